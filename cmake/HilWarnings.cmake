@@ -1,0 +1,12 @@
+# Project-wide warning flags, applied per target with hil_target_warnings().
+add_library(hil_warnings INTERFACE)
+target_compile_options(hil_warnings INTERFACE
+  -Wall -Wextra -Wpedantic -Wshadow -Wnon-virtual-dtor -Woverloaded-virtual
+  -Wformat=2 -Wimplicit-fallthrough)
+if(HIL_WERROR)
+  target_compile_options(hil_warnings INTERFACE -Werror)
+endif()
+
+function(hil_target_warnings target)
+  target_link_libraries(${target} PRIVATE hil_warnings)
+endfunction()

@@ -1,0 +1,122 @@
+// Two processes exchange 1,000 PoseWrenchSamples over the default host-only profile: none lost,
+// none altered, and every locator the peer announces is shared memory or 127.0.0.1.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <fastdds/rtps/participant/ParticipantDiscoveryInfo.h>
+
+#include <atomic>
+#include <chrono>
+#include <mutex>
+#include <thread>
+#include <vector>
+
+#include "hil/acquisition/sample_msg.hpp"
+#include "hil/dds/bus.hpp"
+#include "hil/dds/topics.hpp"
+
+namespace {
+
+constexpr int kSamples = 1000;
+
+hil::format::Sample make_sample(int i) {
+  hil::format::Sample s;
+  s.t_s = 0.001 * i;
+  s.p_world_ee_m = {0.1 + 1e-6 * i, 0.2, 0.3};
+  s.f_fp_n = {0.0, 0.0, -1.0 * i};
+  return s;
+}
+
+struct LocatorAudit : eprosima::fastdds::dds::DomainParticipantListener {
+  std::mutex m;
+  std::vector<std::string> bad;
+  int discovered = 0;
+  void on_participant_discovery(eprosima::fastdds::dds::DomainParticipant*,
+                                eprosima::fastrtps::rtps::ParticipantDiscoveryInfo&& info) override {
+    using eprosima::fastrtps::rtps::Locator_t;
+    std::lock_guard<std::mutex> lock(m);
+    if (info.status != eprosima::fastrtps::rtps::ParticipantDiscoveryInfo::DISCOVERED_PARTICIPANT) return;
+    ++discovered;
+    auto check = [&](const auto& list) {
+      for (const auto& l : list) {
+        if (l.kind == LOCATOR_KIND_SHM) continue;
+        const bool loopback = l.kind == LOCATOR_KIND_UDPv4 && l.address[12] == 127;
+        if (!loopback) bad.push_back(eprosima::fastrtps::rtps::IPLocator::toIPv4string(l));
+      }
+    };
+    check(info.info.metatraffic_locators.unicast);
+    check(info.info.default_locators.unicast);
+    for (const auto& l : info.info.metatraffic_locators.multicast) bad.push_back("multicast " + eprosima::fastrtps::rtps::IPLocator::toIPv4string(l));
+    for (const auto& l : info.info.default_locators.multicast) bad.push_back("multicast " + eprosima::fastrtps::rtps::IPLocator::toIPv4string(l));
+  }
+};
+
+int publisher_process(int domain) {
+  hil::dds::Participant p({domain, "", "hil_localhost", "test-publisher"});
+  hil::dds::Writer<hil_msgs::msg::PoseWrenchSample> w(p, hil::dds::topics::kPoseWrenchSample);
+  if (!w.wait_for_readers(1, std::chrono::seconds(20))) return 3;
+  Eigen::RowVectorXd q(2);
+  for (int i = 0; i < kSamples; ++i) {
+    q << 0.1 * i, -0.1 * i;
+    if (!w.write(hil::acquisition::to_message(make_sample(i), static_cast<std::uint64_t>(i), q))) return 4;
+  }
+  return w.wait_for_acknowledgments(std::chrono::seconds(20)) ? 0 : 5;
+}
+
+}  // namespace
+
+TEST(DdsExchange, ThousandSamplesBetweenProcessesNoneLost) {
+  const int domain = 100 + static_cast<int>(getpid() % 100);
+  const pid_t child = fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) _exit(publisher_process(domain));
+
+  LocatorAudit audit;
+  std::vector<hil_msgs::msg::PoseWrenchSample> got;
+  std::mutex m;
+  {
+    hil::dds::ParticipantOptions o{domain, "", "hil_localhost", "test-subscriber", &audit};
+    hil::dds::Participant p(o);
+    hil::dds::Reader<hil_msgs::msg::PoseWrenchSample> r(p, hil::dds::topics::kPoseWrenchSample,
+                                                          [&](const auto& msg, const auto&) {
+                                                            std::lock_guard<std::mutex> lock(m);
+                                                            got.push_back(msg);
+                                                          });
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(40);
+    for (;;) {
+      {
+        std::lock_guard<std::mutex> lock(m);
+        if (got.size() >= static_cast<std::size_t>(kSamples)) break;
+      }
+      if (std::chrono::steady_clock::now() > deadline) break;
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
+  }
+  int status = 0;
+  waitpid(child, &status, 0);
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 0) << "publisher failed (3: no match, 4: write refused, 5: not acknowledged)";
+  ASSERT_EQ(got.size(), static_cast<std::size_t>(kSamples));
+  for (int i = 0; i < kSamples; ++i) {
+    ASSERT_EQ(got[i].sample_index(), static_cast<std::uint64_t>(i)) << "out of order or lost";
+    Eigen::VectorXd q;
+    const auto s = hil::acquisition::from_message(got[i], &q);
+    EXPECT_EQ(s.f_fp_n, make_sample(i).f_fp_n);
+    EXPECT_EQ(s.p_world_ee_m, make_sample(i).p_world_ee_m);
+    ASSERT_EQ(q.size(), 2);
+    EXPECT_EQ(q(1), -0.1 * i);
+  }
+  std::lock_guard<std::mutex> lock(audit.m);
+  EXPECT_GE(audit.discovered, 1);
+  EXPECT_TRUE(audit.bad.empty()) << "non-loopback locator announced: " << (audit.bad.empty() ? "" : audit.bad.front());
+}
+
+TEST(DdsExchange, BadProfileIsAClearError) {
+  try {
+    hil::dds::Participant p({0, "/nonexistent/profile.xml", "x", "t"});
+    FAIL() << "no error";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("/nonexistent/profile.xml"), std::string::npos);
+  }
+}

@@ -1,0 +1,120 @@
+#include <gtest/gtest.h>
+
+#include "hil/format/rig.hpp"
+#include "test_util.hpp"
+
+using hil::format::parse_rig;
+using hil::test::fails_with;
+
+namespace {
+// A minimal valid rig; tests break one thing at a time.
+const std::string kRig = R"(format_version: 1
+name: t
+frames:
+  - {name: force_plate, parent: world, translation_m: [0, 0, 0.1]}
+  - {name: object2, parent: force_plate, rpy_rad: [0, 0, 1.5707963267948966]}
+  - {name: object1, parent: ee}
+objects:
+  - name: a
+    frame: object1
+    features:
+      - name: f1
+        polyhedra:
+          - vertices_m: [[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]]
+model:
+  contact: {stiffness_n_per_m: 1.0e5, friction_coefficient: 0.3}
+)";
+auto parse(const std::string& text) {
+  return [text] { parse_rig(text, "rig.yaml"); };
+}
+std::string replace(std::string s, const std::string& from, const std::string& to) {
+  const auto p = s.find(from);
+  EXPECT_NE(p, std::string::npos) << from;
+  return s.replace(p, from.size(), to);
+}
+}  // namespace
+
+TEST(Rig, ReadsAndResolvesFrames) {
+  const auto rig = parse_rig(kRig, "rig.yaml");
+  EXPECT_EQ(rig.name, "t");
+  ASSERT_EQ(rig.objects.size(), 1u);
+  EXPECT_EQ(hil::format::total_polyhedra(rig), 1u);
+  const auto T = rig.T_world("object2");
+  EXPECT_NEAR(T.translation().z(), 0.1, 1e-15);
+  EXPECT_NEAR((T.linear() * Eigen::Vector3d::UnitX() - Eigen::Vector3d::UnitY()).norm(), 0.0, 1e-12);
+  EXPECT_TRUE(rig.T_ee("object1").isApprox(Eigen::Isometry3d::Identity()));
+  EXPECT_DOUBLE_EQ(rig.model.contact->friction_coefficient, 0.3);
+}
+
+TEST(Rig, ShippedExampleIsValid) {
+  const auto rig = hil::format::load_rig(std::string(HIL_SOURCE_DIR) + "/examples/rigs/press_bench.yaml");
+  ASSERT_TRUE(rig.robot.has_value());
+  EXPECT_EQ(rig.robot->joints.size(), 6u);
+  EXPECT_TRUE(rig.devices.force_plate.has_value());
+  EXPECT_EQ(rig.model.uncertainties.size(), 2u);
+}
+
+TEST(Rig, UnknownFieldIsNamedWithSuggestion) {
+  EXPECT_TRUE(fails_with(parse(replace(kRig, "name: t\n", "name: t\nnmae: x\n")), 3, "nmae", "did you mean 'name'"));
+  EXPECT_TRUE(fails_with(parse(replace(kRig, "friction_coefficient", "friction_coeficient")), 0,
+                         "model.contact.friction_coeficient", "unknown field"));
+}
+
+TEST(Rig, MissingFieldIsNamed) {
+  EXPECT_TRUE(fails_with(parse(replace(kRig, "name: t\n", "")), 0, "name", "required field is missing"));
+  EXPECT_TRUE(fails_with(parse(replace(kRig, "    frame: object1\n", "")), 8, "objects[0].frame", "required field is missing"));
+}
+
+TEST(Rig, DegeneratePolyhedra) {
+  EXPECT_TRUE(fails_with(parse(replace(kRig, "[[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]]", "[[0, 0, 0], [1, 0, 0], [0, 1, 0]]")),
+                         13, "objects[0].features[0].polyhedra[0].vertices_m", "at least 4 non-coplanar"));
+  EXPECT_TRUE(fails_with(parse(replace(kRig, "[[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]]",
+                                       "[[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0], [0.5, 0.5, 0]]")),
+                         13, "", "coplanar"));
+}
+
+TEST(Rig, BadValues) {
+  EXPECT_TRUE(fails_with(parse(replace(kRig, "stiffness_n_per_m: 1.0e5", "stiffness_n_per_m: -5")), 0,
+                         "model.contact.stiffness_n_per_m", "K must be > 0"));
+  EXPECT_TRUE(fails_with(parse(replace(kRig, "friction_coefficient: 0.3", "friction_coefficient: -0.1")), 0, "", ">= 0"));
+  EXPECT_TRUE(fails_with(parse(replace(kRig, "[0, 0, 0.1]", "[0, zero, 0.1]")), 4, "", "expected a number, found 'zero'"));
+  EXPECT_TRUE(fails_with(parse(replace(kRig, "[0, 0, 0.1]", "[0, .nan, 0.1]")), 4, "", "finite"));
+  EXPECT_TRUE(fails_with(parse(replace(kRig, "[0, 0, 0.1]", "[0, 0]")), 4, "", "list of 3 numbers"));
+}
+
+TEST(Rig, BadFrames) {
+  EXPECT_TRUE(fails_with(parse(replace(kRig, "parent: force_plate", "parent: nowhere")), 0, "frames[1].parent", "unknown parent"));
+  EXPECT_TRUE(fails_with(parse(replace(kRig, "{name: object1, parent: ee}", "{name: object1, parent: ee, quaternion_wxyz: [1, 1, 0, 0]}")),
+                         0, "frames[2].quaternion_wxyz", "not a unit quaternion"));
+  EXPECT_TRUE(fails_with(parse(replace(kRig, "frame: object1", "frame: object9")), 0, "objects[0].frame", "unknown frame"));
+}
+
+TEST(Rig, UncertaintyMustNameAnExistingFeature) {
+  const auto text = kRig + "  uncertainties:\n    - {name: u1, object: a, feature: nope, kind: translation, axis: [1, 0, 0]}\n";
+  EXPECT_TRUE(fails_with(parse(text), 0, "model.uncertainties[0].feature", "has no feature 'nope'"));
+}
+
+TEST(Rig, EmptyAndSyntaxErrors) {
+  EXPECT_TRUE(fails_with(parse(""), 0, "", "empty rig file"));
+  EXPECT_TRUE(fails_with(parse("format_version: 1\nname: [unclosed\n"), 0, "", "YAML syntax error"));
+  EXPECT_TRUE(fails_with(parse(replace(kRig, "format_version: 1", "format_version: 7")), 1, "format_version", "version 1"));
+}
+
+TEST(Rig, DeviceSections) {
+  const auto ok = kRig + R"(devices:
+  force_plate:
+    protocol: declarative
+    interface: can0
+    signals:
+      - {component: fx, frame_id: 0x1A0, start_bit: 0, length_bits: 16, byte_order: big, scale: 0.01}
+  robot: {transport: tcp, host: 127.0.0.1, port: 5020, register_map: custom, registers: [{quantity: j1, address: 270, scale: 0.001}]}
+)";
+  const auto rig = parse_rig(ok, "rig.yaml");
+  ASSERT_EQ(rig.devices.force_plate->signals.size(), 1u);
+  EXPECT_EQ(rig.devices.force_plate->signals[0].frame_id, 0x1A0u);
+  EXPECT_TRUE(rig.devices.force_plate->signals[0].big_endian);
+  EXPECT_EQ(rig.devices.robot->registers[0].address, 270u);
+  EXPECT_TRUE(fails_with(parse(replace(ok, "port: 5020", "port: 70000")), 0, "devices.robot.port", "1..65535"));
+  EXPECT_TRUE(fails_with(parse(replace(ok, "component: fx", "component: fq")), 0, "", "expected one of fx"));
+  EXPECT_TRUE(fails_with(parse(replace(ok, "frame_id: 0x1A0", "frame_id: 0x1000")), 0, "", "CAN id out of range"));
+}

@@ -1,0 +1,29 @@
+#pragma once
+// Each subcommand group registers itself on the root app. A handler returns the exit status;
+// bad input is reported by throwing hil::format::FormatError (or std::runtime_error), which
+// main() turns into one clear line on stderr and exit status 2.
+#include <CLI/CLI.hpp>
+#include <functional>
+#include <string>
+
+namespace hil::cli {
+
+/// Options every subcommand may use.
+struct GlobalOptions {
+  std::string log_level = "info";
+  std::string dds_profile;
+  std::string dds_profile_name = "hil_localhost";
+  int dds_domain = -1;  ///< -1: $HIL_DDS_DOMAIN or 0
+};
+GlobalOptions& globals();
+
+/// Set by the chosen subcommand; run by main() after parsing.
+using Action = std::function<int()>;
+void set_action(Action a);
+
+void add_validate(CLI::App& app);
+void add_demo(CLI::App& app);
+void add_stiffness(CLI::App& app);  // calibration (issue 4)
+void add_contact(CLI::App& app);    // contact identification (issue 5)
+
+}  // namespace hil::cli

@@ -1,0 +1,65 @@
+// hil: hardware-in-the-loop acquisition and identification for robotics labs.
+#include <spdlog/cfg/helpers.h>
+#include <spdlog/sinks/stdout_color_sinks.h>
+#include <spdlog/spdlog.h>
+
+#include <exception>
+#include <iostream>
+
+#include "commands.hpp"
+#include "hil/format/error.hpp"
+
+namespace hil::cli {
+
+GlobalOptions& globals() {
+  static GlobalOptions g;
+  return g;
+}
+
+namespace {
+Action g_action;
+}
+void set_action(Action a) { g_action = std::move(a); }
+
+}  // namespace hil::cli
+
+int main(int argc, char** argv) {
+  using namespace hil::cli;
+  CLI::App app{"hil: hardware-in-the-loop acquisition and identification for robotics labs\n"
+               "Force plate over CAN, robot over Modbus, synchronized samples on DDS, stiffness and\n"
+               "contact identification, and diagnosis of what a simulation gets wrong.",
+               "hil"};
+  app.set_version_flag("--version", std::string("hil ") + HIL_VERSION);
+  app.require_subcommand(1);
+  auto& g = globals();
+  app.add_option("--log-level", g.log_level, "trace, debug, info, warn, error, critical or off")
+      ->check(CLI::IsMember({"trace", "debug", "info", "warn", "error", "critical", "off"}))
+      ->capture_default_str();
+  app.add_option("--dds-profile", g.dds_profile, "Fast DDS XML profile file (default: hil's host-only profile)");
+  app.add_option("--dds-profile-name", g.dds_profile_name, "participant profile in that file")->capture_default_str();
+  app.add_option("--dds-domain", g.dds_domain, "DDS domain id (default: $HIL_DDS_DOMAIN or 0)")->check(CLI::Range(0, 232));
+
+  add_validate(app);
+  add_demo(app);
+  add_stiffness(app);
+  add_contact(app);
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  }
+  auto logger = spdlog::stderr_color_mt("hil");
+  spdlog::set_default_logger(logger);
+  spdlog::set_level(spdlog::level::from_str(g.log_level));
+  spdlog::set_pattern("[%H:%M:%S.%e] [%^%l%$] %v");
+  try {
+    return g_action ? g_action() : 1;
+  } catch (const hil::format::FormatError& e) {
+    std::cerr << "error: " << e.what() << '\n';
+    return 2;
+  } catch (const std::exception& e) {
+    std::cerr << "error: " << e.what() << '\n';
+    return 1;
+  }
+}
