@@ -25,5 +25,6 @@ void add_validate(CLI::App& app);
 void add_demo(CLI::App& app);
 void add_stiffness(CLI::App& app);  // calibration (issue 4)
 void add_contact(CLI::App& app);    // contact identification (issue 5)
+void add_rig(CLI::App& app);        // fake-rig, acquire, echo, replay (issue 3)
 
 }  // namespace hil::cli

@@ -43,6 +43,7 @@ int main(int argc, char** argv) {
   add_demo(app);
   add_stiffness(app);
   add_contact(app);
+  add_rig(app);
 
   try {
     app.parse(argc, argv);
