@@ -36,7 +36,11 @@ Participant::Participant(const ParticipantOptions& o) : domain_id_(o.domain_id) 
   if (factory->get_participant_qos_from_profile(o.profile_name, qos) != ReturnCode_t::RETCODE_OK)
     throw std::runtime_error("DDS profile '" + o.profile_name + "' not found in " + file);
   qos.name(o.name);
-  participant_ = factory->create_participant(static_cast<DomainId_t>(o.domain_id), qos, o.listener);
+  // The participant listener must not take data events: with them in its mask Fast DDS routes
+  // data to the participant's (empty) on_data_on_readers and the readers' callbacks never run.
+  StatusMask mask = StatusMask::all();
+  mask >> StatusMask::data_on_readers() >> StatusMask::data_available();
+  participant_ = factory->create_participant(static_cast<DomainId_t>(o.domain_id), qos, o.listener, mask);
   if (!participant_) throw std::runtime_error("DDS: cannot create a participant in domain " + std::to_string(o.domain_id));
   publisher_ = participant_->create_publisher(PUBLISHER_QOS_DEFAULT);
   subscriber_ = participant_->create_subscriber(SUBSCRIBER_QOS_DEFAULT);

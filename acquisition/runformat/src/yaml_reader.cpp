@@ -1,5 +1,6 @@
 #include "yaml_reader.hpp"
 
+#include <cctype>
 #include <charconv>
 #include <cmath>
 
@@ -70,6 +71,11 @@ double YNode::num() const {
   if (!s.empty() && *b == '+') ++b;
   const auto [p, ec] = std::from_chars(b, s.data() + s.size(), v);
   if (ec != std::errc() || p != s.data() + s.size()) {
+    // YAML's own spellings of NaN and infinity.
+    std::string lower;
+    for (char c : s) lower += static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    if (lower == ".nan" || lower == ".inf" || lower == "-.inf" || lower == "+.inf")
+      fail("expected a finite number, found '" + s + "'");
     // Accept hexadecimal integers (CAN ids are written that way).
     if (s.size() > 2 && s[0] == '0' && (s[1] == 'x' || s[1] == 'X')) {
       unsigned long long u = 0;

@@ -1,0 +1,149 @@
+#!/usr/bin/env python3
+"""Runs the real `hil` binary: help, version, validate on the shipped examples, and a bad input
+of every kind through the command line (non-zero exit, message naming file, line and field)."""
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+import unittest
+
+HIL, SRC = sys.argv[1], sys.argv[2]
+EXAMPLE_RUN = os.path.join(SRC, "examples", "runs", "press_slide")
+EXAMPLE_RIG = os.path.join(SRC, "examples", "rigs", "press_bench.yaml")
+
+
+def hil(*args, env=None):
+    e = dict(os.environ)
+    e["HIL_DDS_DOMAIN"] = str(150 + os.getpid() % 50)
+    if env:
+        e.update(env)
+    return subprocess.run([HIL, *args], capture_output=True, text=True, timeout=120, env=e)
+
+
+class Cli(unittest.TestCase):
+    def test_help_and_version(self):
+        r = hil("--help")
+        self.assertEqual(r.returncode, 0)
+        for cmd in ("validate", "demo"):
+            self.assertIn(cmd, r.stdout)
+        r = hil("validate", "--help")
+        self.assertEqual(r.returncode, 0)
+        self.assertIn("PATH", r.stdout)
+        r = hil("--version")
+        self.assertEqual(r.returncode, 0)
+        self.assertRegex(r.stdout, r"hil \d+\.\d+\.\d+")
+
+    def test_unknown_subcommand_fails(self):
+        self.assertNotEqual(hil("frobnicate").returncode, 0)
+
+    def test_validate_examples(self):
+        r = hil("validate", EXAMPLE_RUN)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        self.assertIn("OK", r.stdout)
+        self.assertRegex(r.stdout, r"rate 50\.00 Hz")
+        self.assertIn("gaps: none", r.stdout)
+        self.assertIn("polyhedra: 2", r.stdout)
+        r = hil("validate", EXAMPLE_RIG)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        self.assertIn("features: 2", r.stdout)
+        self.assertIn("robot 'ur5e' (6 joints", r.stdout)
+
+
+class BadInput(unittest.TestCase):
+    def setUp(self):
+        self.dir = tempfile.mkdtemp()
+        self.run = os.path.join(self.dir, "run")
+        shutil.copytree(EXAMPLE_RUN, self.run)
+        with open(os.path.join(self.run, "samples.csv")) as f:
+            self.lines = f.read().splitlines()
+
+    def tearDown(self):
+        shutil.rmtree(self.dir)
+
+    def write_samples(self, lines, end="\n"):
+        with open(os.path.join(self.run, "samples.csv"), "w") as f:
+            f.write("\n".join(lines) + end)
+
+    def cell(self, line_no, col, value):
+        lines = list(self.lines)
+        cells = lines[line_no - 1].split(",")
+        cells[self.lines[0].split(",").index(col)] = value
+        lines[line_no - 1] = ",".join(cells)
+        return lines
+
+    def expect_error(self, *needles):
+        r = hil("validate", self.run)
+        self.assertNotEqual(r.returncode, 0, r.stdout)
+        self.assertNotIn("Segmentation", r.stderr)
+        for n in needles:
+            self.assertIn(n, r.stderr)
+        return r
+
+    def test_missing_column(self):
+        lines = [",".join(c for c in l.split(",")[:-1]) for l in self.lines]
+        self.write_samples(lines)
+        self.expect_error("samples.csv:1", "'mz'", "missing")
+
+    def test_misspelt_column(self):
+        lines = list(self.lines)
+        lines[0] = lines[0].replace(",fy,", ",fY,")
+        self.write_samples(lines)
+        self.expect_error("samples.csv:1", "'fy'", "'fY': misspelt?")
+
+    def test_non_numeric(self):
+        self.write_samples(self.cell(10, "fz", "12,5".replace(",", ";")))
+        self.expect_error("samples.csv:10:", "'fz'", "expected a number")
+
+    def test_nan(self):
+        self.write_samples(self.cell(7, "px", "NaN"))
+        self.expect_error("samples.csv:7:", "'px'", "finite")
+
+    def test_non_unit_quaternion(self):
+        self.write_samples(self.cell(5, "qw", "0.5"))
+        self.expect_error("samples.csv:5:", "not a unit quaternion")
+
+    def test_time_backwards(self):
+        self.write_samples(self.cell(20, "t", "0.1"))
+        self.expect_error("samples.csv:20", "'t'", "backwards")
+
+    def test_duplicated_timestamp(self):
+        t_prev = self.lines[18].split(",")[0]
+        self.write_samples(self.cell(20, "t", t_prev))
+        self.expect_error("samples.csv:20", "duplicated timestamp")
+
+    def test_truncated_last_line(self):
+        lines = list(self.lines)
+        lines[-1] = lines[-1][: len(lines[-1]) // 2].rsplit(",", 1)[0]
+        self.write_samples(lines, end="")
+        self.expect_error("samples.csv:%d" % len(lines), "truncated last line")
+
+    def test_empty_file(self):
+        self.write_samples([], end="")
+        self.expect_error("samples.csv", "empty file")
+
+    def rig_error(self, old, new, *needles):
+        with open(os.path.join(self.run, "rig.yaml")) as f:
+            text = f.read()
+        self.assertIn(old, text)
+        with open(os.path.join(self.run, "rig.yaml"), "w") as f:
+            f.write(text.replace(old, new, 1))
+        return self.expect_error("rig.yaml:", *needles)
+
+    def test_unknown_rig_field(self):
+        self.rig_error("stiffness_n_per_m:", "stifness_n_per_m:", "stifness_n_per_m", "unknown field", "did you mean")
+
+    def test_missing_rig_field(self):
+        self.rig_error("  - name: cube\n    frame: object1\n", "  - name: cube\n", "objects[0].frame", "required field is missing")
+
+    def test_degenerate_polyhedron(self):
+        top = "[-0.015, -0.015, 0.03], [0.015, -0.015, 0.03], [0.015, 0.015, 0.03], [-0.015, 0.015, 0.03]]"
+        self.rig_error(top, top.replace("0.03]", "0.0]"), "vertices_m", "coplanar")
+
+    def test_missing_run_yaml(self):
+        os.remove(os.path.join(self.run, "run.yaml"))
+        self.expect_error("run.yaml", "missing")
+
+
+if __name__ == "__main__":
+    unittest.main(argv=[sys.argv[0], "-v"])

@@ -1,0 +1,46 @@
+#!/usr/bin/env bash
+# One entry point for a fresh Debian 12 machine (run as root):
+#   bash tools/setup.sh demo   install dependencies, build, run `hil demo`
+#   bash tools/setup.sh test   install dependencies (and the vcan VM), build, run every test
+#   bash tools/setup.sh deps | build
+# Everything comes from Debian's archive (apt-get); nothing else is downloaded.
+set -euo pipefail
+here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+build="${HIL_BUILD_DIR:-$here/build}"
+jobs="${HIL_JOBS:-$(nproc)}"
+
+deps() {
+  export DEBIAN_FRONTEND=noninteractive
+  local pkgs=(
+    build-essential cmake ninja-build pkg-config python3
+    libeigen3-dev libspdlog-dev libfmt-dev libyaml-cpp-dev libcli11-dev nlohmann-json3-dev
+    libmodbus-dev libfastrtps-dev libfastcdr-dev fastddsgen fastdds-tools default-jre-headless
+    can-utils iproute2 libgtest-dev libgmock-dev libbenchmark-dev
+    python3-can python3-pymodbus python3-numpy
+  )
+  local missing=()
+  for p in "${pkgs[@]}"; do dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p"); done
+  if ((${#missing[@]})); then
+    echo "setup: installing ${missing[*]}"
+    apt-get update -qq
+    apt-get install -y -qq --no-install-recommends "${missing[@]}"
+  fi
+}
+
+vm() {
+  # The machines' kernel has no SocketCAN: the vcan tests run in a QEMU guest (tests/vm/README.md).
+  if [[ -x "$here/tests/vm/prepare.sh" ]]; then bash "$here/tests/vm/prepare.sh"; fi
+}
+
+build() {
+  cmake -S "$here" -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DHIL_WERROR=ON
+  cmake --build "$build" -j "$jobs"
+}
+
+case "${1:-}" in
+  deps) deps ;;
+  build) deps; build ;;
+  demo) deps; build; "$build/tools/hil/hil" demo ;;
+  test) deps; vm; build; cd "$build" && ctest -j "$jobs" --output-on-failure --timeout 900 ;;
+  *) echo "usage: bash tools/setup.sh demo|test|deps|build" >&2; exit 2 ;;
+esac
