@@ -2,6 +2,9 @@
 
 #include <fmt/format.h>
 
+#include <fcntl.h>
+#include <unistd.h>
+
 #include <cerrno>
 #include <cstring>
 #include <stdexcept>
@@ -100,49 +103,65 @@ SampleTable parse_samples(const std::string& text, const std::string& display_na
   return from_csv(parse_csv(text, sample_options(display_name)));
 }
 
-SamplesWriter::SamplesWriter(const std::string& path, std::size_t joint_count) : path_(path), joints_(joint_count) {
-  f_ = std::fopen(path.c_str(), "wb");
-  if (!f_) throw std::runtime_error(path + ": cannot create: " + std::strerror(errno));
+SamplesWriter::SamplesWriter(const std::string& path, std::size_t joint_count, std::vector<std::string> extra_columns)
+    : path_(path), joints_(joint_count), extras_(extra_columns.size()) {
+  fd_ = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (fd_ < 0) throw std::runtime_error(path + ": cannot create: " + std::strerror(errno));
   std::string header;
   for (const auto& c : sample_columns()) header += (header.empty() ? "" : ",") + c;
   for (std::size_t j = 1; j <= joints_; ++j) header += ",j" + std::to_string(j);
+  for (const auto& e : extra_columns) header += "," + e;
   header += '\n';
-  if (std::fputs(header.c_str(), f_) < 0) throw std::runtime_error(path + ": write failed: " + std::strerror(errno));
+  write_all(header);
 }
 
 SamplesWriter::~SamplesWriter() {
   try {
     close();
   } catch (...) {
-    // Destructors must not throw; close() explicitly to see write errors.
+    // Destructors must not throw; call close() to see write errors.
   }
 }
 
-void SamplesWriter::append(const Sample& s, const double* joints_rad) {
-  buf_.clear();
+void SamplesWriter::append(const Sample& s, const double* joints_rad, const double* extras) {
   // {} prints the shortest text that reads back to the same double: the file is lossless.
-  fmt::format_to(std::back_inserter(buf_), "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}", s.t_s,
-                 s.p_world_ee_m.x(), s.p_world_ee_m.y(), s.p_world_ee_m.z(), s.q_world_ee.w(), s.q_world_ee.x(),
-                 s.q_world_ee.y(), s.q_world_ee.z(), s.v_world_ee_m_per_s.x(), s.v_world_ee_m_per_s.y(),
-                 s.v_world_ee_m_per_s.z(), s.w_world_ee_rad_per_s.x(), s.w_world_ee_rad_per_s.y(),
-                 s.w_world_ee_rad_per_s.z(), s.f_fp_n.x(), s.f_fp_n.y(), s.f_fp_n.z(), s.m_fp_nm.x(), s.m_fp_nm.y(),
-                 s.m_fp_nm.z());
-  for (std::size_t j = 0; j < joints_; ++j) fmt::format_to(std::back_inserter(buf_), ",{}", joints_rad[j]);
+  auto out = std::back_inserter(buf_);
+  fmt::format_to(out, "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}", s.t_s, s.p_world_ee_m.x(),
+                 s.p_world_ee_m.y(), s.p_world_ee_m.z(), s.q_world_ee.w(), s.q_world_ee.x(), s.q_world_ee.y(),
+                 s.q_world_ee.z(), s.v_world_ee_m_per_s.x(), s.v_world_ee_m_per_s.y(), s.v_world_ee_m_per_s.z(),
+                 s.w_world_ee_rad_per_s.x(), s.w_world_ee_rad_per_s.y(), s.w_world_ee_rad_per_s.z(), s.f_fp_n.x(),
+                 s.f_fp_n.y(), s.f_fp_n.z(), s.m_fp_nm.x(), s.m_fp_nm.y(), s.m_fp_nm.z());
+  for (std::size_t j = 0; j < joints_; ++j) fmt::format_to(out, ",{}", joints_rad[j]);
+  for (std::size_t e = 0; e < extras_; ++e) fmt::format_to(out, ",{}", extras[e]);
   buf_ += '\n';
-  if (std::fwrite(buf_.data(), 1, buf_.size(), f_) != buf_.size())
-    throw std::runtime_error(path_ + ": write failed: " + std::strerror(errno));
   ++rows_;
+  if (buf_.size() > (1u << 20)) flush();  // bound memory if the caller never flushes
+}
+
+void SamplesWriter::write_all(const std::string& bytes) {
+  std::size_t done = 0;
+  while (done < bytes.size()) {
+    const auto n = ::write(fd_, bytes.data() + done, bytes.size() - done);
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      throw std::runtime_error(path_ + ": write failed: " + std::strerror(errno));
+    }
+    done += static_cast<std::size_t>(n);
+  }
 }
 
 void SamplesWriter::flush() {
-  if (f_ && std::fflush(f_) != 0) throw std::runtime_error(path_ + ": flush failed: " + std::strerror(errno));
+  if (fd_ < 0 || buf_.empty()) return;
+  write_all(buf_);
+  buf_.clear();
 }
 
 void SamplesWriter::close() {
-  if (!f_) return;
-  std::FILE* f = f_;
-  f_ = nullptr;
-  if (std::fclose(f) != 0) throw std::runtime_error(path_ + ": close failed: " + std::strerror(errno));
+  if (fd_ < 0) return;
+  flush();
+  const int fd = fd_;
+  fd_ = -1;
+  if (::close(fd) != 0) throw std::runtime_error(path_ + ": close failed: " + std::strerror(errno));
 }
 
 void write_samples(const std::string& path, const SampleTable& table) {

@@ -2,7 +2,6 @@
 /// \file samples.csv: one row per synchronized sample, SI units, frames in the column names.
 #include <Eigen/Core>
 #include <Eigen/Geometry>
-#include <cstdio>
 #include <string>
 #include <vector>
 
@@ -39,26 +38,33 @@ struct SampleTable {
 SampleTable read_samples(const std::string& path);
 SampleTable parse_samples(const std::string& text, const std::string& display_name);
 
-/// Append-only writer: rows go to the file as they come; flush() pushes them to the kernel, so a
-/// crash loses at most what came since the last flush.
+/// Append-only writer. Rows are kept in memory and handed to the kernel whole by flush() (one
+/// write(2) of complete lines), so a process killed at any moment leaves a file that ends at a
+/// row boundary and loses only what came since the last flush.
 class SamplesWriter {
  public:
-  /// Creates (truncates) `path` and writes the header. \throws std::runtime_error on I/O failure.
-  SamplesWriter(const std::string& path, std::size_t joint_count);
+  /// Creates (truncates) `path` and writes the header: the sample columns, j1..jN, then
+  /// `extra_columns` (numbers the reader keeps and ignores, e.g. the recorder's `quality`).
+  /// \throws std::runtime_error on I/O failure.
+  SamplesWriter(const std::string& path, std::size_t joint_count, std::vector<std::string> extra_columns = {});
   ~SamplesWriter();
   SamplesWriter(const SamplesWriter&) = delete;
   SamplesWriter& operator=(const SamplesWriter&) = delete;
 
   /// \pre joints_rad has joint_count entries (or is null when joint_count is 0).
-  void append(const Sample& s, const double* joints_rad = nullptr);
+  /// \pre extras has extra_columns.size() entries (or is null when there are none).
+  void append(const Sample& s, const double* joints_rad = nullptr, const double* extras = nullptr);
+  std::size_t buffered_bytes() const { return buf_.size(); }
   void flush();
   void close();
   std::size_t rows() const { return rows_; }
 
  private:
-  std::FILE* f_ = nullptr;
+  void write_all(const std::string& bytes);
+  int fd_ = -1;
   std::string path_;
   std::size_t joints_ = 0;
+  std::size_t extras_ = 0;
   std::size_t rows_ = 0;
   std::string buf_;
 };

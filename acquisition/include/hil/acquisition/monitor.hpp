@@ -1,0 +1,59 @@
+#pragma once
+/// \file Health of one device, from what its driver reports: samples, drops, errors, link state.
+/// Pure: the caller passes the time. A silence longer than `silence_periods` nominal periods,
+/// a fault, a drop or a lost link changes the state at the next update(), so a fault is visible
+/// within a few sample periods when update() runs at the sample rate.
+#include <cstdint>
+#include <deque>
+#include <string>
+
+namespace hil::acquisition {
+
+enum class DeviceState : std::uint8_t { ok = 0, degraded = 1, fault = 2, disconnected = 3 };
+const char* to_string(DeviceState s);
+
+struct DeviceHealth {
+  std::string device;
+  DeviceState state = DeviceState::disconnected;
+  bool connected = false;
+  double rate_hz = 0.0;            ///< samples over the last second
+  double last_sample_age_s = 0.0;  ///< +inf before the first sample
+  std::uint64_t samples = 0;
+  std::uint64_t frames_dropped = 0;
+  std::uint64_t errors = 0;
+  std::string last_error;
+  std::string reason;  ///< why the state is what it is, e.g. "silent for 4.0 ms"
+};
+
+class DeviceMonitor {
+ public:
+  DeviceMonitor(std::string device, double nominal_rate_hz, double silence_periods = 3.0);
+
+  void sample(std::int64_t t_ns);
+  void dropped(std::uint64_t n, std::int64_t t_ns);
+  /// A fault reported by the device or its driver (bus-off, exception response, status bit...).
+  void error(const std::string& what, std::int64_t t_ns);
+  void link(bool connected, std::int64_t t_ns);
+
+  /// Re-evaluates the state at `now_ns`. \returns true when it changed (publish then).
+  bool update(std::int64_t now_ns);
+  DeviceHealth health(std::int64_t now_ns) const;
+  DeviceState state() const { return state_; }
+  const std::string& reason() const { return reason_; }
+
+ private:
+  std::string device_;
+  double period_s_;
+  double silence_periods_;
+  bool connected_ = false;
+  std::int64_t last_sample_ns_ = 0;
+  std::int64_t last_error_ns_ = 0;
+  std::int64_t last_drop_ns_ = 0;
+  std::uint64_t samples_ = 0, dropped_ = 0, errors_ = 0;
+  std::string last_error_;
+  std::deque<std::int64_t> recent_;  ///< sample times within the last second
+  DeviceState state_ = DeviceState::disconnected;
+  std::string reason_ = "not connected yet";
+};
+
+}  // namespace hil::acquisition

@@ -1,0 +1,91 @@
+#include "hil/acquisition/monitor.hpp"
+
+#include <fmt/format.h>
+
+#include <cmath>
+
+namespace hil::acquisition {
+
+const char* to_string(DeviceState s) {
+  switch (s) {
+    case DeviceState::ok: return "ok";
+    case DeviceState::degraded: return "degraded";
+    case DeviceState::fault: return "fault";
+    case DeviceState::disconnected: return "disconnected";
+  }
+  return "?";
+}
+
+DeviceMonitor::DeviceMonitor(std::string device, double nominal_rate_hz, double silence_periods)
+    : device_(std::move(device)), period_s_(1.0 / nominal_rate_hz), silence_periods_(silence_periods) {}
+
+void DeviceMonitor::sample(std::int64_t t_ns) {
+  ++samples_;
+  last_sample_ns_ = t_ns;
+  connected_ = true;
+  recent_.push_back(t_ns);
+  while (!recent_.empty() && recent_.front() < t_ns - 1'000'000'000) recent_.pop_front();
+}
+
+void DeviceMonitor::dropped(std::uint64_t n, std::int64_t t_ns) {
+  if (n == 0) return;
+  dropped_ += n;
+  last_drop_ns_ = t_ns;
+}
+
+void DeviceMonitor::error(const std::string& what, std::int64_t t_ns) {
+  ++errors_;
+  last_error_ = what;
+  last_error_ns_ = t_ns;
+}
+
+void DeviceMonitor::link(bool connected, std::int64_t t_ns) {
+  connected_ = connected;
+  if (!connected) last_error_ns_ = std::max(last_error_ns_, t_ns);
+}
+
+bool DeviceMonitor::update(std::int64_t now_ns) {
+  DeviceState s;
+  std::string why;
+  const double silence_s = (now_ns - last_sample_ns_) * 1e-9;
+  const double limit_s = silence_periods_ * period_s_;
+  if (!connected_) {
+    s = DeviceState::disconnected;
+    why = last_error_.empty() ? "not connected" : "link lost: " + last_error_;
+  } else if (last_error_ns_ != 0 && last_error_ns_ >= last_sample_ns_ - static_cast<std::int64_t>(period_s_ * 1e9)) {
+    // A fault holds until good samples flow again for more than a period after it.
+    s = DeviceState::fault;
+    why = last_error_;
+  } else if (samples_ > 0 && silence_s > limit_s) {
+    s = DeviceState::degraded;
+    why = fmt::format("silent for {:.1f} ms", silence_s * 1e3);
+  } else if (last_drop_ns_ != 0 && now_ns - last_drop_ns_ < 1'000'000'000) {
+    s = DeviceState::degraded;
+    why = fmt::format("{} frames dropped", dropped_);
+  } else {
+    s = DeviceState::ok;
+  }
+  const bool changed = s != state_;
+  state_ = s;
+  reason_ = why;
+  return changed;
+}
+
+DeviceHealth DeviceMonitor::health(std::int64_t now_ns) const {
+  DeviceHealth h;
+  h.device = device_;
+  h.state = state_;
+  h.connected = connected_;
+  std::size_t n = 0;
+  for (auto t : recent_) n += t >= now_ns - 1'000'000'000;
+  h.rate_hz = static_cast<double>(n);
+  h.last_sample_age_s = samples_ ? (now_ns - last_sample_ns_) * 1e-9 : INFINITY;
+  h.samples = samples_;
+  h.frames_dropped = dropped_;
+  h.errors = errors_;
+  h.last_error = last_error_;
+  h.reason = reason_;
+  return h;
+}
+
+}  // namespace hil::acquisition

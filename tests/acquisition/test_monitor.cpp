@@ -1,0 +1,69 @@
+#include <gtest/gtest.h>
+
+#include "hil/acquisition/monitor.hpp"
+
+using namespace hil::acquisition;
+
+namespace {
+constexpr std::int64_t ms = 1'000'000;
+}
+
+TEST(Monitor, SilenceIsSeenWithinThreePeriodsAndRecovers) {
+  DeviceMonitor m("force_plate", 1000.0);
+  std::int64_t t = 0;
+  for (; t < 100 * ms; t += ms) {
+    m.sample(t);
+    m.update(t);
+  }
+  EXPECT_EQ(m.state(), DeviceState::ok);
+  const std::int64_t last = t - ms;
+  // The device goes silent; update() runs every millisecond.
+  std::int64_t seen = -1;
+  for (std::int64_t now = last + ms; now < last + 20 * ms; now += ms) {
+    if (m.update(now) && m.state() == DeviceState::degraded) {
+      seen = now;
+      break;
+    }
+  }
+  ASSERT_GE(seen, 0);
+  EXPECT_LE(seen - last, 4 * ms) << "reported after " << (seen - last) / ms << " ms";
+  EXPECT_NE(m.reason().find("silent"), std::string::npos);
+  m.sample(last + 50 * ms);
+  EXPECT_TRUE(m.update(last + 50 * ms));
+  EXPECT_EQ(m.state(), DeviceState::ok);
+}
+
+TEST(Monitor, FaultHoldsUntilSamplesFlowAgain) {
+  DeviceMonitor m("force_plate", 1000.0);
+  m.sample(0);
+  m.update(0);
+  m.error("bus-off", 1 * ms);
+  EXPECT_TRUE(m.update(1 * ms));
+  EXPECT_EQ(m.state(), DeviceState::fault);
+  EXPECT_EQ(m.health(1 * ms).last_error, "bus-off");
+  m.sample(2 * ms);
+  m.update(2 * ms);
+  EXPECT_EQ(m.state(), DeviceState::fault) << "one sample right after the fault is not recovery";
+  m.sample(3 * ms);
+  m.update(3 * ms);
+  EXPECT_EQ(m.state(), DeviceState::ok);
+  EXPECT_EQ(m.health(3 * ms).errors, 1u);
+}
+
+TEST(Monitor, DropsAndLinkLoss) {
+  DeviceMonitor m("robot", 125.0);
+  m.sample(0);
+  m.update(0);
+  EXPECT_EQ(m.state(), DeviceState::ok);
+  m.dropped(3, 1 * ms);
+  m.sample(2 * ms);
+  EXPECT_TRUE(m.update(2 * ms));
+  EXPECT_EQ(m.state(), DeviceState::degraded);
+  EXPECT_EQ(m.health(2 * ms).frames_dropped, 3u);
+  m.link(false, 3 * ms);
+  m.update(3 * ms);
+  EXPECT_EQ(m.state(), DeviceState::disconnected);
+  const auto h = m.health(1003 * ms);
+  EXPECT_FALSE(h.connected);
+  EXPECT_DOUBLE_EQ(h.rate_hz, 0.0);
+}

@@ -1,0 +1,124 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <vector>
+
+#include "hil/acquisition/sync.hpp"
+
+using namespace hil::acquisition;
+
+namespace {
+constexpr std::int64_t kT0 = 1'700'000'000'000'000'000;  // an epoch time, as the kernel stamps give
+constexpr double kPi = 3.14159265358979323846;
+
+PoseReading pose_at(std::int64_t t_ns, std::uint64_t seq) {
+  // Linear motion along x at 0.1 m/s and a constant rotation about z at 0.5 rad/s.
+  const double t = (t_ns - kT0) * 1e-9;
+  PoseReading p;
+  p.t_ns = t_ns;
+  p.seq = seq;
+  p.p_world_ee_m = {0.1 * t, 0.2, 0.3};
+  p.q_world_ee = Eigen::Quaterniond(Eigen::AngleAxisd(0.5 * t, Eigen::Vector3d::UnitZ()));
+  p.joints_rad = Eigen::VectorXd::Constant(2, t);
+  return p;
+}
+}  // namespace
+
+TEST(Sync, RatesMustDivide) {
+  EXPECT_THROW(Synchronizer({1000.0, 300.0}, [](const SyncedSample&) {}), std::invalid_argument);
+  EXPECT_NO_THROW(Synchronizer({1000.0, 50.0}, [](const SyncedSample&) {}));
+}
+
+TEST(Sync, FilterHasUnitDcGainAndRemovesAliases) {
+  std::vector<SyncedSample> out;
+  Synchronizer sync({1000.0, 50.0}, [&](const SyncedSample& s) { out.push_back(s); });
+  ASSERT_EQ(sync.decimation(), 20);
+  // A constant 10 N plus a 200 Hz, 5 N disturbance: well above the 25 Hz output Nyquist rate.
+  for (int i = 0; i < 2000; ++i) {
+    const std::int64_t t = kT0 + i * 1'000'000LL;
+    if (i % 8 == 0) sync.push_pose(pose_at(t, static_cast<std::uint64_t>(i / 8)));
+    WrenchReading w;
+    w.t_ns = t;
+    w.seq = static_cast<std::uint64_t>(i);
+    w.wrench_fp(2) = 10.0 + 5.0 * std::sin(2 * kPi * 200.0 * i * 1e-3);
+    sync.push_wrench(w);
+  }
+  sync.flush();
+  ASSERT_GT(out.size(), 90u);
+  for (const auto& s : out) EXPECT_NEAR(s.wrench_fp(2), 10.0, 0.05) << "alias not removed at index " << s.index;
+  // Output times are spaced by the output period and indices count up from 0.
+  for (std::size_t i = 1; i < out.size(); ++i) {
+    EXPECT_EQ(out[i].t_ns - out[i - 1].t_ns, 20'000'000);
+    EXPECT_EQ(out[i].index, i);
+  }
+}
+
+TEST(Sync, PoseInterpolationAndTwist) {
+  std::vector<SyncedSample> out;
+  Synchronizer sync({1000.0, 50.0}, [&](const SyncedSample& s) { out.push_back(s); });
+  for (int i = 0; i < 1000; ++i) {
+    const std::int64_t t = kT0 + i * 1'000'000LL;
+    // Robot polled at 125 Hz with a 3 ms offset: pose times never coincide with sample times.
+    if (i % 8 == 3) sync.push_pose(pose_at(t, static_cast<std::uint64_t>(i)));
+    WrenchReading w;
+    w.t_ns = t;
+    sync.push_wrench(w);
+  }
+  ASSERT_GT(out.size(), 40u);
+  for (const auto& s : out) {
+    if (s.quality & kPoseExtrapolated) continue;
+    const auto truth = pose_at(s.t_ns, 0);
+    EXPECT_NEAR((s.p_world_ee_m - truth.p_world_ee_m).norm(), 0.0, 1e-12);
+    EXPECT_NEAR(s.q_world_ee.angularDistance(truth.q_world_ee), 0.0, 1e-9);
+    EXPECT_NEAR(s.joints_rad(1), truth.joints_rad(1), 1e-12);
+    EXPECT_NEAR((s.v_world_ee_m_per_s - Eigen::Vector3d(0.1, 0, 0)).norm(), 0.0, 1e-9);
+    EXPECT_NEAR((s.w_world_ee_rad_per_s - Eigen::Vector3d(0, 0, 0.5)).norm(), 0.0, 1e-6);
+    EXPECT_LE(s.pose_age_s, 0.004 + 1e-12);
+  }
+  EXPECT_EQ(out.front().quality & kPoseStale, 0u);
+}
+
+TEST(Sync, GapRestartsFilterAndIsFlagged) {
+  std::vector<SyncedSample> out;
+  Synchronizer sync({1000.0, 50.0}, [&](const SyncedSample& s) { out.push_back(s); });
+  for (int i = 0; i < 1000; ++i) {
+    if (i >= 400 && i < 450) continue;  // 50 frames lost
+    const std::int64_t t = kT0 + i * 1'000'000LL;
+    if (i % 8 == 0) sync.push_pose(pose_at(t, 0));
+    WrenchReading w;
+    w.t_ns = t;
+    w.wrench_fp(0) = 1.0;
+    sync.push_wrench(w);
+  }
+  sync.flush();
+  EXPECT_EQ(sync.wrench_gaps(), 1u);
+  int flagged = 0;
+  for (const auto& s : out) {
+    if (s.quality & kGapBefore) {
+      ++flagged;
+      EXPECT_GT(s.t_ns, kT0 + 450'000'000LL);
+    }
+    EXPECT_NEAR(s.wrench_fp(0), 1.0, 1e-12);
+  }
+  EXPECT_EQ(flagged, 1);
+}
+
+TEST(Sync, MissingPoseTimesOutAndIsFlagged) {
+  std::vector<SyncedSample> out;
+  SyncConfig cfg{1000.0, 100.0};
+  cfg.pose_timeout_s = 0.05;
+  Synchronizer sync(cfg, [&](const SyncedSample& s) { out.push_back(s); });
+  for (int i = 0; i < 500; ++i) {
+    const std::int64_t t = kT0 + i * 1'000'000LL;
+    if (i < 100 && i % 8 == 0) sync.push_pose(pose_at(t, 0));  // the robot goes silent at 0.1 s
+    WrenchReading w;
+    w.t_ns = t;
+    sync.push_wrench(w);
+  }
+  ASSERT_FALSE(out.empty());
+  // Nothing is held back for longer than the timeout: outputs keep coming while the robot is silent.
+  EXPECT_GT(out.back().t_ns, kT0 + 400'000'000LL);
+  EXPECT_TRUE(out.back().quality & kPoseExtrapolated);
+  EXPECT_TRUE(out.back().quality & kPoseStale);
+  EXPECT_GT(out.back().pose_age_s, 0.2);
+}
