@@ -50,6 +50,28 @@ class Cli(unittest.TestCase):
         self.assertIn("robot 'ur5e' (6 joints", r.stdout)
 
 
+    def test_replay_and_echo_over_dds(self):
+        env = dict(os.environ)
+        env["HIL_DDS_DOMAIN"] = str(200 + os.getpid() % 30)
+        with open(os.path.join(EXAMPLE_RUN, "samples.csv")) as f:
+            rows = sum(1 for _ in f) - 1
+        echo = subprocess.Popen([HIL, "echo", "pose_wrench", "-n", str(rows), "--timeout", "60"],
+                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
+        r = subprocess.run([HIL, "replay", EXAMPLE_RUN, "--speed", "0", "--wait-subscribers", "1"],
+                           capture_output=True, text=True, timeout=120, env=env)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        out, err = echo.communicate(timeout=60)
+        self.assertEqual(echo.returncode, 0, err)
+        lines = out.splitlines()
+        self.assertEqual(len(lines), rows)
+        self.assertTrue(lines[0].startswith("#0 t=0.0000"))
+        self.assertTrue(lines[-1].startswith("#%d " % (rows - 1)))
+
+    def test_echo_unknown_topic(self):
+        r = hil("echo", "nonsense", "--timeout", "1")
+        self.assertNotEqual(r.returncode, 0)
+
+
 class BadInput(unittest.TestCase):
     def setUp(self):
         self.dir = tempfile.mkdtemp()

@@ -25,6 +25,8 @@ void add_validate(CLI::App& app);
 void add_demo(CLI::App& app);
 void add_stiffness(CLI::App& app);  // calibration (issue 4)
 void add_contact(CLI::App& app);    // contact identification (issue 5)
-void add_rig(CLI::App& app);        // fake-rig, acquire, echo, replay (issue 3)
+void add_rig(CLI::App& app);        // fake-rig, acquire (issue 3)
+void add_echo(CLI::App& app);       // bus: print a topic
+void add_replay(CLI::App& app);     // bus: publish a recorded run
 
 }  // namespace hil::cli

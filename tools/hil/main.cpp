@@ -44,6 +44,8 @@ int main(int argc, char** argv) {
   add_stiffness(app);
   add_contact(app);
   add_rig(app);
+  add_echo(app);
+  add_replay(app);
 
   try {
     app.parse(argc, argv);

@@ -1,0 +1,119 @@
+// `hil echo TOPIC`: prints a topic live, one line per message.
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
+#include <atomic>
+#include <chrono>
+#include <csignal>
+#include <iostream>
+#include <mutex>
+#include <thread>
+
+#include "../commands.hpp"
+#include "hil/acquisition/sample_msg.hpp"
+#include "hil/dds/bus.hpp"
+#include "hil/dds/topics.hpp"
+
+namespace hil::cli {
+namespace {
+
+std::atomic<bool> g_stop{false};
+extern "C" void on_signal(int) { g_stop = true; }
+
+struct EchoOptions {
+  std::string topic;
+  long count = 0;  // 0 = until Ctrl-C
+  double timeout_s = 0.0;
+};
+
+std::string fmt_pws(const hil_msgs::msg::PoseWrenchSample& m) {
+  const auto& p = m.pose_world_ee().position();
+  const auto& f = m.wrench_fp().force();
+  const auto& t = m.wrench_fp().torque();
+  return fmt::format("#{} t={:.4f} p=[{:.6f} {:.6f} {:.6f}] f=[{:.3f} {:.3f} {:.3f}] m=[{:.4f} {:.4f} {:.4f}] q={} ages={:.1f}/{:.1f} ms",
+                     m.sample_index(), m.t_s(), p.x(), p.y(), p.z(), f.x(), f.y(), f.z(), t.x(), t.y(), t.z(),
+                     m.quality_flags(), m.wrench_age_s() * 1e3, m.pose_age_s() * 1e3);
+}
+
+std::string fmt_status(const hil_msgs::msg::DeviceStatus& m) {
+  static const char* states[] = {"ok", "degraded", "fault", "disconnected"};
+  return fmt::format("{} {} connected={} rate={:.1f} Hz age={:.1f} ms samples={} dropped={} errors={}{}", m.device(),
+                     m.state() < 4 ? states[m.state()] : "?", m.connected(), m.rate_hz(), m.last_sample_age_s() * 1e3,
+                     m.samples(), m.frames_dropped(), m.errors(), m.last_error().empty() ? "" : " last: " + m.last_error());
+}
+
+std::string fmt_contact(const hil_msgs::msg::ContactEstimate& m) {
+  return fmt::format("t={:.3f} points={} K_inst={:.4g} mu_inst={:.3f} K={:.4g}+-{:.2g} mu={:.3f}+-{:.2g} n={} err={:.3f}", m.t_s(),
+                     m.contact_points(), m.k_instant_n_per_m(), m.mu_instant(), m.k_global_n_per_m(), m.k_global_std(),
+                     m.mu_global(), m.mu_global_std(), m.samples_used(), m.relative_force_error());
+}
+
+std::string fmt_stiffness(const hil_msgs::msg::StiffnessEstimate& m) {
+  std::string s = fmt::format("configs={} rank={} params={}", m.configurations(), m.rank(), m.parameters().size());
+  for (const auto& p : m.parameters()) s += fmt::format(" {}={:.4g}+-{:.2g}({})", p.name(), p.value(), p.std_dev(), p.identifiability());
+  return s;
+}
+
+std::string fmt_measurement(const hil_msgs::msg::StiffnessMeasurement& m) {
+  const auto& d = m.displacement_world_m();
+  return fmt::format("config={} joints={} d=[{:.6g} {:.6g} {:.6g}]", m.config(), m.joints_rad().size(), d.x(), d.y(), d.z());
+}
+
+template <class Msg>
+int echo(dds::Participant& p, const std::string& topic, std::string (*show)(const Msg&), const EchoOptions& o) {
+  std::atomic<long> n{0};
+  std::mutex out;
+  dds::Reader<Msg> reader(p, topic, [&](const Msg& m, const auto&) {
+    std::lock_guard<std::mutex> lock(out);
+    std::cout << show(m) << '\n' << std::flush;
+    ++n;
+  });
+  const auto start = std::chrono::steady_clock::now();
+  while (!g_stop && (o.count == 0 || n < o.count)) {
+    if (o.timeout_s > 0 && std::chrono::steady_clock::now() - start > std::chrono::duration<double>(o.timeout_s)) {
+      spdlog::warn("echo: {} messages on {} before the timeout", n.load(), topic);
+      return o.count == 0 ? 0 : 1;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  return 0;
+}
+
+std::string resolve(const std::string& t) {
+  if (t.rfind("rt/", 0) == 0) return t;
+  if (t == "pose_wrench") return dds::topics::kPoseWrenchSample;
+  if (t == "device_status") return dds::topics::kDeviceStatus;
+  if (t == "contact_estimate") return dds::topics::kContactEstimate;
+  if (t == "stiffness_estimate") return dds::topics::kStiffnessEstimate;
+  if (t == "stiffness_measurement") return dds::topics::kStiffnessMeasurement;
+  return "rt/" + (t.front() == '/' ? t.substr(1) : t);
+}
+
+}  // namespace
+
+void add_echo(CLI::App& app) {
+  auto* cmd = app.add_subcommand("echo", "Print a bus topic live: pose_wrench, device_status, contact_estimate, "
+                                         "stiffness_estimate, stiffness_measurement (or its rt/... name)");
+  static EchoOptions o;
+  cmd->add_option("TOPIC", o.topic, "topic")->required();
+  cmd->add_option("-n,--count", o.count, "stop after this many messages (0: until Ctrl-C)");
+  cmd->add_option("--timeout", o.timeout_s, "give up after this many seconds (0: never)");
+  cmd->callback([] {
+    set_action([] {
+      std::signal(SIGINT, on_signal);
+      std::signal(SIGTERM, on_signal);
+      auto& g = globals();
+      dds::Participant p({g.dds_domain >= 0 ? g.dds_domain : dds::domain_from_env(), g.dds_profile, g.dds_profile_name, "hil-echo"});
+      const auto topic = resolve(o.topic);
+      if (topic == dds::topics::kPoseWrenchSample) return echo<hil_msgs::msg::PoseWrenchSample>(p, topic, fmt_pws, o);
+      if (topic == dds::topics::kDeviceStatus) return echo<hil_msgs::msg::DeviceStatus>(p, topic, fmt_status, o);
+      if (topic == dds::topics::kContactEstimate) return echo<hil_msgs::msg::ContactEstimate>(p, topic, fmt_contact, o);
+      if (topic == dds::topics::kStiffnessEstimate) return echo<hil_msgs::msg::StiffnessEstimate>(p, topic, fmt_stiffness, o);
+      if (topic == dds::topics::kStiffnessMeasurement) return echo<hil_msgs::msg::StiffnessMeasurement>(p, topic, fmt_measurement, o);
+      throw std::runtime_error("echo: unknown topic '" + o.topic + "' (known: pose_wrench, device_status, contact_estimate, "
+                               "stiffness_estimate, stiffness_measurement)");
+    });
+  });
+}
+
+}  // namespace hil::cli

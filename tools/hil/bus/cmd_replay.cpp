@@ -1,0 +1,66 @@
+// `hil replay RUN`: publishes a recorded run as PoseWrenchSample, at its own pace or faster.
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
+#include <chrono>
+#include <csignal>
+#include <thread>
+
+#include "../commands.hpp"
+#include "hil/acquisition/sample_msg.hpp"
+#include "hil/dds/bus.hpp"
+#include "hil/dds/topics.hpp"
+#include "hil/format/run.hpp"
+
+namespace hil::cli {
+namespace {
+std::atomic<bool> g_stop{false};
+extern "C" void on_replay_signal(int) { g_stop = true; }
+
+struct ReplayOptions {
+  std::string run;
+  double speed = 1.0;  // 0 = as fast as possible
+  int wait_readers = 0;
+  double wait_s = 10.0;
+};
+}  // namespace
+
+int replay(const ReplayOptions& o) {
+  const auto run = format::load_run(o.run);
+  auto& g = globals();
+  dds::Participant p({g.dds_domain >= 0 ? g.dds_domain : dds::domain_from_env(), g.dds_profile, g.dds_profile_name, "hil-replay"});
+  dds::Writer<hil_msgs::msg::PoseWrenchSample> w(p, dds::topics::kPoseWrenchSample);
+  if (o.wait_readers > 0 && !w.wait_for_readers(o.wait_readers, std::chrono::milliseconds(static_cast<long>(o.wait_s * 1e3))))
+    throw std::runtime_error(fmt::format("replay: fewer than {} subscribers after {} s", o.wait_readers, o.wait_s));
+  std::signal(SIGINT, on_replay_signal);
+  spdlog::info("replaying {} samples ({:.1f} s) from {} at {}", run.samples.size(),
+               run.samples.samples.back().t_s - run.samples.samples.front().t_s, o.run,
+               o.speed > 0 ? fmt::format("{}x", o.speed) : std::string("full speed"));
+  const auto start = std::chrono::steady_clock::now();
+  const double t0 = run.samples.samples.front().t_s;
+  std::size_t sent = 0;
+  for (std::size_t i = 0; i < run.samples.size() && !g_stop; ++i) {
+    const auto& s = run.samples.samples[i];
+    if (o.speed > 0)
+      std::this_thread::sleep_until(start + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                                                std::chrono::duration<double>((s.t_s - t0) / o.speed)));
+    if (!w.write(acquisition::to_message(s, i, run.samples.joints_rad.row(static_cast<Eigen::Index>(i)))))
+      throw std::runtime_error(fmt::format("replay: DDS refused sample {}", i));
+    ++sent;
+  }
+  if (o.wait_readers > 0) w.wait_for_acknowledgments(std::chrono::seconds(10));
+  spdlog::info("replay: {} samples published", sent);
+  return 0;
+}
+
+void add_replay(CLI::App& app) {
+  auto* cmd = app.add_subcommand("replay", "Publish a recorded run on the bus as PoseWrenchSample");
+  static ReplayOptions o;
+  cmd->add_option("RUN", o.run, "run folder")->required()->check(CLI::ExistingDirectory);
+  cmd->add_option("--speed", o.speed, "1 = real time, 10 = ten times faster, 0 = as fast as possible")->capture_default_str();
+  cmd->add_option("--wait-subscribers", o.wait_readers, "wait for this many subscribers before starting, and for their acknowledgments at the end");
+  cmd->add_option("--wait-timeout", o.wait_s, "seconds to wait for subscribers")->capture_default_str();
+  cmd->callback([] { set_action([] { return replay(o); }); });
+}
+
+}  // namespace hil::cli
