@@ -1,5 +1,6 @@
 #include "hil/acquisition/sync.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
@@ -41,42 +42,64 @@ Synchronizer::Synchronizer(const SyncConfig& config, Sink sink) : cfg_(config), 
   half_ = m_ == 1 ? 0 : (cfg_.fir_half_length > 0 ? cfg_.fir_half_length : 2 * m_);
   taps_ = m_ == 1 ? std::vector<double>{1.0} : lowpass_taps(half_, 0.4 / m_);
   period_ns_ = static_cast<std::int64_t>(std::llround(1e9 / cfg_.wrench_rate_hz));
+  gap_ns_ = static_cast<std::int64_t>(std::llround(cfg_.gap_periods * 1e9 / cfg_.wrench_rate_hz));
+  reset_ns_ = cfg_.reset_gap_s > 0 ? static_cast<std::int64_t>(cfg_.reset_gap_s * 1e9)
+                                   : std::max({gap_ns_, static_cast<std::int64_t>(half_) * period_ns_, std::int64_t{50'000'000}});
 }
 
 void Synchronizer::push_wrench(const WrenchReading& r) {
-  if (!window_.empty()) {
-    const auto dt = r.t_ns - window_.back().t_ns;
-    if (dt > period_ns_ * 3 / 2) {
-      // Frames are missing: a FIR over a hole would smear it. Restart, and say so on the next output.
-      window_.clear();
-      since_output_ = 0;
+  if (have_prev_ && r.t_ns <= prev_.t_ns) return;  // duplicate or out of order: keep the first
+  if (!have_prev_ || r.t_ns - prev_.t_ns > reset_ns_) {
+    // First reading, or a hole too long to bridge: restart the grid and the filter here.
+    if (have_prev_) {
       gap_pending_ = true;
       ++gaps_;
     }
-  } else if (last_wrench_ns_ != 0 && r.t_ns - last_wrench_ns_ > period_ns_ * 3 / 2) {
-    gap_pending_ = true;
-    ++gaps_;
+    window_.clear();
+    since_output_ = 0;
+    grid_ns_ = r.t_ns;
+    push_grid(r.t_ns, r.wrench_fp, r.quality, r.seq);
+    grid_ns_ += period_ns_;
+  } else {
+    if (r.t_ns - prev_.t_ns > gap_ns_) {
+      gap_pending_ = true;  // readings are missing: bridged by interpolation, and said so
+      ++gaps_;
+    }
+    const double span = static_cast<double>(r.t_ns - prev_.t_ns);
+    for (; grid_ns_ <= r.t_ns; grid_ns_ += period_ns_) {
+      const double a = static_cast<double>(grid_ns_ - prev_.t_ns) / span;
+      push_grid(grid_ns_, (1.0 - a) * prev_.wrench_fp + a * r.wrench_fp, prev_.quality | r.quality, r.seq);
+    }
   }
+  prev_ = r;
+  have_prev_ = true;
   last_wrench_ns_ = r.t_ns;
-  window_.push_back(r);
+  emit_ready(r.t_ns, false);
+}
+
+void Synchronizer::push_grid(std::int64_t t_ns, const Vector6d& w, std::uint32_t quality, std::uint64_t seq) {
+  WrenchReading g;
+  g.t_ns = t_ns;
+  g.wrench_fp = w;
+  g.quality = quality;
+  g.seq = seq;
+  window_.push_back(g);
   if (window_.size() > taps_.size()) window_.pop_front();
   ++since_output_;
-  if (window_.size() == taps_.size() && since_output_ >= m_) {
-    since_output_ = 0;
-    SyncedSample s;
-    const auto& centre = window_[static_cast<std::size_t>(half_)];
-    s.t_ns = centre.t_ns;
-    s.wrench_seq = window_.back().seq;
-    s.wrench_age_s = 0.0;  // the centre reading is the sample's own time
-    for (std::size_t k = 0; k < taps_.size(); ++k) {
-      s.wrench_fp.noalias() += taps_[k] * window_[k].wrench_fp;
-      s.quality |= window_[k].quality;
-    }
-    if (gap_pending_) s.quality |= kGapBefore;
-    gap_pending_ = false;
-    pending_.push_back(std::move(s));
+  if (window_.size() < taps_.size() || since_output_ < m_) return;
+  since_output_ = 0;
+  SyncedSample s;
+  const auto& centre = window_[static_cast<std::size_t>(half_)];
+  s.t_ns = centre.t_ns;
+  s.wrench_seq = centre.seq;
+  s.wrench_age_s = 0.0;  // the centre value is at the sample's own time
+  for (std::size_t k = 0; k < taps_.size(); ++k) {
+    s.wrench_fp.noalias() += taps_[k] * window_[k].wrench_fp;
+    s.quality |= window_[k].quality;
   }
-  emit_ready(r.t_ns, false);
+  if (gap_pending_) s.quality |= kGapBefore;
+  gap_pending_ = false;
+  pending_.push_back(std::move(s));
 }
 
 void Synchronizer::push_pose(const PoseReading& r) {

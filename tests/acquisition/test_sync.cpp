@@ -82,7 +82,7 @@ TEST(Sync, GapRestartsFilterAndIsFlagged) {
   std::vector<SyncedSample> out;
   Synchronizer sync({1000.0, 50.0}, [&](const SyncedSample& s) { out.push_back(s); });
   for (int i = 0; i < 1000; ++i) {
-    if (i >= 400 && i < 450) continue;  // 50 frames lost
+    if (i >= 400 && i < 460) continue;  // 60 frames lost: longer than the 50 ms that are bridged
     const std::int64_t t = kT0 + i * 1'000'000LL;
     if (i % 8 == 0) sync.push_pose(pose_at(t, 0));
     WrenchReading w;
@@ -96,9 +96,37 @@ TEST(Sync, GapRestartsFilterAndIsFlagged) {
   for (const auto& s : out) {
     if (s.quality & kGapBefore) {
       ++flagged;
-      EXPECT_GT(s.t_ns, kT0 + 450'000'000LL);
+      EXPECT_GT(s.t_ns, kT0 + 460'000'000LL);
     }
     EXPECT_NEAR(s.wrench_fp(0), 1.0, 1e-12);
+  }
+  EXPECT_EQ(flagged, 1);
+}
+
+TEST(Sync, JitterAndShortGapsAreBridgedOnAUniformGrid) {
+  std::vector<SyncedSample> out;
+  Synchronizer sync({1000.0, 50.0}, [&](const SyncedSample& s) { out.push_back(s); });
+  std::uint64_t lcg = 12345;
+  for (int i = 0; i < 1000; ++i) {
+    if (i >= 500 && i < 505) continue;  // 5 frames lost: bridged, not a restart
+    lcg = lcg * 6364136223846793005ULL + 1442695040888963407ULL;
+    const std::int64_t jitter = static_cast<std::int64_t>((lcg >> 33) % 1500000) - 750000;  // +-0.75 ms
+    const std::int64_t t = kT0 + i * 1'000'000LL + jitter;
+    if (i % 8 == 0) sync.push_pose(pose_at(t, 0));
+    WrenchReading w;
+    w.t_ns = t;
+    w.wrench_fp(1) = 2.0;
+    sync.push_wrench(w);
+  }
+  sync.flush();
+  ASSERT_GE(out.size(), 45u) << "jitter must not starve the output";
+  int flagged = 0;
+  for (std::size_t i = 0; i < out.size(); ++i) {
+    EXPECT_NEAR(out[i].wrench_fp(1), 2.0, 1e-12);
+    if (i > 0) {
+      EXPECT_EQ(out[i].t_ns - out[i - 1].t_ns, 20000000) << "output times are exactly uniform";
+    }
+    flagged += (out[i].quality & kGapBefore) != 0;
   }
   EXPECT_EQ(flagged, 1);
 }

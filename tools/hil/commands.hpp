@@ -28,5 +28,6 @@ void add_contact(CLI::App& app);    // contact identification (issue 5)
 void add_rig(CLI::App& app);        // fake-rig, acquire (issue 3)
 void add_echo(CLI::App& app);       // bus: print a topic
 void add_replay(CLI::App& app);     // bus: publish a recorded run
+void add_acquire(CLI::App& app);    // the rig service
 
 }  // namespace hil::cli

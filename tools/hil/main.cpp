@@ -46,6 +46,7 @@ int main(int argc, char** argv) {
   add_rig(app);
   add_echo(app);
   add_replay(app);
+  add_acquire(app);
 
   try {
     app.parse(argc, argv);

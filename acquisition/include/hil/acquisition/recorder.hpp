@@ -31,6 +31,7 @@ class RunRecorder {
   std::string raw_path(const std::string& file) const;
   const std::string& dir() const { return dir_; }
   std::uint64_t rows() const { return rows_; }
+  std::int64_t start_ns() const { return start_ns_; }
   std::uint64_t gaps() const { return gaps_; }
 
  private:

@@ -1,17 +1,19 @@
 #pragma once
 /// \file Synchronisation of the pose stream to the wrench stream, with decimation.
 ///
-/// The wrench stream (force plate, ~1 kHz) sets the clock. It is low-pass filtered by a
-/// windowed-sinc FIR (cut-off 0.4 x the output rate, Hann window) and decimated to the output
-/// rate; each output takes the time stamp of the FIR's centre tap, so the filter adds no phase
-/// lag. The pose (robot, ~125 Hz) is interpolated at that time: position and joints linearly,
-/// orientation by slerp. The twist comes from filtered differences: a least-squares slope over
-/// the poses within +-`twist_half_window` of the sample time. An output waits for a pose newer
-/// than its time; after `pose_timeout_s` without one it goes out with the last pose held and
-/// flagged (kPoseExtrapolated, kPoseStale past `pose_stale_s`). A gap in the wrench stream
-/// (step > 1.5 nominal periods) restarts the filter and flags the next output kGapBefore.
-/// Pure: no clocks, no threads, no I/O; real-time safe after construction (no allocation in
-/// push_* once the buffers reached their size).
+/// The wrench stream (force plate, ~1 kHz) sets the clock. Readings come with jitter (polls on a
+/// busy machine) and sometimes not at all (lost frames), so they are first resampled onto a uniform
+/// grid at the nominal rate by linear interpolation between neighbouring readings. The grid is
+/// low-pass filtered by a windowed-sinc FIR (cut-off 0.4 x the output rate, Hann window) and
+/// decimated to the output rate; each output takes the time of the FIR's centre tap, so the filter
+/// adds no phase lag and output times are exactly uniform. A step longer than `gap_periods` nominal
+/// periods is bridged but flags the next output kGapBefore; one longer than `reset_gap_s` restarts
+/// the filter (nothing is invented across it). The pose (robot, ~125 Hz) is interpolated at each
+/// output time: position and joints linearly, orientation by slerp; the twist comes from filtered
+/// differences, a least-squares slope over the poses within +-`twist_half_window_s`. An output
+/// waits for a pose past that window; after `pose_timeout_s` without one it goes out with the last
+/// pose held and flagged (kPoseExtrapolated, kPoseStale past `pose_stale_s`).
+/// Pure: no clocks, no threads, no I/O.
 #include <deque>
 #include <functional>
 #include <vector>
@@ -27,6 +29,11 @@ struct SyncConfig {
   double pose_timeout_s = 0.1;     ///< wait at most this long for a pose after a sample's time
   double pose_stale_s = 0.05;      ///< a pose older than this at the sample time is stale
   double twist_half_window_s = 0.02;  ///< poses within +- this fit the twist
+  /// A step longer than this many nominal periods is a gap (frames lost). Polling jitter on a
+  /// loaded machine makes 1.5-period steps common; 2.5 means at least one reading is missing.
+  double gap_periods = 2.5;
+  /// A step longer than this restarts the filter (0: the FIR half-length, at least 50 ms).
+  double reset_gap_s = 0.0;
 };
 
 class Synchronizer {
@@ -59,7 +66,13 @@ class Synchronizer {
   int half_ = 0;
   std::vector<double> taps_;
   std::int64_t period_ns_ = 0;
-  std::deque<WrenchReading> window_;  ///< last 2*half+1 wrench readings
+  std::int64_t gap_ns_ = 0;
+  void push_grid(std::int64_t t_ns, const Vector6d& w, std::uint32_t quality, std::uint64_t seq);
+  std::deque<WrenchReading> window_;  ///< last 2*half+1 grid values
+  WrenchReading prev_;                ///< the previous reading (for interpolation)
+  bool have_prev_ = false;
+  std::int64_t grid_ns_ = 0;          ///< next grid time
+  std::int64_t reset_ns_ = 0;
   int since_output_ = 0;
   bool gap_pending_ = false;
   std::uint64_t gaps_ = 0;

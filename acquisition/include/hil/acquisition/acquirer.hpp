@@ -1,0 +1,97 @@
+#pragma once
+/// \file The rig service's core: polls the force plate and the robot controller on their own
+/// threads, synchronizes, records and publishes, and watches device health.
+///
+/// Threads: one per device (each driver holds its own CAN channel or libmodbus context). Both push
+/// into the Synchronizer under one mutex; outputs are recorded and published from the thread that
+/// completed them. DeviceStatus goes out on every state change and every `status_period_s`.
+/// Exceptions never leave a device thread: a failing poll is a status, counted and reported.
+#include <atomic>
+#include <functional>
+#include <memory>
+#include <mutex>
+#include <thread>
+#include <vector>
+
+#include "hil/acquisition/monitor.hpp"
+#include "hil/acquisition/recorder.hpp"
+#include "hil/acquisition/sync.hpp"
+#include "hil/dds/bus.hpp"
+#include "hil/drivers/force_plate.hpp"
+#include "hil/drivers/robot_controller.hpp"
+
+namespace hil::acquisition {
+
+struct AcquirerOptions {
+  SyncConfig sync;
+  Eigen::Isometry3d T_world_base = Eigen::Isometry3d::Identity();  ///< robot base in world
+  Eigen::Isometry3d T_tcp_ee = Eigen::Isometry3d::Identity();      ///< ee in the controller's tool frame
+  /// Joints -> T_base_ee, used when the register map has no tool pose (from the rig's DH table).
+  std::function<Eigen::Isometry3d(const Eigen::VectorXd&)> forward_kinematics;
+  double status_period_s = 1.0;
+  bool ros_topics = true;  ///< also publish rt/hil/wrench, rt/hil/pose, rt/hil/joint_states
+  std::string force_plate_name = "force_plate";
+  std::string robot_name = "robot";
+};
+
+/// Raw per-device streams written next to the run (raw/force_plate.csv, raw/robot.csv).
+class RawWriter;
+
+class Acquirer {
+ public:
+  /// \param bus, recorder  not owned, may be null; must outlive the Acquirer.
+  Acquirer(AcquirerOptions options, std::unique_ptr<drivers::ForcePlate> plate,
+           std::unique_ptr<drivers::RobotControllerDriver> robot, dds::Participant* bus, RunRecorder* recorder);
+  ~Acquirer();
+  Acquirer(const Acquirer&) = delete;
+  Acquirer& operator=(const Acquirer&) = delete;
+
+  /// Starts the devices (ATI start-up reads, Modbus connect) and the threads.
+  /// \throws drivers::DeviceError if a device cannot be started.
+  void start();
+  /// Stops the threads and flushes the synchronizer (pending samples go out). Idempotent.
+  void stop();
+  /// Software tare of the force plate (averages the next samples).
+  void tare();
+
+  /// Called for every synchronized sample (under the pipeline lock: keep it short).
+  void on_sample(std::function<void(const SyncedSample&)> f);
+  std::vector<DeviceHealth> health() const;
+  std::uint64_t samples() const { return emitted_; }
+  std::uint64_t status_messages() const { return status_sent_; }
+  const drivers::ForcePlateInfo& plate_info() const { return plate_info_; }
+
+ private:
+  void plate_loop();
+  void robot_loop();
+  void emit(const SyncedSample& s);
+  void check_health(std::int64_t now_ns, bool periodic);
+  void publish_status(const DeviceHealth& h, std::int64_t now_ns);
+
+  AcquirerOptions opt_;
+  std::unique_ptr<drivers::ForcePlate> plate_;
+  std::unique_ptr<drivers::RobotControllerDriver> robot_;
+  dds::Participant* bus_;
+  RunRecorder* recorder_;
+  drivers::ForcePlateInfo plate_info_;
+
+  mutable std::mutex mutex_;  ///< guards sync_, monitors, writers, sinks
+  Synchronizer sync_;
+  DeviceMonitor plate_mon_, robot_mon_;
+  std::unique_ptr<dds::Writer<hil_msgs::msg::PoseWrenchSample>> w_sample_;
+  std::unique_ptr<dds::Writer<hil_msgs::msg::DeviceStatus>> w_status_;
+  std::unique_ptr<dds::Writer<geometry_msgs::msg::WrenchStamped>> w_wrench_;
+  std::unique_ptr<dds::Writer<geometry_msgs::msg::PoseStamped>> w_pose_;
+  std::unique_ptr<dds::Writer<sensor_msgs::msg::JointState>> w_joints_;
+  std::vector<std::function<void(const SyncedSample&)>> sinks_;
+  std::unique_ptr<RawWriter> raw_;
+  std::int64_t last_status_ns_ = 0;
+  std::int64_t start_ns_ = 0;  ///< the run's t = 0
+  std::uint64_t last_plate_drops_ = 0, last_robot_failures_ = 0;
+
+  std::atomic<bool> running_{false};
+  std::atomic<std::uint64_t> emitted_{0}, status_sent_{0};
+  std::thread plate_thread_, robot_thread_;
+};
+
+}  // namespace hil::acquisition

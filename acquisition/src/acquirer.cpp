@@ -1,0 +1,351 @@
+#include "hil/acquisition/acquirer.hpp"
+
+#include <fcntl.h>
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
+
+#include "hil/acquisition/sample_msg.hpp"
+#include "hil/dds/topics.hpp"
+#include "hil/drivers/can_channel.hpp"
+#include "hil/drivers/error.hpp"
+
+namespace hil::acquisition {
+
+// Append-only CSV of each device's own readings, flushed with the run (whole lines per write).
+class RawWriter {
+ public:
+  explicit RawWriter(const RunRecorder& rec) {
+    plate_ = open(rec.raw_path("force_plate.csv"),
+                  "t_ns,seq,stamp,status_word,g0,g1,g2,g3,g4,g5,fx,fy,fz,mx,my,mz\n");
+    robot_ = open(rec.raw_path("robot.csv"), "t_ns,rtt_ns,seq,px,py,pz,qw,qx,qy,qz,joints\n");
+  }
+  ~RawWriter() {
+    flush();
+    ::close(plate_);
+    ::close(robot_);
+  }
+  void plate(const drivers::WrenchSample& s) {
+    fmt::format_to(std::back_inserter(plate_buf_), "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n", s.t_ns, s.sequence,
+                   static_cast<int>(s.stamp), s.status_word, s.gauges[0], s.gauges[1], s.gauges[2], s.gauges[3], s.gauges[4],
+                   s.gauges[5], s.w_fp[0], s.w_fp[1], s.w_fp[2], s.w_fp[3], s.w_fp[4], s.w_fp[5]);
+  }
+  void robot(const drivers::RobotSample& s, const Eigen::Isometry3d& T_world_ee) {
+    const Eigen::Quaterniond q(T_world_ee.linear());
+    const auto& p = T_world_ee.translation();
+    fmt::format_to(std::back_inserter(robot_buf_), "{},{},{},{},{},{},{},{},{},{},", s.t_ns, s.rtt_ns, s.sequence, p.x(), p.y(),
+                   p.z(), q.w(), q.x(), q.y(), q.z());
+    for (unsigned j = 0; j < s.joint_count; ++j) fmt::format_to(std::back_inserter(robot_buf_), "{}{}", j ? " " : "", s.joints[j]);
+    robot_buf_ += '\n';
+  }
+  void flush() {
+    write_all(plate_, plate_buf_);
+    write_all(robot_, robot_buf_);
+  }
+
+ private:
+  static int open(const std::string& path, const char* header) {
+    const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+    if (fd < 0) throw std::runtime_error(path + ": cannot create: " + std::strerror(errno));
+    std::string h(header);
+    write_all(fd, h);
+    return fd;
+  }
+  static void write_all(int fd, std::string& buf) {
+    std::size_t done = 0;
+    while (done < buf.size()) {
+      const auto n = ::write(fd, buf.data() + done, buf.size() - done);
+      if (n < 0 && errno == EINTR) continue;
+      if (n < 0) {
+        spdlog::error("raw recording: write failed: {}", std::strerror(errno));
+        break;
+      }
+      done += static_cast<std::size_t>(n);
+    }
+    buf.clear();
+  }
+  int plate_ = -1, robot_ = -1;
+  std::string plate_buf_, robot_buf_;
+};
+
+namespace {
+
+DeviceHealth merged(const DeviceHealth& h, const drivers::DeviceCounters& c) {
+  DeviceHealth out = h;
+  out.frames_dropped = std::max(out.frames_dropped, c.dropped_frames);
+  return out;
+}
+
+hil_msgs::msg::DeviceStatus to_msg(const DeviceHealth& h, std::int64_t now_ns) {
+  hil_msgs::msg::DeviceStatus m;
+  m.stamp(to_time(static_cast<double>(now_ns) * 1e-9));
+  m.device(h.device);
+  m.state(static_cast<std::uint8_t>(h.state));
+  m.connected(h.connected);
+  m.rate_hz(h.rate_hz);
+  m.last_sample_age_s(std::isfinite(h.last_sample_age_s) ? h.last_sample_age_s : -1.0);
+  m.samples(h.samples);
+  m.frames_dropped(h.frames_dropped);
+  m.errors(h.errors);
+  m.last_error(h.state == DeviceState::ok ? h.last_error : (h.reason.empty() ? h.last_error : h.reason));
+  return m;
+}
+
+}  // namespace
+
+Acquirer::Acquirer(AcquirerOptions options, std::unique_ptr<drivers::ForcePlate> plate,
+                   std::unique_ptr<drivers::RobotControllerDriver> robot, dds::Participant* bus, RunRecorder* recorder)
+    : opt_(std::move(options)), plate_(std::move(plate)), robot_(std::move(robot)), bus_(bus), recorder_(recorder),
+      sync_(opt_.sync, [this](const SyncedSample& s) { emit(s); }),
+      plate_mon_(opt_.force_plate_name, opt_.sync.wrench_rate_hz),
+      robot_mon_(opt_.robot_name, robot_ ? robot_->config().rate_hz : 1.0) {
+  if (!plate_) throw std::invalid_argument("acquirer: a force plate is required");
+  if (bus_) {
+    // Keep-last with a deep history: a slow subscriber never blocks acquisition; 5 s of samples
+    // are kept for it to catch up.
+    dds::StreamQos q{true, 5000, 0};
+    w_sample_ = std::make_unique<dds::Writer<hil_msgs::msg::PoseWrenchSample>>(*bus_, dds::topics::kPoseWrenchSample, q);
+    w_status_ = std::make_unique<dds::Writer<hil_msgs::msg::DeviceStatus>>(*bus_, dds::topics::kDeviceStatus,
+                                                                          dds::StreamQos{true, 10, 10});
+    if (opt_.ros_topics) {
+      w_wrench_ = std::make_unique<dds::Writer<geometry_msgs::msg::WrenchStamped>>(*bus_, dds::topics::kWrench, q);
+      w_pose_ = std::make_unique<dds::Writer<geometry_msgs::msg::PoseStamped>>(*bus_, dds::topics::kPose, q);
+      w_joints_ = std::make_unique<dds::Writer<sensor_msgs::msg::JointState>>(*bus_, dds::topics::kJointStates, q);
+    }
+  }
+  if (recorder_) raw_ = std::make_unique<RawWriter>(*recorder_);
+}
+
+Acquirer::~Acquirer() { stop(); }
+
+void Acquirer::on_sample(std::function<void(const SyncedSample&)> f) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  sinks_.push_back(std::move(f));
+}
+
+void Acquirer::start() {
+  start_ns_ = recorder_ ? recorder_->start_ns() : realtime_ns();
+  plate_info_ = plate_->start();
+  spdlog::info("force plate: {} serial '{}' firmware '{}' on {}", plate_info_.protocol, plate_info_.serial, plate_info_.firmware,
+               plate_->channel().name());
+  if (robot_) {
+    robot_->connect();
+    spdlog::info("robot controller: {}", robot_->config().describe());
+  }
+  running_ = true;
+  plate_thread_ = std::thread([this] { plate_loop(); });
+  if (robot_) robot_thread_ = std::thread([this] { robot_loop(); });
+}
+
+void Acquirer::stop() {
+  if (!running_.exchange(false)) return;
+  if (plate_thread_.joinable()) plate_thread_.join();
+  if (robot_thread_.joinable()) robot_thread_.join();
+  std::lock_guard<std::mutex> lock(mutex_);
+  sync_.flush();
+  if (raw_) raw_->flush();
+  if (recorder_) recorder_->flush();
+  const auto now = realtime_ns();
+  publish_status(merged(plate_mon_.health(now), plate_->counters()), now);
+  if (robot_) publish_status(robot_mon_.health(now), now);
+}
+
+void Acquirer::tare() { plate_->tare(); }
+
+std::vector<DeviceHealth> Acquirer::health() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  const auto now = realtime_ns();
+  std::vector<DeviceHealth> out{merged(plate_mon_.health(now), plate_->counters())};
+  if (robot_) out.push_back(robot_mon_.health(now));
+  return out;
+}
+
+void Acquirer::plate_loop() {
+  drivers::RatePacer pacer(plate_->config().rate_hz);
+  drivers::WrenchSample s;
+  while (running_) {
+    const auto st = plate_->poll(s);
+    const auto now = realtime_ns();
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      switch (st) {
+        case drivers::PollStatus::ok: {
+          WrenchReading r;
+          r.t_ns = s.t_ns != 0 ? s.t_ns : now;
+          r.seq = s.sequence;
+          r.wrench_fp = s.w_fp;
+          if (s.saturated_axes || s.gauge_saturated) r.quality |= kWrenchSaturated;
+          if (s.can_bus_error) {
+            r.quality |= kDeviceFault;
+            plate_mon_.error("force plate reports a CAN bus error (status 0x4000)", now);
+          }
+          plate_mon_.sample(r.t_ns);
+          if (raw_) raw_->plate(s);
+          sync_.push_wrench(r);
+          break;
+        }
+        case drivers::PollStatus::timeout:
+          break;  // silence: the monitor sees it after a few periods
+        case drivers::PollStatus::bad_frame:
+        case drivers::PollStatus::bus_error:
+        case drivers::PollStatus::exception:
+          plate_mon_.error(fmt::format("{}: {}", drivers::to_string(st), plate_->last_problem()), now);
+          break;
+        case drivers::PollStatus::disconnected:
+        case drivers::PollStatus::closed:
+          plate_mon_.link(false, now);
+          break;
+      }
+      const auto drops = plate_->counters().dropped_frames;
+      if (drops > last_plate_drops_) plate_mon_.dropped(drops - last_plate_drops_, now);
+      last_plate_drops_ = drops;
+      check_health(now, true);
+    }
+    if (st == drivers::PollStatus::closed) break;
+    pacer.wait();
+  }
+}
+
+void Acquirer::robot_loop() {
+  drivers::RatePacer pacer(robot_->config().rate_hz);
+  drivers::RobotSample s;
+  Eigen::VectorXd q;
+  while (running_) {
+    const auto st = robot_->poll(s);
+    const auto now = realtime_ns();
+    // Pose outside the lock: forward kinematics may take a few microseconds.
+    PoseReading r;
+    Eigen::Isometry3d T_world_ee = Eigen::Isometry3d::Identity();
+    bool have_pose = false;
+    if (st == drivers::PollStatus::ok) {
+      q = Eigen::Map<const Eigen::VectorXd>(s.joints.data(), s.joint_count);
+      if (s.has_pose) {
+        Eigen::Isometry3d T_base_tcp = Eigen::Isometry3d::Identity();
+        T_base_tcp.linear() = s.q_base_tcp.toRotationMatrix();
+        T_base_tcp.translation() = s.p_base_tcp_m;
+        T_world_ee = opt_.T_world_base * T_base_tcp * opt_.T_tcp_ee;
+        have_pose = true;
+      } else if (opt_.forward_kinematics && s.joint_count > 0) {
+        T_world_ee = opt_.T_world_base * opt_.forward_kinematics(q);
+        have_pose = true;
+      }
+      r.t_ns = s.t_ns;
+      r.rtt_ns = s.rtt_ns;
+      r.seq = s.sequence;
+      r.p_world_ee_m = T_world_ee.translation();
+      r.q_world_ee = Eigen::Quaterniond(T_world_ee.linear()).normalized();
+      r.joints_rad = q;
+    }
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      switch (st) {
+        case drivers::PollStatus::ok:
+          if (!have_pose) {
+            robot_mon_.error("the register map gives neither a tool pose nor joints with a DH table", now);
+            break;
+          }
+          robot_mon_.sample(s.t_ns);
+          if (raw_) raw_->robot(s, T_world_ee);
+          sync_.push_pose(r);
+          break;
+        case drivers::PollStatus::timeout:
+          break;
+        case drivers::PollStatus::bad_frame:
+        case drivers::PollStatus::bus_error:
+        case drivers::PollStatus::exception:
+          robot_mon_.error(fmt::format("{}: {}", drivers::to_string(st), robot_->last_problem()), now);
+          break;
+        case drivers::PollStatus::disconnected:
+        case drivers::PollStatus::closed:
+          robot_mon_.link(false, now);
+          break;
+      }
+      check_health(now, false);
+    }
+    pacer.wait();
+  }
+}
+
+void Acquirer::emit(const SyncedSample& s) {
+  ++emitted_;
+  for (auto& f : sinks_) f(s);
+  if (recorder_) {
+    recorder_->append(s);
+    if (raw_ && s.index % 50 == 0) raw_->flush();
+  }
+  if (!w_sample_) return;
+  format::Sample row;
+  row.t_s = static_cast<double>(s.t_ns) * 1e-9;
+  row.p_world_ee_m = s.p_world_ee_m;
+  row.q_world_ee = s.q_world_ee;
+  row.v_world_ee_m_per_s = s.v_world_ee_m_per_s;
+  row.w_world_ee_rad_per_s = s.w_world_ee_rad_per_s;
+  row.f_fp_n = s.wrench_fp.head<3>();
+  row.m_fp_nm = s.wrench_fp.tail<3>();
+  auto m = to_message(row, s.index, s.joints_rad.transpose());
+  m.t_s(static_cast<double>(s.t_ns - start_ns_) * 1e-9);
+  m.wrench_seq(s.wrench_seq);
+  m.pose_seq(s.pose_seq);
+  m.wrench_age_s(s.wrench_age_s);
+  m.pose_age_s(std::isfinite(s.pose_age_s) ? s.pose_age_s : -1.0);
+  m.quality_flags(s.quality);
+  w_sample_->write(m);
+  if (w_wrench_) {
+    geometry_msgs::msg::WrenchStamped w;
+    w.header(m.header());
+    w.header().frame_id("force_plate");
+    w.wrench(m.wrench_fp());
+    w_wrench_->write(w);
+    geometry_msgs::msg::PoseStamped p;
+    p.header(m.header());
+    p.pose(m.pose_world_ee());
+    w_pose_->write(p);
+    if (s.joints_rad.size() > 0) {
+      sensor_msgs::msg::JointState j;
+      j.header(m.header());
+      j.header().frame_id("");
+      std::vector<std::string> names;
+      for (Eigen::Index i = 0; i < s.joints_rad.size(); ++i) names.push_back("j" + std::to_string(i + 1));
+      j.name(names);
+      j.position(m.joint_positions_rad());
+      w_joints_->write(j);
+    }
+  }
+}
+
+void Acquirer::check_health(std::int64_t now_ns, bool periodic) {
+  const bool plate_changed = plate_mon_.update(now_ns);
+  const bool robot_changed = robot_ && robot_mon_.update(now_ns);
+  auto log_change = [](const DeviceMonitor& m, const DeviceHealth& h) {
+    if (m.state() == DeviceState::ok) spdlog::info("{}: ok again", h.device);
+    else spdlog::warn("{}: {} ({})", h.device, to_string(m.state()), m.reason());
+  };
+  if (plate_changed) {
+    const auto h = merged(plate_mon_.health(now_ns), plate_->counters());
+    log_change(plate_mon_, h);
+    publish_status(h, now_ns);
+  }
+  if (robot_changed) {
+    const auto h = robot_mon_.health(now_ns);
+    log_change(robot_mon_, h);
+    publish_status(h, now_ns);
+  }
+  if (periodic && now_ns - last_status_ns_ >= static_cast<std::int64_t>(opt_.status_period_s * 1e9)) {
+    last_status_ns_ = now_ns;
+    publish_status(merged(plate_mon_.health(now_ns), plate_->counters()), now_ns);
+    if (robot_) publish_status(robot_mon_.health(now_ns), now_ns);
+    if (recorder_) recorder_->flush();
+    if (raw_) raw_->flush();
+  }
+}
+
+void Acquirer::publish_status(const DeviceHealth& h, std::int64_t now_ns) {
+  if (!w_status_) return;
+  w_status_->write(to_msg(h, now_ns));
+  ++status_sent_;
+}
+
+}  // namespace hil::acquisition

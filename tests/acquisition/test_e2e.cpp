@@ -1,0 +1,232 @@
+// End to end without hardware: the fake rig (ATI plate on an in-process CAN bus, a libmodbus
+// robot controller on 127.0.0.1) plays the shipped example run; the Acquirer records and
+// publishes; a DDS subscriber and the recording must agree sample for sample. Then each injected
+// fault must be reported on DeviceStatus within 3 sample periods and clear when the fault ends.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <map>
+#include <mutex>
+#include <thread>
+
+#include "../runformat/test_util.hpp"
+#include "hil/acquisition/acquirer.hpp"
+#include "hil/acquisition/sample_msg.hpp"
+#include "hil/dds/topics.hpp"
+#include "hil/drivers/fake_rig.hpp"
+#include "hil/format/csv.hpp"
+#include "hil/format/run.hpp"
+
+using namespace hil;
+
+namespace {
+
+std::shared_ptr<const drivers::Scenario> example_scenario(bool loop) {
+  const auto run = format::load_run(std::string(HIL_SOURCE_DIR) + "/examples/runs/press_slide");
+  std::vector<drivers::ScenarioPoint> pts;
+  for (const auto& s : run.samples.samples) {
+    drivers::ScenarioPoint p;
+    p.t_s = s.t_s;
+    p.w_fp << s.f_fp_n, s.m_fp_nm;
+    p.p_base_tcp_m = s.p_world_ee_m;
+    p.q_base_tcp = s.q_world_ee;
+    p.joints_rad.assign(6, 0.1);
+    pts.push_back(p);
+  }
+  return std::make_shared<const drivers::Scenario>(std::move(pts), loop);
+}
+
+int test_domain(int base) { return base + static_cast<int>(getpid() % 40); }
+
+struct StatusLog {
+  std::mutex m;
+  struct Entry {
+    std::int64_t t_ns;
+    std::string device;
+    std::uint8_t state;
+    std::string error;
+  };
+  std::vector<Entry> entries;
+  void add(const hil_msgs::msg::DeviceStatus& s) {
+    std::lock_guard<std::mutex> lock(m);
+    entries.push_back({static_cast<std::int64_t>(acquisition::from_time(s.stamp()) * 1e9), s.device(), s.state(), s.last_error()});
+  }
+  // First status of `device` with a state other than ok at or after t_ns.
+  const Entry* first_bad(const std::string& device, std::int64_t after_ns) {
+    for (const auto& e : entries)
+      if (e.device == device && e.state != hil_msgs::msg::DEVICE_OK && e.t_ns >= after_ns) return &e;
+    return nullptr;
+  }
+  const Entry* first_ok(const std::string& device, std::int64_t after_ns) {
+    for (const auto& e : entries)
+      if (e.device == device && e.state == hil_msgs::msg::DEVICE_OK && e.t_ns >= after_ns) return &e;
+    return nullptr;
+  }
+};
+
+}  // namespace
+
+TEST(EndToEnd, ThirtySecondsAt1kHzNoneLost) {
+  hil::test::TempDir tmp;
+  auto scenario = example_scenario(true);
+  auto bus = drivers::CanLoopbackBus::create();
+  drivers::FakeAtiConfig fc;
+  drivers::FakeAtiForcePlate fake_plate(fc, bus->open(), scenario);
+  drivers::FakeRobotConfig rc;
+  rc.map = drivers::float32_register_map();
+  drivers::FakeRobotController fake_robot(rc, scenario);
+
+  drivers::ForcePlateConfig pc;
+  auto plate = drivers::make_force_plate(pc, bus->open());
+  drivers::ModbusConfig mc;
+  mc.port = fake_robot.port();
+  mc.map = drivers::float32_register_map();
+  auto robot = std::make_unique<drivers::RobotControllerDriver>(mc);
+
+  hil::dds::Participant participant({test_domain(60), "", "hil_localhost", "e2e"});
+  std::mutex m;
+  std::vector<hil_msgs::msg::PoseWrenchSample> received;
+  hil::dds::Reader<hil_msgs::msg::PoseWrenchSample> reader(participant, hil::dds::topics::kPoseWrenchSample, [&](const auto& msg, const auto&) {
+    std::lock_guard<std::mutex> lock(m);
+    received.push_back(msg);
+  });
+
+  format::RunInfo info;
+  info.rig = "press_bench";
+  info.output_rate_hz = 1000;
+  const auto dir = tmp.path() + "/run";
+  const auto start = acquisition::realtime_ns();
+  {
+    acquisition::RunRecorder rec(dir, info, "", start, 6);
+    acquisition::AcquirerOptions ao;
+    ao.sync.output_rate_hz = 1000;  // no decimation: every reading is a sample
+    acquisition::Acquirer acq(ao, std::move(plate), std::move(robot), &participant, &rec);
+    fake_plate.start();
+    fake_robot.start();
+    acq.start();
+    std::this_thread::sleep_for(std::chrono::seconds(31));
+    acq.stop();
+    fake_plate.stop();
+    fake_robot.stop();
+    rec.close();
+    std::this_thread::sleep_for(std::chrono::milliseconds(500));  // last messages in flight
+  }
+  const auto run = format::load_run(dir);
+  std::lock_guard<std::mutex> lock(m);
+  ASSERT_GE(run.samples.size(), 30000u) << "at least 30 s of 1 kHz samples";
+  ASSERT_EQ(received.size(), run.samples.size()) << "the subscriber and the recording disagree on the count";
+  for (std::size_t i = 0; i < received.size(); ++i) {
+    ASSERT_EQ(received[i].sample_index(), i) << "lost or reordered on the bus";
+    const auto s = acquisition::from_message(received[i]);
+    const auto& r = run.samples.samples[i];
+    ASSERT_NEAR(s.t_s, r.t_s, 1e-9);
+    ASSERT_EQ(s.f_fp_n, r.f_fp_n) << "row " << i;
+    ASSERT_EQ(s.m_fp_nm, r.m_fp_nm) << "row " << i;
+    ASSERT_EQ(s.p_world_ee_m, r.p_world_ee_m) << "row " << i;
+  }
+  // Against the played scenario: the plate's range comes through within its quantization and the
+  // float32 pose map's resolution.
+  double fz_min = 0, fz_max = 0, px_max = 0;
+  for (const auto& s : run.samples.samples) {
+    fz_min = std::min(fz_min, s.f_fp_n.z());
+    fz_max = std::max(fz_max, s.f_fp_n.z());
+    px_max = std::max(px_max, s.p_world_ee_m.x());
+  }
+  EXPECT_NEAR(fz_min, -360.2, 1.0);
+  EXPECT_NEAR(fz_max, 0.25, 1.0);
+  EXPECT_NEAR(px_max, 0.02, 1e-6);
+}
+
+TEST(EndToEnd, InjectedFaultsAreReportedAndRecoveredFrom) {
+  hil::test::TempDir tmp;
+  auto scenario = example_scenario(true);
+  auto bus = drivers::CanLoopbackBus::create();
+  drivers::FakeAtiConfig fc;
+  fc.faults.silent.push_back({1.0, 0.3});   // plate silent from 1.0 s to 1.3 s
+  fc.faults.bus_off.push_back({2.0, 0.3});  // bus-off from 2.0 s to 2.3 s
+  drivers::FakeAtiForcePlate fake_plate(fc, bus->open(), scenario);
+  drivers::FakeRobotConfig rc;
+  rc.map = drivers::float32_register_map();
+  rc.faults.exception_windows.push_back({1.5, 0.3});  // Modbus exceptions from 1.5 s to 1.8 s
+  drivers::FakeRobotController fake_robot(rc, scenario);
+
+  drivers::ForcePlateConfig pc;
+  auto plate = drivers::make_force_plate(pc, bus->open());
+  drivers::ModbusConfig mc;
+  mc.port = fake_robot.port();
+  mc.map = drivers::float32_register_map();
+  auto robot = std::make_unique<drivers::RobotControllerDriver>(mc);
+
+  hil::dds::Participant participant({test_domain(100), "", "hil_localhost", "e2e-faults"});
+  StatusLog log;
+  hil::dds::Reader<hil_msgs::msg::DeviceStatus> reader(participant, hil::dds::topics::kDeviceStatus,
+                                                  [&](const auto& msg, const auto&) { log.add(msg); }, hil::dds::StreamQos{true, 0, 10});
+  format::RunInfo info;
+  info.rig = "press_bench";
+  info.output_rate_hz = 50;
+  const auto dir = tmp.path() + "/run";
+  std::int64_t fake_start = 0;
+  {
+    acquisition::RunRecorder rec(dir, info, "", acquisition::realtime_ns(), 6);
+    acquisition::AcquirerOptions ao;
+    acquisition::Acquirer acq(ao, std::move(plate), std::move(robot), &participant, &rec);
+    fake_start = acquisition::realtime_ns();
+    fake_plate.start();
+    fake_robot.start();
+    acq.start();
+    std::this_thread::sleep_for(std::chrono::milliseconds(3000));
+    acq.stop();
+    fake_plate.stop();
+    fake_robot.stop();
+    rec.close();
+    std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  }
+  (void)fake_start;
+  const auto run = format::load_run(dir);
+  std::lock_guard<std::mutex> lock(log.m);
+  ASSERT_FALSE(log.entries.empty());
+
+  // Reads the raw plate stream to find the last good reading before each plate fault.
+  std::vector<std::int64_t> plate_t;
+  {
+    const auto csv = format::read_csv(dir + "/raw/force_plate.csv", {{"t_ns"}, {}, ""});
+    for (double t : csv.numeric("t_ns")) plate_t.push_back(static_cast<std::int64_t>(t));
+  }
+  auto last_before_hole = [&](std::int64_t from_ns) {
+    for (std::size_t i = 1; i < plate_t.size(); ++i)
+      if (plate_t[i - 1] >= from_ns && plate_t[i] - plate_t[i - 1] > 100'000'000) return plate_t[i - 1];
+    return std::int64_t{0};
+  };
+  const std::int64_t period_ns = 1'000'000;  // 1 kHz plate
+  // Silence: reported within 3 periods of the last reading, and cleared after.
+  const auto silent_from = last_before_hole(plate_t.front());
+  ASSERT_NE(silent_from, 0) << "the silent window left no hole in the raw stream";
+  const auto* bad = log.first_bad("force_plate", silent_from);
+  ASSERT_NE(bad, nullptr) << "silence never reported";
+  EXPECT_LE(bad->t_ns - silent_from, 3 * period_ns + 1'000'000) << "reported " << (bad->t_ns - silent_from) / 1e6 << " ms late";
+  EXPECT_NE(bad->error.find("silent"), std::string::npos) << bad->error;
+  EXPECT_NE(log.first_ok("force_plate", bad->t_ns), nullptr) << "never recovered from the silence";
+  // Bus-off: the second hole in the raw stream; reported as a fault naming bus-off.
+  const auto busoff_from = last_before_hole(silent_from + 200'000'000);
+  ASSERT_NE(busoff_from, 0);
+  const auto* fault = log.first_bad("force_plate", busoff_from);
+  ASSERT_NE(fault, nullptr);
+  EXPECT_LE(fault->t_ns - busoff_from, 3 * period_ns + 1'000'000) << "reported " << (fault->t_ns - busoff_from) / 1e6 << " ms late";
+  bool named_bus_off = false;
+  for (const auto& e : log.entries)
+    if (e.device == "force_plate" && e.t_ns >= busoff_from && e.t_ns < busoff_from + 400'000'000)
+      named_bus_off = named_bus_off || e.error.find("bus-off") != std::string::npos || e.error.find("bus_error") != std::string::npos;
+  EXPECT_TRUE(named_bus_off);
+  EXPECT_NE(log.first_ok("force_plate", fault->t_ns), nullptr) << "never recovered from bus-off";
+  // Modbus exceptions: the robot is reported faulty, then ok again.
+  const auto* robot_bad = log.first_bad("robot", 0);
+  ASSERT_NE(robot_bad, nullptr) << "Modbus exceptions never reported";
+  EXPECT_NE(log.first_ok("robot", robot_bad->t_ns), nullptr);
+  // The recording marks the holes: rows flagged kGapBefore after each.
+  const auto& q = run.samples;
+  (void)q;
+  int flagged = 0;
+  const auto csv = format::read_csv(dir + "/samples.csv", {{"t", "quality"}, {}, ""});
+  for (double v : csv.numeric("quality")) flagged += (static_cast<std::uint32_t>(v) & acquisition::kGapBefore) != 0;
+  EXPECT_GE(flagged, 2) << "the silent and bus-off holes must be marked in the recording";
+}

@@ -1,0 +1,44 @@
+#pragma once
+// The acquisition run behind `hil acquire`, reusable by `hil demo`.
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "hil/acquisition/monitor.hpp"
+#include "hil/acquisition/streams.hpp"
+#include "hil/drivers/fake_rig.hpp"
+#include "../commands.hpp"
+
+namespace hil::cli {
+
+struct AcquireOptions {
+  std::string rig, out;
+  double duration_s = 0.0;
+  double output_rate_hz = 50.0;
+  std::string can_interface, robot_host;
+  int robot_port = 0;
+  bool no_robot = false;
+  bool tare = false;
+  bool ros_topics = true;
+  bool no_bus = false;
+  bool progress = true;
+  std::string play;  ///< run folder for the in-process fake rig
+  double play_speed = 1.0;
+  bool play_over_socketcan = false;  ///< the fake plate talks on the SocketCAN interface instead of loopback
+  drivers::CanFaults plate_faults;
+  drivers::ModbusFaults robot_faults;
+};
+
+struct AcquireResult {
+  std::uint64_t samples = 0, gaps = 0;
+  std::vector<acquisition::DeviceHealth> health;
+  std::string summary;
+};
+
+/// Runs one acquisition to its end (duration, played run's end, or Ctrl-C). \throws on bad
+/// configuration or a device that cannot be started.
+AcquireResult run_acquisition(const AcquireOptions& o, const std::function<void(const acquisition::SyncedSample&)>& observer);
+
+void add_acquire(CLI::App& app);
+
+}  // namespace hil::cli

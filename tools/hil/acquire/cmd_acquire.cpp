@@ -1,0 +1,186 @@
+// `hil acquire --rig RIG --out RUN`: the rig service. Polls the force plate (CAN) and the robot
+// controller (Modbus), synchronizes, records the run and publishes it on the bus until Ctrl-C
+// (or --duration). With --play RUN it first starts the fake rig in-process (loopback CAN and a
+// Modbus server on 127.0.0.1) playing that run: the whole service without hardware or SocketCAN.
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
+#include <atomic>
+#include <chrono>
+#include <csignal>
+#include <fstream>
+#include <iostream>
+#include <sstream>
+#include <thread>
+
+#include "../commands.hpp"
+#include "acquire.hpp"
+#include "hil/acquisition/acquirer.hpp"
+#include "hil/drivers/socketcan.hpp"
+#include "hil/format/error.hpp"
+#include "rig_devices.hpp"
+
+namespace hil::cli {
+namespace {
+std::atomic<bool> g_stop{false};
+extern "C" void on_acquire_signal(int) { g_stop = true; }
+}  // namespace
+
+AcquireResult run_acquisition(const AcquireOptions& o, const std::function<void(const acquisition::SyncedSample&)>& observer) {
+  const auto rig = format::load_rig(o.rig);
+  std::string rig_text;
+  {
+    std::ifstream in(o.rig, std::ios::binary);
+    std::ostringstream ss;
+    ss << in.rdbuf();
+    rig_text = ss.str();
+  }
+  if (!rig.devices.force_plate) throw format::FormatError({o.rig, 0, 0, "devices.force_plate"}, "acquisition needs a force plate section");
+  auto pcfg = plate_config(*rig.devices.force_plate);
+  if (!o.can_interface.empty()) pcfg.interface = o.can_interface;
+  const bool with_robot = rig.devices.robot.has_value() && !o.no_robot;
+  const Eigen::Isometry3d T_world_base = rig.robot ? rig.robot->T_world_base.isometry() : Eigen::Isometry3d::Identity();
+
+  // The in-process fake rig, when asked for.
+  std::shared_ptr<drivers::CanLoopbackBus> loop;
+  std::unique_ptr<drivers::FakeAtiForcePlate> fake_plate;
+  std::unique_ptr<drivers::FakeRobotController> fake_robot;
+  std::unique_ptr<drivers::CanChannel> channel;
+  double play_duration_s = 0.0;
+  drivers::ModbusConfig mcfg;
+  if (with_robot) mcfg = modbus_config(*rig.devices.robot);
+  if (!o.play.empty()) {
+    const auto played = format::load_run(o.play);
+    auto scenario = scenario_from_run(played, T_world_base);
+    play_duration_s = scenario->duration_s() / o.play_speed;
+    drivers::FakeAtiConfig fc;
+    fc.base_id = pcfg.base_id;
+    fc.T_fp_sensor = pcfg.T_fp_sensor;
+    fc.clock.speed = o.play_speed;
+    fc.faults = o.plate_faults;
+    if (o.play_over_socketcan) {
+      drivers::SocketCanOptions so;
+      so.interface = pcfg.interface;
+      fake_plate = std::make_unique<drivers::FakeAtiForcePlate>(fc, drivers::SocketCanChannel::open(so), scenario);
+    } else {
+      loop = drivers::CanLoopbackBus::create("loop0");
+      fake_plate = std::make_unique<drivers::FakeAtiForcePlate>(fc, loop->open(), scenario);
+      channel = loop->open();
+    }
+    if (with_robot) {
+      drivers::FakeRobotConfig rc;
+      rc.map = mcfg.map;
+      rc.port = 0;
+      rc.clock.speed = o.play_speed;
+      rc.faults = o.robot_faults;
+      fake_robot = std::make_unique<drivers::FakeRobotController>(rc, scenario);
+      mcfg.host = "127.0.0.1";
+      mcfg.port = fake_robot->port();
+    }
+  }
+  if (!channel) {
+    drivers::SocketCanOptions so;
+    so.interface = pcfg.interface;
+    channel = drivers::SocketCanChannel::open(so);
+  }
+  if (with_robot && !o.robot_host.empty()) mcfg.host = o.robot_host;
+  if (with_robot && o.robot_port > 0) mcfg.port = o.robot_port;
+
+  auto plate = drivers::make_force_plate(pcfg, std::move(channel));
+  std::unique_ptr<drivers::RobotControllerDriver> robot;
+  if (with_robot) robot = std::make_unique<drivers::RobotControllerDriver>(mcfg);
+
+  auto& g = globals();
+  std::unique_ptr<dds::Participant> bus;
+  if (!o.no_bus)
+    bus = std::make_unique<dds::Participant>(dds::ParticipantOptions{g.dds_domain >= 0 ? g.dds_domain : dds::domain_from_env(),
+                                                                     g.dds_profile, g.dds_profile_name, "hil-acquire"});
+  format::RunInfo info;
+  info.rig = rig.name;
+  info.output_rate_hz = o.output_rate_hz;
+  info.sources.push_back({"force_plate", "can", pcfg.rate_hz, "raw/force_plate.csv"});
+  if (with_robot) info.sources.push_back({"robot", "modbus", mcfg.rate_hz, "raw/robot.csv"});
+  info.notes = o.play.empty() ? "Recorded by hil acquire." : "Recorded by hil acquire from the fake rig playing " + o.play + ".";
+  const auto start_ns = acquisition::realtime_ns();
+  acquisition::RunRecorder recorder(o.out, info, rig_text, start_ns, with_robot ? mcfg.map.joint_count() : 0);
+
+  acquisition::AcquirerOptions ao;
+  ao.sync.wrench_rate_hz = pcfg.rate_hz;
+  ao.sync.output_rate_hz = o.output_rate_hz;
+  ao.T_world_base = T_world_base;
+  ao.ros_topics = o.ros_topics;
+  if (with_robot && !mcfg.map.has_pose()) {
+    if (!rig.robot) throw format::FormatError({o.rig, 0, 0, "robot"}, "the register map reads joints only: the rig needs a robot DH table");
+    const auto model = robot_model(*rig.robot);
+    if (static_cast<unsigned>(model.dof()) != mcfg.map.joint_count())
+      throw format::FormatError({o.rig, 0, 0, "robot.joints"}, fmt::format("the register map reads {} joints but the DH table has {}",
+                                                                          mcfg.map.joint_count(), model.dof()));
+    const Eigen::Isometry3d T_base_world = model.T_world_base.inverse();
+    ao.forward_kinematics = [model, T_base_world](const Eigen::VectorXd& q) { return T_base_world * calibration::tool_pose(model, q); };
+  }
+  acquisition::Acquirer acq(ao, std::move(plate), std::move(robot), bus.get(), &recorder);
+  if (observer) acq.on_sample(observer);
+
+  if (fake_plate) fake_plate->start();
+  if (fake_robot) fake_robot->start();
+  acq.start();
+  if (o.tare) acq.tare();
+  std::signal(SIGINT, on_acquire_signal);
+  std::signal(SIGTERM, on_acquire_signal);
+  const double duration = o.duration_s > 0 ? o.duration_s : play_duration_s;
+  const auto t0 = std::chrono::steady_clock::now();
+  auto next_progress = t0 + std::chrono::seconds(5);
+  while (!g_stop) {
+    const auto now = std::chrono::steady_clock::now();
+    if (duration > 0 && now - t0 >= std::chrono::duration<double>(duration)) break;
+    if (o.progress && now >= next_progress) {
+      spdlog::info("acquire: {} samples, {:.0f} s", acq.samples(), std::chrono::duration<double>(now - t0).count());
+      next_progress += std::chrono::seconds(5);
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  acq.stop();
+  if (fake_plate) fake_plate->stop();
+  if (fake_robot) fake_robot->stop();
+
+  AcquireResult r;
+  r.samples = acq.samples();
+  r.health = acq.health();
+  r.gaps = recorder.gaps();
+  std::string summary = fmt::format("Samples: {}, gaps: {}.", r.samples, r.gaps);
+  for (const auto& h : r.health)
+    summary += fmt::format(" {}: {} samples, {} errors, {} dropped{}.", h.device, h.samples, h.errors, h.frames_dropped,
+                           h.last_error.empty() ? "" : ", last error: " + h.last_error);
+  recorder.close(summary);
+  r.summary = summary;
+  return r;
+}
+
+void add_acquire(CLI::App& app) {
+  auto* cmd = app.add_subcommand("acquire", "Acquire from the rig: record a run and publish it on the bus");
+  static AcquireOptions o;
+  cmd->add_option("--rig", o.rig, "rig file (devices section)")->required()->check(CLI::ExistingFile);
+  cmd->add_option("--out", o.out, "run folder to create")->required();
+  cmd->add_option("--duration", o.duration_s, "seconds to acquire (default: until Ctrl-C, or the played run's length)");
+  cmd->add_option("--output-rate", o.output_rate_hz, "output rate in Hz (must divide the force-plate rate)")->capture_default_str();
+  cmd->add_option("--can-interface", o.can_interface, "SocketCAN interface (default: the rig's)");
+  cmd->add_option("--robot-host", o.robot_host, "Modbus host (default: the rig's)");
+  cmd->add_option("--robot-port", o.robot_port, "Modbus port (default: the rig's)");
+  cmd->add_flag("--no-robot", o.no_robot, "acquire the force plate only");
+  cmd->add_flag("--tare", o.tare, "tare the force plate at start");
+  cmd->add_flag("!--no-ros-topics", o.ros_topics, "do not publish rt/hil/wrench, rt/hil/pose, rt/hil/joint_states");
+  cmd->add_option("--play", o.play, "start the fake rig in-process playing this run (no hardware, no SocketCAN)")
+      ->check(CLI::ExistingDirectory);
+  cmd->add_option("--play-speed", o.play_speed, "playback speed of --play")->capture_default_str();
+  cmd->callback([] {
+    set_action([] {
+      const auto r = run_acquisition(o, nullptr);
+      std::cout << fmt::format("recorded {} -> {}\n", r.summary, o.out);
+      for (const auto& h : r.health)
+        if (h.samples == 0) return 1;  // a device that never answered is a failed acquisition
+      return 0;
+    });
+  });
+}
+
+}  // namespace hil::cli
