@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <cerrno>
+#include <ctime>
 #include <cstring>
 
 #include "hil/acquisition/sample_msg.hpp"
@@ -72,6 +73,12 @@ class RawWriter {
 };
 
 namespace {
+
+std::int64_t thread_cpu_ns() {
+  timespec ts{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return static_cast<std::int64_t>(ts.tv_sec) * 1'000'000'000 + ts.tv_nsec;
+}
 
 DeviceHealth merged(const DeviceHealth& h, const drivers::DeviceCounters& c) {
   DeviceHealth out = h;
@@ -184,6 +191,7 @@ void Acquirer::plate_loop() {
           }
           plate_mon_.sample(r.t_ns);
           if (raw_) raw_->plate(s);
+          if (w_wrench_) publish_wrench(r);
           sync_.push_wrench(r);
           break;
         }
@@ -207,6 +215,7 @@ void Acquirer::plate_loop() {
     if (st == drivers::PollStatus::closed) break;
     pacer.wait();
   }
+  cpu_ns_ += thread_cpu_ns();
 }
 
 void Acquirer::robot_loop() {
@@ -267,6 +276,7 @@ void Acquirer::robot_loop() {
     }
     pacer.wait();
   }
+  cpu_ns_ += thread_cpu_ns();
 }
 
 void Acquirer::emit(const SyncedSample& s) {
@@ -293,12 +303,7 @@ void Acquirer::emit(const SyncedSample& s) {
   m.pose_age_s(std::isfinite(s.pose_age_s) ? s.pose_age_s : -1.0);
   m.quality_flags(s.quality);
   w_sample_->write(m);
-  if (w_wrench_) {
-    geometry_msgs::msg::WrenchStamped w;
-    w.header(m.header());
-    w.header().frame_id("force_plate");
-    w.wrench(m.wrench_fp());
-    w_wrench_->write(w);
+  if (w_pose_) {
     geometry_msgs::msg::PoseStamped p;
     p.header(m.header());
     p.pose(m.pose_world_ee());
@@ -314,6 +319,19 @@ void Acquirer::emit(const SyncedSample& s) {
       w_joints_->write(j);
     }
   }
+}
+
+void Acquirer::publish_wrench(const WrenchReading& r) {
+  // The live wrench stream: every reading as it arrives, stamped with its receive time, before
+  // synchronisation (which waits for poses), so monitors see it with the least delay.
+  geometry_msgs::msg::WrenchStamped w;
+  w.header().stamp(to_time(static_cast<double>(r.t_ns) * 1e-9));
+  w.header().frame_id("force_plate");
+  auto& f = w.wrench().force();
+  f.x(r.wrench_fp[0]), f.y(r.wrench_fp[1]), f.z(r.wrench_fp[2]);
+  auto& t = w.wrench().torque();
+  t.x(r.wrench_fp[3]), t.y(r.wrench_fp[4]), t.z(r.wrench_fp[5]);
+  w_wrench_->write(w);
 }
 
 void Acquirer::check_health(std::int64_t now_ns, bool periodic) {

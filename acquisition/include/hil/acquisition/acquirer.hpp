@@ -29,7 +29,9 @@ struct AcquirerOptions {
   /// Joints -> T_base_ee, used when the register map has no tool pose (from the rig's DH table).
   std::function<Eigen::Isometry3d(const Eigen::VectorXd&)> forward_kinematics;
   double status_period_s = 1.0;
-  bool ros_topics = true;  ///< also publish rt/hil/wrench, rt/hil/pose, rt/hil/joint_states
+  /// Also publish rt/hil/wrench (every force-plate reading as it arrives: the low-latency live
+  /// stream), rt/hil/pose and rt/hil/joint_states (at the output rate).
+  bool ros_topics = true;
   std::string force_plate_name = "force_plate";
   std::string robot_name = "robot";
 };
@@ -60,11 +62,14 @@ class Acquirer {
   std::uint64_t samples() const { return emitted_; }
   std::uint64_t status_messages() const { return status_sent_; }
   const drivers::ForcePlateInfo& plate_info() const { return plate_info_; }
+  /// CPU time (s) the two device threads used, pipeline work included; valid after stop().
+  double device_threads_cpu_s() const { return cpu_ns_.load() * 1e-9; }
 
  private:
   void plate_loop();
   void robot_loop();
   void emit(const SyncedSample& s);
+  void publish_wrench(const WrenchReading& r);
   void check_health(std::int64_t now_ns, bool periodic);
   void publish_status(const DeviceHealth& h, std::int64_t now_ns);
 
@@ -91,6 +96,7 @@ class Acquirer {
 
   std::atomic<bool> running_{false};
   std::atomic<std::uint64_t> emitted_{0}, status_sent_{0};
+  std::atomic<std::int64_t> cpu_ns_{0};
   std::thread plate_thread_, robot_thread_;
 };
 
