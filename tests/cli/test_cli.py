@@ -67,6 +67,21 @@ class Cli(unittest.TestCase):
         self.assertTrue(lines[0].startswith("#0 t=0.0000"))
         self.assertTrue(lines[-1].startswith("#%d " % (rows - 1)))
 
+    def test_demo_runs_the_chain(self):
+        out = tempfile.mkdtemp()
+        try:
+            r = hil("demo", "--out", os.path.join(out, "run"), "--speed", "2")
+            self.assertEqual(r.returncode, 0, r.stdout + r.stderr)
+            self.assertIn("[4/4] done", r.stdout)
+            self.assertEqual(hil("validate", os.path.join(out, "run")).returncode, 0)
+        finally:
+            shutil.rmtree(out)
+
+    def test_acquire_refuses_to_overwrite_a_run(self):
+        r = hil("acquire", "--rig", EXAMPLE_RIG, "--out", EXAMPLE_RUN, "--play", EXAMPLE_RUN)
+        self.assertNotEqual(r.returncode, 0)
+        self.assertIn("refusing to overwrite", r.stderr)
+
     def test_echo_unknown_topic(self):
         r = hil("echo", "nonsense", "--timeout", "1")
         self.assertNotEqual(r.returncode, 0)

@@ -1,65 +1,104 @@
-// `hil demo`: the README's main job. See the issue tracker: it grows into the whole pipeline
-// (fake rig -> acquisition -> DDS -> online workers -> diagnosis) as those parts land.
+// `hil demo`: the README's main job on shipped data, no hardware needed. The fake rig plays the
+// example run (ATI plate on an in-process CAN bus, a Modbus robot controller on 127.0.0.1), the
+// rig service acquires, records and publishes it on DDS, a subscriber watches the bus, and the
+// recorded run is checked against what was played. Identification and diagnosis join as they land.
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
 #include <atomic>
 #include <chrono>
-#include <thread>
+#include <filesystem>
 #include <iostream>
+#include <mutex>
 
+#include "acquire/acquire.hpp"
 #include "commands.hpp"
+#include "hil/acquisition/recorder.hpp"
 #include "hil/dds/bus.hpp"
 #include "hil/dds/topics.hpp"
 #include "hil/format/run.hpp"
-#include "hil/acquisition/sample_msg.hpp"
 #include "summary.hpp"
 
 namespace hil::cli {
+namespace {
+struct DemoOptions {
+  std::string example = std::string(HIL_SOURCE_DIR) + "/examples/runs/press_slide";
+  std::string rig = std::string(HIL_SOURCE_DIR) + "/examples/rigs/press_bench.yaml";
+  std::string out;
+  double speed = 1.0;
+};
+}  // namespace
 
-int demo(const std::string& run_dir) {
-  std::cout << "hil demo: what exists so far runs on the shipped example run.\n"
-               "  (the fake rig, acquisition, online workers and diagnosis join this demo as they are built)\n\n";
-  std::cout << fmt::format("[1/3] validating {}\n", run_dir);
-  const auto run = format::load_run(run_dir);
-  print_run_summary(std::cout, run);
+int demo(const DemoOptions& o) {
+  namespace fs = std::filesystem;
+  const std::string out = o.out.empty() ? (fs::temp_directory_path() / "hil-demo" /
+                                           fmt::format("run-{}", acquisition::realtime_ns() / 1'000'000)).string()
+                                        : o.out;
+  const auto played = format::load_run(o.example);
+  std::cout << "hil demo: the fake rig plays an example run; hil acquires, records and publishes it.\n"
+               "  (contact identification and diagnosis join this demo as they are built: see the issue tracker)\n\n";
+  std::cout << fmt::format("[1/4] example run {}: {} samples, {:.1f} s; rig {}\n", o.example, played.samples.size(),
+                           played.samples.samples.back().t_s, o.rig);
 
-  std::cout << "\n[2/3] publishing the run as PoseWrenchSample on DDS (host-only profile) and subscribing to it\n";
   auto& g = globals();
-  dds::Participant participant({g.dds_domain >= 0 ? g.dds_domain : dds::domain_from_env(), g.dds_profile,
-                                g.dds_profile_name, "hil-demo"});
-  std::atomic<std::size_t> received{0};
-  std::atomic<double> max_error{0.0};
-  dds::Reader<hil_msgs::msg::PoseWrenchSample> reader(
-      participant, dds::topics::kPoseWrenchSample, [&](const hil_msgs::msg::PoseWrenchSample& m, const auto&) {
-        const auto i = static_cast<std::size_t>(m.sample_index());
-        if (i < run.samples.size()) {
-          const double e = std::abs(m.wrench_fp().force().z() - run.samples.samples[i].f_fp_n.z());
-          if (e > max_error) max_error = e;
-        }
-        ++received;
-      });
-  dds::Writer<hil_msgs::msg::PoseWrenchSample> writer(participant, dds::topics::kPoseWrenchSample);
-  if (!writer.wait_for_readers(1, std::chrono::seconds(5))) throw std::runtime_error("DDS: the demo reader did not match");
-  for (std::size_t i = 0; i < run.samples.size(); ++i) {
-    writer.write(acquisition::to_message(run.samples.samples[i], i, run.samples.joints_rad.row(static_cast<Eigen::Index>(i))));
-  }
-  writer.wait_for_acknowledgments(std::chrono::seconds(5));
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(5);
-  while (received < run.samples.size() && std::chrono::steady_clock::now() < deadline)
-    std::this_thread::sleep_for(std::chrono::milliseconds(10));
-  std::cout << fmt::format("  published {}, received {}, largest fz difference {:.3g} N\n", run.samples.size(),
-                           received.load(), max_error.load());
+  dds::Participant participant({g.dds_domain >= 0 ? g.dds_domain : dds::domain_from_env(), g.dds_profile, g.dds_profile_name,
+                                "hil-demo-monitor"});
+  std::atomic<std::uint64_t> bus_samples{0}, bus_status{0};
+  std::mutex m;
+  std::string last_status;
+  dds::Reader<hil_msgs::msg::PoseWrenchSample> samples(participant, dds::topics::kPoseWrenchSample,
+                                                       [&](const auto&, const auto&) { ++bus_samples; });
+  dds::Reader<hil_msgs::msg::DeviceStatus> status(participant, dds::topics::kDeviceStatus, [&](const auto& s, const auto&) {
+    ++bus_status;
+    std::lock_guard<std::mutex> lock(m);
+    last_status = s.device() + (s.connected() ? " connected" : " disconnected");
+  }, dds::StreamQos{true, 0, 10});
 
-  std::cout << "\n[3/3] done. Next: hil validate, and the issue tracker for what is still to come.\n";
-  return received == run.samples.size() ? 0 : 1;
+  std::cout << fmt::format("[2/4] acquiring from the fake rig (in-process CAN bus, Modbus on 127.0.0.1) into {}\n", out);
+  AcquireOptions ao;
+  ao.rig = o.rig;
+  ao.out = out;
+  ao.play = o.example;
+  ao.play_speed = o.speed;
+  ao.output_rate_hz = played.info.output_rate_hz;
+  ao.progress = false;
+  std::atomic<std::uint64_t> n{0};
+  const double total_s = played.samples.samples.back().t_s / o.speed;
+  const auto t0 = std::chrono::steady_clock::now();
+  const auto result = run_acquisition(ao, [&](const acquisition::SyncedSample&) {
+    const auto i = ++n;
+    if (i % 25 == 0) {
+      const double el = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      std::cout << fmt::format("\r      {:5.1f} / {:.1f} s, {} samples, {} seen on the bus", el, total_s, i, bus_samples.load())
+                << std::flush;
+    }
+  });
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  std::cout << "\n" << fmt::format("      {}\n      bus: {} PoseWrenchSample, {} DeviceStatus messages received\n", result.summary,
+                                   bus_samples.load(), bus_status.load());
+
+  std::cout << fmt::format("[3/4] checking the recorded run {}\n", out);
+  const auto rec = format::load_run(out);
+  print_samples_summary(std::cout, rec.samples);
+  double fz_rec = 0, fz_played = 0;
+  for (const auto& s : rec.samples.samples) fz_rec = std::min(fz_rec, s.f_fp_n.z());
+  for (const auto& s : played.samples.samples) fz_played = std::min(fz_played, s.f_fp_n.z());
+  std::cout << fmt::format("      peak fz played {:.2f} N, recorded {:.2f} N\n", fz_played, fz_rec);
+
+  std::cout << "[4/4] done. Look at it live with `hil echo pose_wrench`, replay it with `hil replay " << out << "`.\n";
+  const bool ok = rec.samples.size() > 0 && bus_samples == rec.samples.size() && std::abs(fz_rec - fz_played) < 5.0;
+  if (!ok) std::cout << "demo: the bus, the recording and the played run disagree (see above)\n";
+  return ok ? 0 : 1;
 }
 
 void add_demo(CLI::App& app) {
-  auto* cmd = app.add_subcommand("demo", "Run the main job on the shipped example data");
-  static std::string run_dir = std::string(HIL_SOURCE_DIR) + "/examples/runs/press_slide";
-  cmd->add_option("--run", run_dir, "run folder to use")->capture_default_str();
-  cmd->callback([] { set_action([] { return demo(run_dir); }); });
+  auto* cmd = app.add_subcommand("demo", "Run the main job on the shipped example data (no hardware needed)");
+  static DemoOptions o;
+  cmd->add_option("--run", o.example, "run for the fake rig to play")->capture_default_str();
+  cmd->add_option("--rig", o.rig, "rig file")->capture_default_str();
+  cmd->add_option("--out", o.out, "where to record (default: a new folder under the temp directory)");
+  cmd->add_option("--speed", o.speed, "playback speed")->capture_default_str();
+  cmd->callback([] { set_action([] { return demo(o); }); });
 }
 
 }  // namespace hil::cli
