@@ -172,6 +172,8 @@ void add_acquire(CLI::App& app) {
   cmd->add_option("--play", o.play, "start the fake rig in-process playing this run (no hardware, no SocketCAN)")
       ->check(CLI::ExistingDirectory);
   cmd->add_option("--play-speed", o.play_speed, "playback speed of --play")->capture_default_str();
+  cmd->add_flag("--play-on-can", o.play_over_socketcan,
+                "with --play: the fake plate answers on the SocketCAN interface (e.g. vcan0) instead of an in-process bus");
   cmd->callback([] {
     set_action([] {
       const auto r = run_acquisition(o, nullptr);
