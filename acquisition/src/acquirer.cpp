@@ -158,6 +158,9 @@ void Acquirer::stop() {
   const auto now = realtime_ns();
   publish_status(merged(plate_mon_.health(now), plate_->counters()), now);
   if (robot_) publish_status(robot_mon_.health(now), now);
+  // Subscribers get the last samples before the writers go away with this object.
+  if (w_sample_) w_sample_->wait_for_acknowledgments(std::chrono::seconds(2));
+  if (w_status_) w_status_->wait_for_acknowledgments(std::chrono::seconds(1));
 }
 
 void Acquirer::tare() { plate_->tare(); }

@@ -82,6 +82,45 @@ class Cli(unittest.TestCase):
         self.assertNotEqual(r.returncode, 0)
         self.assertIn("refusing to overwrite", r.stderr)
 
+    def acquire_then_signal(self, sig):
+        import signal, time
+        out = tempfile.mkdtemp()
+        run = os.path.join(out, "run")
+        env = dict(os.environ)
+        env["HIL_DDS_DOMAIN"] = str(120 + os.getpid() % 20)
+        p = subprocess.Popen([HIL, "acquire", "--rig", EXAMPLE_RIG, "--out", run, "--play", EXAMPLE_RUN, "--duration", "60"],
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
+        time.sleep(3.5)
+        p.send_signal(sig)
+        stdout, stderr = p.communicate(timeout=30)
+        return out, run, p.returncode, stdout, stderr
+
+    def test_acquire_ctrl_c_closes_cleanly(self):
+        import signal
+        out, run, rc, stdout, stderr = self.acquire_then_signal(signal.SIGINT)
+        try:
+            self.assertEqual(rc, 0, stderr)
+            r = hil("validate", run)
+            self.assertEqual(r.returncode, 0, r.stderr)
+            with open(os.path.join(run, "run.yaml")) as f:
+                self.assertIn("Samples:", f.read())  # the closing summary
+        finally:
+            shutil.rmtree(out)
+
+    def test_acquire_kill_9_leaves_a_readable_run(self):
+        import signal
+        out, run, rc, stdout, stderr = self.acquire_then_signal(signal.SIGKILL)
+        try:
+            self.assertEqual(rc, -9)
+            r = hil("validate", run)
+            self.assertEqual(r.returncode, 0, r.stderr)
+            m = __import__("re").search(r"samples: (\d+), duration ([0-9.]+) s", r.stdout)
+            self.assertIsNotNone(m, r.stdout)
+            # 3.5 s after start, flushed every second: at least ~1.5 s of 50 Hz samples are there.
+            self.assertGreaterEqual(int(m.group(1)), 50)
+        finally:
+            shutil.rmtree(out)
+
     def test_echo_unknown_topic(self):
         r = hil("echo", "nonsense", "--timeout", "1")
         self.assertNotEqual(r.returncode, 0)
