@@ -188,9 +188,12 @@ void Acquirer::plate_loop() {
           r.seq = s.sequence;
           r.wrench_fp = s.w_fp;
           if (s.saturated_axes || s.gauge_saturated) r.quality |= kWrenchSaturated;
-          if (s.can_bus_error) {
+          if (s.can_bus_error || s.error_frames > 0) {
             r.quality |= kDeviceFault;
-            plate_mon_.error("force plate reports a CAN bus error (status 0x4000)", now);
+            plate_mon_.error(s.error_frames > 0 ? fmt::format("{} CAN error frame(s): {}", s.error_frames,
+                                                              drivers::describe(plate_->last_bus_error()))
+                                                : std::string("force plate reports a CAN bus error (status 0x4000)"),
+                             now);
           }
           plate_mon_.sample(r.t_ns);
           if (raw_) raw_->plate(s);
@@ -199,7 +202,10 @@ void Acquirer::plate_loop() {
           break;
         }
         case drivers::PollStatus::timeout:
-          break;  // silence: the monitor sees it after a few periods
+          // A request the plate did not answer in time: a lost reading. A longer silence is
+          // seen by the monitor after a few periods.
+          plate_mon_.dropped(1, now);
+          break;
         case drivers::PollStatus::bad_frame:
         case drivers::PollStatus::bus_error:
         case drivers::PollStatus::exception:

@@ -61,7 +61,7 @@ bool DeviceMonitor::update(std::int64_t now_ns) {
     why = fmt::format("silent for {:.1f} ms", silence_s * 1e3);
   } else if (last_drop_ns_ != 0 && now_ns - last_drop_ns_ < 1'000'000'000) {
     s = DeviceState::degraded;
-    why = fmt::format("{} frames dropped", dropped_);
+    why = fmt::format("{} readings lost so far", dropped_);
   } else {
     s = DeviceState::ok;
   }

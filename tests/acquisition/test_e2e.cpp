@@ -230,3 +230,81 @@ TEST(EndToEnd, InjectedFaultsAreReportedAndRecoveredFrom) {
   for (double v : csv.numeric("quality")) flagged += (static_cast<std::uint32_t>(v) & acquisition::kGapBefore) != 0;
   EXPECT_GE(flagged, 2) << "the silent and bus-off holes must be marked in the recording";
 }
+
+// Faults switched on and off while the service runs, as `hil fake-rig` does from its command line.
+TEST(EndToEnd, FaultSwitchesAreReportedWithinThreePeriods) {
+  auto scenario = example_scenario(true);
+  auto bus = drivers::CanLoopbackBus::create();
+  drivers::FakeAtiForcePlate fake_plate(drivers::FakeAtiConfig{}, bus->open(), scenario);
+  drivers::FakeRobotConfig rc;
+  rc.map = drivers::float32_register_map();
+  drivers::FakeRobotController fake_robot(rc, scenario);
+  drivers::ModbusConfig mc;
+  mc.port = fake_robot.port();
+  mc.map = drivers::float32_register_map();
+  mc.timeout_s = 0.02;
+  hil::dds::Participant participant({test_domain(140), "", "hil_localhost", "e2e-switches"});
+  StatusLog log;
+  hil::dds::Reader<hil_msgs::msg::DeviceStatus> reader(participant, hil::dds::topics::kDeviceStatus,
+                                                       [&](const auto& msg, const auto&) { log.add(msg); },
+                                                       hil::dds::StreamQos{true, 0, 10});
+  acquisition::AcquirerOptions ao;
+  acquisition::Acquirer acq(ao, drivers::make_force_plate({}, bus->open()), std::make_unique<drivers::RobotControllerDriver>(mc),
+                            &participant, nullptr);
+  fake_plate.start();
+  fake_robot.start();
+  acq.start();
+  std::this_thread::sleep_for(std::chrono::milliseconds(500));
+
+  struct Case {
+    const char* name;
+    const char* device;
+    std::function<void()> on, off;
+    double period_s;
+    std::vector<std::string> reasons;  // what the report must say (any of)
+  };
+  drivers::CanFaults corrupt;
+  corrupt.corrupt_fraction = 1.0;
+  drivers::CanFaults errors;
+  errors.error_frame_rate_hz = 200.0;
+  drivers::CanFaults drops;
+  drops.drop_fraction = 1.0;
+  drivers::ModbusFaults slow;
+  slow.slow_fraction = 1.0;
+  slow.slow_delay_s = 0.05;  // beyond the driver's 20 ms timeout
+  const std::vector<Case> cases = {
+      {"corrupt frames", "force_plate", [&] { fake_plate.set_faults(corrupt); }, [&] { fake_plate.set_faults({}); }, 1e-3,
+       {"bad frame"}},
+      {"error frames", "force_plate", [&] { fake_plate.set_faults(errors); }, [&] { fake_plate.set_faults({}); }, 1e-3,
+       {"error frame", "0x4000"}},
+      {"dropped frames", "force_plate", [&] { fake_plate.set_faults(drops); }, [&] { fake_plate.set_faults({}); }, 1e-3,
+       {"lost", "silent"}},
+      {"slow responses", "robot", [&] { fake_robot.set_faults(slow); }, [&] { fake_robot.set_faults({}); }, 8e-3,
+       {"silent", "timeout"}},
+  };
+  for (const auto& c : cases) {
+    // Wait for a quiet state of the device first (drops keep it degraded for a second).
+    std::this_thread::sleep_for(std::chrono::milliseconds(1300));
+    const auto t_on = acquisition::realtime_ns();
+    c.on();
+    std::this_thread::sleep_for(std::chrono::milliseconds(300));
+    const auto t_off = acquisition::realtime_ns();
+    c.off();
+    std::this_thread::sleep_for(std::chrono::milliseconds(1300));
+    std::lock_guard<std::mutex> lock(log.m);
+    const StatusLog::Entry* bad = nullptr;
+    for (const auto& e : log.entries) {
+      if (bad || e.device != c.device || e.state == hil_msgs::msg::DEVICE_OK || e.t_ns < t_on) continue;
+      for (const auto& r : c.reasons)
+        if (e.error.find(r) != std::string::npos) bad = &e;
+    }
+    ASSERT_NE(bad, nullptr) << c.name << ": never reported with its reason";
+    // Three periods of the device, plus the poll in flight when the fault was switched on.
+    const double late_s = (bad->t_ns - t_on) * 1e-9;
+    EXPECT_LE(late_s, 4 * c.period_s + 2e-3) << c.name << ": reported " << late_s * 1e3 << " ms after it began (" << bad->error << ")";
+    EXPECT_NE(log.first_ok(c.device, t_off), nullptr) << c.name << ": never recovered";
+  }
+  acq.stop();
+  fake_plate.stop();
+  fake_robot.stop();
+}
