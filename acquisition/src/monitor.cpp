@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 
 namespace hil::acquisition {
@@ -16,8 +17,9 @@ const char* to_string(DeviceState s) {
   return "?";
 }
 
-DeviceMonitor::DeviceMonitor(std::string device, double nominal_rate_hz, double silence_periods)
-    : device_(std::move(device)), period_s_(1.0 / nominal_rate_hz), silence_periods_(silence_periods) {}
+DeviceMonitor::DeviceMonitor(std::string device, double nominal_rate_hz, double silence_periods, double lost_per_s_tolerated)
+    : device_(std::move(device)), period_s_(1.0 / nominal_rate_hz), silence_periods_(silence_periods),
+      drops_tolerated_(lost_per_s_tolerated >= 0 ? lost_per_s_tolerated : std::max(1.0, 0.01 * nominal_rate_hz)) {}
 
 void DeviceMonitor::sample(std::int64_t t_ns) {
   ++samples_;
@@ -31,6 +33,7 @@ void DeviceMonitor::dropped(std::uint64_t n, std::int64_t t_ns) {
   if (n == 0) return;
   dropped_ += n;
   last_drop_ns_ = t_ns;
+  for (std::uint64_t i = 0; i < n && i < 100000; ++i) recent_drops_.push_back(t_ns);
 }
 
 void DeviceMonitor::error(const std::string& what, std::int64_t t_ns) {
@@ -45,28 +48,35 @@ void DeviceMonitor::link(bool connected, std::int64_t t_ns) {
 }
 
 bool DeviceMonitor::update(std::int64_t now_ns) {
+  while (!recent_drops_.empty() && recent_drops_.front() < now_ns - 1'000'000'000) recent_drops_.pop_front();
   DeviceState s;
   std::string why;
+  int cause = 0;
   const double silence_s = (now_ns - last_sample_ns_) * 1e-9;
   const double limit_s = silence_periods_ * period_s_;
   if (!connected_) {
     s = DeviceState::disconnected;
     why = last_error_.empty() ? "not connected" : "link lost: " + last_error_;
+    cause = 1;
   } else if (last_error_ns_ != 0 && last_error_ns_ >= last_sample_ns_ - static_cast<std::int64_t>(period_s_ * 1e9)) {
     // A fault holds until good samples flow again for more than a period after it.
     s = DeviceState::fault;
     why = last_error_;
+    cause = 2;
   } else if (samples_ > 0 && silence_s > limit_s) {
     s = DeviceState::degraded;
     why = fmt::format("silent for {:.1f} ms", silence_s * 1e3);
-  } else if (last_drop_ns_ != 0 && now_ns - last_drop_ns_ < 1'000'000'000) {
+    cause = 3;
+  } else if (static_cast<double>(recent_drops_.size()) > drops_tolerated_) {
     s = DeviceState::degraded;
-    why = fmt::format("{} readings lost so far", dropped_);
+    why = fmt::format("{} readings lost in the last second ({} in all)", recent_drops_.size(), dropped_);
+    cause = 4;
   } else {
     s = DeviceState::ok;
   }
-  const bool changed = s != state_;
+  const bool changed = s != state_ || cause != cause_ || (cause == 2 && why != reason_);
   state_ = s;
+  cause_ = cause;
   reason_ = why;
   return changed;
 }

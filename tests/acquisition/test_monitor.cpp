@@ -55,15 +55,22 @@ TEST(Monitor, DropsAndLinkLoss) {
   m.sample(0);
   m.update(0);
   EXPECT_EQ(m.state(), DeviceState::ok);
-  m.dropped(3, 1 * ms);
+  m.dropped(1, 1 * ms);
   m.sample(2 * ms);
-  EXPECT_TRUE(m.update(2 * ms));
+  EXPECT_FALSE(m.update(2 * ms)) << "one lost reading in a second is tolerated at 125 Hz";
+  m.dropped(2, 3 * ms);
+  m.sample(4 * ms);
+  EXPECT_TRUE(m.update(4 * ms));
   EXPECT_EQ(m.state(), DeviceState::degraded);
-  EXPECT_EQ(m.health(2 * ms).frames_dropped, 3u);
-  m.link(false, 3 * ms);
-  m.update(3 * ms);
+  EXPECT_NE(m.reason().find("3 readings lost"), std::string::npos) << m.reason();
+  EXPECT_EQ(m.health(4 * ms).frames_dropped, 3u);
+  m.sample(1100 * ms);
+  EXPECT_TRUE(m.update(1100 * ms)) << "a second later the losses are forgotten";
+  EXPECT_EQ(m.state(), DeviceState::ok);
+  m.link(false, 1101 * ms);
+  m.update(1101 * ms);
   EXPECT_EQ(m.state(), DeviceState::disconnected);
-  const auto h = m.health(1003 * ms);
+  const auto h = m.health(2200 * ms);
   EXPECT_FALSE(h.connected);
   EXPECT_DOUBLE_EQ(h.rate_hz, 0.0);
 }

@@ -2,7 +2,8 @@
 /// \file Health of one device, from what its driver reports: samples, drops, errors, link state.
 /// Pure: the caller passes the time. A silence longer than `silence_periods` nominal periods,
 /// a fault, a drop or a lost link changes the state at the next update(), so a fault is visible
-/// within a few sample periods when update() runs at the sample rate.
+/// within three sample periods when update() runs at the sample rate (silence is declared after
+/// two, leaving a period for the poll in flight).
 #include <cstdint>
 #include <deque>
 #include <string>
@@ -27,7 +28,10 @@ struct DeviceHealth {
 
 class DeviceMonitor {
  public:
-  DeviceMonitor(std::string device, double nominal_rate_hz, double silence_periods = 3.0);
+  /// \param lost_per_s_tolerated  readings lost per second before the device counts as degraded
+  ///        (default: 1 % of the nominal rate, at least 1): an occasional late answer on a busy
+  ///        machine is counted but does not flap the state.
+  DeviceMonitor(std::string device, double nominal_rate_hz, double silence_periods = 2.0, double lost_per_s_tolerated = -1.0);
 
   void sample(std::int64_t t_ns);
   void dropped(std::uint64_t n, std::int64_t t_ns);
@@ -35,7 +39,8 @@ class DeviceMonitor {
   void error(const std::string& what, std::int64_t t_ns);
   void link(bool connected, std::int64_t t_ns);
 
-  /// Re-evaluates the state at `now_ns`. \returns true when it changed (publish then).
+  /// Re-evaluates the state at `now_ns`. \returns true when the state or its cause changed
+  /// (publish then).
   bool update(std::int64_t now_ns);
   DeviceHealth health(std::int64_t now_ns) const;
   DeviceState state() const { return state_; }
@@ -52,8 +57,11 @@ class DeviceMonitor {
   std::uint64_t samples_ = 0, dropped_ = 0, errors_ = 0;
   std::string last_error_;
   std::deque<std::int64_t> recent_;  ///< sample times within the last second
+  std::deque<std::int64_t> recent_drops_;  ///< times of lost readings within the last second
+  double drops_tolerated_;
   DeviceState state_ = DeviceState::disconnected;
   std::string reason_ = "not connected yet";
+  int cause_ = -1;  ///< what made the state: link, error, silence, losses, none
 };
 
 }  // namespace hil::acquisition
