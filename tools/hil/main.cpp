@@ -47,6 +47,7 @@ int main(int argc, char** argv) {
   add_echo(app);
   add_replay(app);
   add_acquire(app);
+  add_import(app);
 
   try {
     app.parse(argc, argv);
