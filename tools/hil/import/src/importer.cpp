@@ -582,35 +582,19 @@ void write_imported_run(const std::string& dir, const ImportedRun& run) {
   namespace fs = std::filesystem;
   fs::create_directories(dir);
   format::write_run_info((fs::path(dir) / "run.yaml").string(), run.info);
-  const auto path = (fs::path(dir) / "samples.csv").string();
-  std::ofstream f(path, std::ios::binary);
-  if (!f) throw std::runtime_error(path + ": cannot create");
-  std::string buf;
-  for (const auto& c : format::sample_columns()) buf += (buf.empty() ? "" : ",") + c;
-  for (Eigen::Index j = 0; j < run.table.joints_rad.cols(); ++j) buf += fmt::format(",j{}", j + 1);
-  for (const auto& x : run.extra_names) buf += "," + x;
-  buf += '\n';
-  auto num = [&](double v) {
-    if (std::isnan(v)) buf += ",nan";
-    else fmt::format_to(std::back_inserter(buf), ",{}", v);
-  };
+  // The run format's own writer: shortest round-trip numbers, extras after the joints (a NaN
+  // extra is written as nan, which readers keep as text).
+  format::SamplesWriter w((fs::path(dir) / "samples.csv").string(), static_cast<std::size_t>(run.table.joints_rad.cols()),
+                          run.extra_names);
+  std::vector<double> joints(static_cast<std::size_t>(run.table.joints_rad.cols()));
+  std::vector<double> extras(static_cast<std::size_t>(run.extra_values.cols()));
   for (std::size_t i = 0; i < run.table.size(); ++i) {
-    const auto& s = run.table.samples[i];
-    fmt::format_to(std::back_inserter(buf), "{}", s.t_s);
-    for (double v : {s.p_world_ee_m.x(), s.p_world_ee_m.y(), s.p_world_ee_m.z(), s.q_world_ee.w(), s.q_world_ee.x(),
-                     s.q_world_ee.y(), s.q_world_ee.z(), s.v_world_ee_m_per_s.x(), s.v_world_ee_m_per_s.y(),
-                     s.v_world_ee_m_per_s.z(), s.w_world_ee_rad_per_s.x(), s.w_world_ee_rad_per_s.y(),
-                     s.w_world_ee_rad_per_s.z(), s.f_fp_n.x(), s.f_fp_n.y(), s.f_fp_n.z(), s.m_fp_nm.x(), s.m_fp_nm.y(),
-                     s.m_fp_nm.z()})
-      num(v);
     const auto ii = static_cast<Eigen::Index>(i);
-    for (Eigen::Index j = 0; j < run.table.joints_rad.cols(); ++j) num(run.table.joints_rad(ii, j));
-    for (Eigen::Index x = 0; x < run.extra_values.cols(); ++x) num(run.extra_values(ii, x));
-    buf += '\n';
+    for (std::size_t j = 0; j < joints.size(); ++j) joints[j] = run.table.joints_rad(ii, static_cast<Eigen::Index>(j));
+    for (std::size_t x = 0; x < extras.size(); ++x) extras[x] = run.extra_values(ii, static_cast<Eigen::Index>(x));
+    w.append(run.table.samples[i], joints.data(), extras.data());
   }
-  f << buf;
-  f.close();
-  if (!f) throw std::runtime_error(path + ": write failed");
+  w.close();
 }
 
 std::string report_text(const ImportReport& r) {
