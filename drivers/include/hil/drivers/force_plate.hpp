@@ -1,0 +1,200 @@
+#pragma once
+/// \file Force-plate drivers on a CanChannel: the ATI F/T CAN OEM protocol and a declarative
+/// decoder configured per signal (frame id, bits, byte order, scale, offset, wrench component).
+/// Both produce the wrench on the force plate, about the plate origin, in the force-plate frame
+/// (`w_fp` = [f_fp (N); m_fp (N·m)]), after a software tare and the sensor→plate transform.
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <array>
+#include <atomic>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "hil/drivers/ati_protocol.hpp"
+#include "hil/drivers/can_channel.hpp"
+#include "hil/drivers/status.hpp"
+
+namespace hil::drivers {
+
+using Vector6d = Eigen::Matrix<double, 6, 1>;
+using Matrix6d = Eigen::Matrix<double, 6, 6>;
+
+enum class WrenchComponent : std::uint8_t { fx, fy, fz, mx, my, mz, status };
+/// "fx".."mz", "status". \throws ConfigError(field) on anything else.
+WrenchComponent parse_wrench_component(const std::string& s, const std::string& field);
+const char* to_string(WrenchComponent c) noexcept;
+
+/// One signal of the declarative decoder (a DBC-style signal).
+struct CanSignal {
+  WrenchComponent component = WrenchComponent::fx;
+  std::uint32_t frame_id = 0;
+  bool extended_id = false;
+  unsigned start_bit = 0;  ///< little endian: LSB position (Intel); big endian: MSB position (Motorola/DBC)
+  unsigned length_bits = 16;
+  bool is_signed = true;
+  bool big_endian = false;
+  double scale = 1.0;   ///< physical = raw * scale + offset (N, N·m; status: raw)
+  double offset = 0.0;
+};
+
+/// Raw bits of a signal (sign-extended when signed). \pre the frame holds the signal's bytes.
+std::int64_t extract_raw(const CanSignal& s, const std::uint8_t* data) noexcept;
+/// Writes raw bits into a payload (for fakes and tests).
+void insert_raw(const CanSignal& s, std::int64_t raw, std::uint8_t* data) noexcept;
+/// Payload bytes a signal needs.
+unsigned bytes_needed(const CanSignal& s) noexcept;
+/// \throws ConfigError naming `signals[i].<field>`.
+void validate_signals(const std::vector<CanSignal>& signals);
+
+enum class ForcePlateProtocol : std::uint8_t { ati_ft_can, declarative };
+
+struct ForcePlateConfig {
+  ForcePlateProtocol protocol = ForcePlateProtocol::ati_ft_can;
+  std::string interface = "vcan0";  ///< SocketCAN interface (used by whoever opens the channel)
+  std::uint32_t base_id = 0;        ///< ATI base id (0..0x7F)
+  double rate_hz = 1000.0;
+  Eigen::Isometry3d T_fp_sensor = Eigen::Isometry3d::Identity();  ///< sensor frame in the plate frame
+  std::vector<CanSignal> signals;   ///< declarative only
+  std::vector<double> saturation_limits;  ///< |fx fy fz mx my mz| limits in N, N·m; empty = unknown
+  double response_timeout_s = 0.0;  ///< per poll; 0 = 0.9 period (ATI) or 3 periods (declarative)
+  double startup_timeout_s = 0.1;   ///< per start-up request (ATI)
+  int startup_tries = 3;
+  unsigned tare_samples = 16;       ///< samples averaged by tare()
+  /// \throws ConfigError naming the field.
+  void validate() const;
+  double response_timeout() const noexcept;
+};
+
+/// One wrench sample.
+struct WrenchSample {
+  std::int64_t t_ns = 0;  ///< kernel receive time of the (first) frame, CLOCK_REALTIME ns
+  StampSource stamp = StampSource::none;
+  std::uint64_t sequence = 0;
+  Vector6d w_fp = Vector6d::Zero();      ///< tared, force-plate frame, about the plate origin
+  Vector6d w_sensor = Vector6d::Zero();  ///< raw, sensor frame, before tare
+  ati::Gauges gauges{};                  ///< ATI only
+  std::uint16_t status_word = 0;         ///< ATI status / declarative `status` signal
+  std::uint8_t saturated_axes = 0;       ///< bit i: |w_fp[i]| ≥ saturation_limits[i]
+  bool gauge_saturated = false;          ///< a strain gauge at its int16 limit
+  bool can_bus_error = false;            ///< ATI status bit 0x4000
+  bool taring = false;                   ///< a tare is being averaged
+  std::uint32_t error_frames = 0;        ///< CAN error frames seen during this poll
+};
+
+/// What start() learned about the device.
+struct ForcePlateInfo {
+  std::string protocol;
+  std::string serial;
+  std::string firmware;
+  std::string units;
+  std::int32_t counts_per_force = 0, counts_per_torque = 0;
+  Matrix6d calibration = Matrix6d::Zero();  ///< ATI: M (gauges → counts)
+};
+
+/// A force plate behind a CanChannel. Not thread-safe, except tare() which any thread may call.
+class ForcePlate {
+ public:
+  virtual ~ForcePlate() = default;
+  ForcePlate(const ForcePlate&) = delete;
+  ForcePlate& operator=(const ForcePlate&) = delete;
+
+  /// Reads what the device must tell before polling (ATI: serial, firmware, units, counts,
+  /// calibration matrix). \throws DeviceError naming the device and the step that failed.
+  virtual ForcePlateInfo start() = 0;
+  /// One sample: ATI sends a request and waits for the answer; the declarative decoder waits for
+  /// one complete set of frames. Never throws; \returns the status, `out` is valid only on ok.
+  virtual PollStatus poll(WrenchSample& out) noexcept = 0;
+
+  /// Averages the next `samples` raw wrenches (0 = config.tare_samples) and subtracts them from then
+  /// on (sensor frame). Thread-safe.
+  void tare(unsigned samples = 0) noexcept;
+  /// Removes the tare. Thread-safe.
+  void clear_tare() noexcept;
+  Vector6d tare_bias() const;
+
+  const DeviceCounters& counters() const noexcept { return counters_; }
+  /// The last error frame seen.
+  const CanErrorInfo& last_bus_error() const noexcept { return last_bus_error_; }
+  /// Text of the last non-ok poll (not real-time safe to read concurrently).
+  const std::string& last_problem() const noexcept { return last_problem_; }
+  const ForcePlateConfig& config() const noexcept { return cfg_; }
+  CanChannel& channel() noexcept { return *channel_; }
+
+ protected:
+  ForcePlate(const ForcePlateConfig& cfg, std::unique_ptr<CanChannel> channel);
+  /// Tare, transform, saturation. Real-time safe.
+  void finish(WrenchSample& s) noexcept;
+  /// Books an error frame (bus-off state, counters).
+  void book_error_frame(const CanFrame& f) noexcept;
+  void problem(const char* what) noexcept;
+
+  ForcePlateConfig cfg_;
+  std::unique_ptr<CanChannel> channel_;
+  DeviceCounters counters_;
+  CanErrorInfo last_bus_error_;
+  std::string last_problem_;
+  std::uint64_t sequence_ = 0;
+
+ private:
+  Matrix6d X_fp_sensor_ = Matrix6d::Identity();  ///< wrench transform sensor → plate
+  Vector6d bias_ = Vector6d::Zero();
+  Vector6d tare_sum_ = Vector6d::Zero();
+  unsigned tare_count_ = 0;
+  unsigned tare_target_ = 0;
+  std::atomic<unsigned> tare_request_{0};
+  std::atomic<bool> clear_request_{false};
+  std::array<double, 6> limits_{};
+  bool have_limits_ = false;
+};
+
+/// The ATI F/T CAN OEM board.
+class AtiFtCanDriver final : public ForcePlate {
+ public:
+  /// \throws ConfigError on a bad configuration.
+  AtiFtCanDriver(const ForcePlateConfig& cfg, std::unique_ptr<CanChannel> channel);
+  ForcePlateInfo start() override;
+  PollStatus poll(WrenchSample& out) noexcept override;
+  /// gauges → wrench in SI units, sensor frame (valid after start()).
+  const Matrix6d& gauge_to_wrench() const noexcept { return G_; }
+
+ private:
+  bool transaction(std::uint8_t opcode, int arg, unsigned frames, std::array<CanFrame, 3>& out);
+  void drain() noexcept;
+  Matrix6d G_ = Matrix6d::Zero();
+  bool started_ = false;
+};
+
+/// The declarative decoder: a sample is complete when every configured frame id has been received
+/// since the previous sample.
+class DeclarativeForcePlate final : public ForcePlate {
+ public:
+  /// \throws ConfigError naming `signals[i].<field>`.
+  DeclarativeForcePlate(const ForcePlateConfig& cfg, std::unique_ptr<CanChannel> channel);
+  ForcePlateInfo start() override;
+  PollStatus poll(WrenchSample& out) noexcept override;
+  /// Decodes one frame into the pending sample; true when the sample is complete. Pure, fast.
+  bool feed(const CanFrame& f, WrenchSample& out) noexcept;
+
+ private:
+  struct FrameSlot {
+    std::uint32_t id;
+    bool extended;
+    unsigned min_len;
+    std::vector<unsigned> signals;
+  };
+  std::vector<FrameSlot> slots_;
+  std::uint64_t seen_mask_ = 0;
+  std::uint64_t full_mask_ = 0;
+  Vector6d pending_ = Vector6d::Zero();
+  std::uint16_t pending_status_ = 0;
+  std::int64_t first_t_ns_ = 0;
+  StampSource first_stamp_ = StampSource::none;
+  bool bad_ = false;
+};
+
+/// The driver the configuration asks for. \throws ConfigError.
+std::unique_ptr<ForcePlate> make_force_plate(const ForcePlateConfig& cfg, std::unique_ptr<CanChannel> channel);
+
+}  // namespace hil::drivers

@@ -1,0 +1,264 @@
+#include <deque>
+#include <random>
+
+#include "hil/drivers/error.hpp"
+#include "hil/drivers/fake_rig.hpp"
+
+namespace hil::drivers {
+
+Matrix6d default_ati_calibration() {
+  Matrix6d M;
+  M << 60, 3, -2, 1, 2, -1,  //
+      -2, 60, 1, -3, 1, 2,   //
+      1, -1, 62, 2, -2, 1,   //
+      4, 2, -3, 180, 5, -4,  //
+      -3, 5, 2, -4, 182, 3,  //
+      2, -4, 3, 5, -3, 181;
+  return M;
+}
+
+AtiGaugeModel::AtiGaugeModel(const FakeAtiConfig& cfg) {
+  const double f_si = ati::force_unit_to_si(cfg.force_units), t_si = ati::torque_unit_to_si(cfg.torque_units);
+  if (f_si == 0.0) throw ConfigError("force_units", "unknown ATI force unit code");
+  if (t_si == 0.0) throw ConfigError("torque_units", "unknown ATI torque unit code");
+  if (cfg.counts_per_force <= 0 || cfg.counts_per_torque <= 0) throw ConfigError("counts", "must be > 0");
+  Eigen::FullPivLU<Matrix6d> lu(cfg.calibration);
+  if (lu.rank() < 6) throw ConfigError("calibration", "the calibration matrix is singular");
+  // Wrench on the plate → wrench on the sensor: the inverse of the driver's X_fp_sensor.
+  const Eigen::Matrix3d R = cfg.T_fp_sensor.linear();
+  const Eigen::Vector3d p = cfg.T_fp_sensor.translation();
+  Eigen::Matrix3d P;
+  P << 0, -p.z(), p.y(), p.z(), 0, -p.x(), -p.y(), p.x(), 0;
+  Matrix6d X_sensor_fp = Matrix6d::Zero();
+  X_sensor_fp.topLeftCorner<3, 3>() = R.transpose();
+  X_sensor_fp.bottomLeftCorner<3, 3>() = -R.transpose() * P;
+  X_sensor_fp.bottomRightCorner<3, 3>() = R.transpose();
+  Vector6d to_counts;
+  to_counts << cfg.counts_per_force / f_si, cfg.counts_per_force / f_si, cfg.counts_per_force / f_si,
+      cfg.counts_per_torque / t_si, cfg.counts_per_torque / t_si, cfg.counts_per_torque / t_si;
+  A_ = lu.inverse() * to_counts.asDiagonal() * X_sensor_fp;
+}
+
+ati::Gauges AtiGaugeModel::gauges(const Vector6d& w_fp, bool& saturated) const noexcept {
+  const Vector6d g = A_ * w_fp;
+  ati::Gauges out{};
+  saturated = false;
+  for (int i = 0; i < 6; ++i) {
+    double v = std::nearbyint(g[i]);
+    if (!(v == v)) v = 0;
+    if (v > 32767.0) {
+      v = 32767.0;
+      saturated = true;
+    } else if (v < -32768.0) {
+      v = -32768.0;
+      saturated = true;
+    }
+    out[static_cast<std::size_t>(i)] = static_cast<std::int16_t>(v);
+  }
+  return out;
+}
+
+struct FakeAtiForcePlate::Impl {
+  FakeAtiConfig cfg;
+  std::unique_ptr<CanChannel> channel;
+  std::shared_ptr<const Scenario> scenario;
+  AtiGaugeModel model;
+  mutable std::mutex m;  // guards faults, wrench, stats
+  CanFaults faults;
+  Vector6d wrench = Vector6d::Zero();
+  Stats stats;
+  std::atomic<bool> stop{false};
+  std::chrono::steady_clock::time_point start;
+  std::mt19937_64 rng;
+  std::deque<std::pair<std::chrono::steady_clock::time_point, CanFrame>> pending;
+  Impl(FakeAtiConfig c, std::unique_ptr<CanChannel> ch, std::shared_ptr<const Scenario> s)
+      : cfg(std::move(c)), channel(std::move(ch)), scenario(std::move(s)), model(cfg), faults(cfg.faults), rng(cfg.seed) {}
+};
+
+FakeAtiForcePlate::FakeAtiForcePlate(FakeAtiConfig cfg, std::unique_ptr<CanChannel> channel,
+                                     std::shared_ptr<const Scenario> scenario) {
+  if (!channel) throw ConfigError("channel", "no CAN channel given");
+  if (cfg.base_id > ati::kMaxBase) throw ConfigError("base_id", "ATI base id must be 0..0x7F");
+  if (!(cfg.clock.speed > 0.0)) throw ConfigError("speed", "must be > 0");
+  impl_ = std::make_unique<Impl>(std::move(cfg), std::move(channel), std::move(scenario));
+}
+
+FakeAtiForcePlate::~FakeAtiForcePlate() { stop(); }
+
+void FakeAtiForcePlate::start() {
+  if (thread_.joinable()) return;
+  impl_->stop = false;
+  impl_->start = std::chrono::steady_clock::now();
+  thread_ = std::jthread([this] { run(); });
+}
+
+void FakeAtiForcePlate::stop() noexcept {
+  impl_->stop = true;
+  if (thread_.joinable()) thread_.join();
+}
+
+void FakeAtiForcePlate::set_wrench(const Vector6d& w_fp) {
+  std::lock_guard lk(impl_->m);
+  impl_->wrench = w_fp;
+}
+
+void FakeAtiForcePlate::set_faults(const CanFaults& f) {
+  std::lock_guard lk(impl_->m);
+  impl_->faults = f;
+}
+
+FakeAtiForcePlate::Stats FakeAtiForcePlate::stats() const {
+  std::lock_guard lk(impl_->m);
+  return impl_->stats;
+}
+
+void FakeAtiForcePlate::run() noexcept {
+  using Clock = std::chrono::steady_clock;
+  Impl& I = *impl_;
+  const std::uint32_t base = I.cfg.base_id;
+  bool in_bus_off = false;
+  Clock::time_point next_error = Clock::now();
+  ScenarioPoint point;
+  std::uniform_real_distribution<double> uni(0.0, 1.0);
+  auto send_now = [&](const CanFrame& f) {
+    if (I.channel->send(f, std::chrono::milliseconds(5)) == IoStatus::ok) {
+      std::lock_guard lk(I.m);
+      ++I.stats.frames_sent;
+    }
+  };
+  while (!I.stop.load()) {
+    const auto now = Clock::now();
+    const double t = std::chrono::duration<double>(now - I.start).count();
+    CanFaults f;
+    {
+      std::lock_guard lk(I.m);
+      f = I.faults;
+    }
+    bool silent = f.silent_now;
+    for (const auto& w : f.silent) silent = silent || w.contains(t);
+    bool bus_off = false;
+    for (const auto& w : f.bus_off) bus_off = bus_off || w.contains(t);
+    if (bus_off && !in_bus_off) {
+      send_now(make_error_frame(kErrBusOff));
+      std::lock_guard lk(I.m);
+      ++I.stats.error_frames_sent;
+    } else if (!bus_off && in_bus_off) {
+      send_now(make_error_frame(kErrRestarted));
+      std::lock_guard lk(I.m);
+      ++I.stats.error_frames_sent;
+    }
+    in_bus_off = bus_off;
+    if (f.error_frame_rate_hz > 0.0 && now >= next_error) {
+      send_now(make_error_frame(kErrCrtl | kErrCnt, {0, kErrCrtlRxPassive, 0, 0, 0, 0, 0, 130}));
+      {
+        std::lock_guard lk(I.m);
+        ++I.stats.error_frames_sent;
+      }
+      next_error = now + std::chrono::nanoseconds(static_cast<std::int64_t>(1e9 / f.error_frame_rate_hz));
+    }
+    while (!I.pending.empty() && I.pending.front().first <= now) {
+      send_now(I.pending.front().second);
+      I.pending.pop_front();
+    }
+    auto wait = std::chrono::nanoseconds(std::chrono::milliseconds(10));
+    if (!I.pending.empty()) wait = std::min<std::chrono::nanoseconds>(wait, I.pending.front().first - now);
+    if (f.error_frame_rate_hz > 0.0) wait = std::min<std::chrono::nanoseconds>(wait, next_error - now);
+    if (wait.count() < 0) wait = std::chrono::nanoseconds(0);
+    CanFrame req;
+    const auto r = I.channel->receive(req, wait);
+    if (r == IoStatus::closed) break;
+    if (r != IoStatus::ok || req.error || req.extended || req.rtr || req.fd) continue;
+    if (ati::base_of(req.id) != base) continue;
+    {
+      // Faults as they are now (they may have been switched while we waited).
+      std::lock_guard lk(I.m);
+      f = I.faults;
+    }
+    const double t_req = std::chrono::duration<double>(Clock::now() - I.start).count();
+    silent = f.silent_now;
+    for (const auto& w : f.silent) silent = silent || w.contains(t_req);
+    bus_off = false;
+    for (const auto& w : f.bus_off) bus_off = bus_off || w.contains(t_req);
+    const std::uint8_t op = ati::opcode_of(req.id);
+    std::array<CanFrame, 3> answer;
+    std::size_t n = 0;
+    switch (op) {
+      case ati::kOpReadGauges: {
+        if (req.len != 0) continue;  // another device's answer
+        Vector6d w;
+        if (I.scenario) {
+          I.scenario->at(I.cfg.clock.scenario_time(std::chrono::duration<double>(Clock::now() - I.start).count()), point);
+          w = point.w_fp;
+        } else {
+          std::lock_guard lk(I.m);
+          w = I.wrench;
+        }
+        bool sat = false;
+        const ati::Gauges g = I.model.gauges(w, sat);
+        const std::uint16_t status = (f.error_frame_rate_hz > 0.0 || bus_off) ? ati::kStatusCanBusError : 0;
+        const auto fr = ati::encode_gauges(base, status, g);
+        answer[0] = fr[0];
+        answer[1] = fr[1];
+        n = 2;
+        break;
+      }
+      case ati::kOpReadMatrix: {
+        if (req.len != 1 || req.data[0] > 5) continue;
+        ati::MatrixRow row{};
+        for (int c = 0; c < 6; ++c) row[static_cast<std::size_t>(c)] = static_cast<float>(I.cfg.calibration(req.data[0], c));
+        const auto fr = ati::encode_matrix_row(base, row);
+        for (std::size_t k = 0; k < 3; ++k) answer[k] = fr[k];
+        n = 3;
+        break;
+      }
+      case ati::kOpSerial:
+        answer[0] = ati::encode_serial(base, I.cfg.serial);
+        n = 1;
+        break;
+      case ati::kOpCounts:
+        answer[0] = ati::encode_counts(base, I.cfg.counts_per_force, I.cfg.counts_per_torque);
+        n = 1;
+        break;
+      case ati::kOpUnits:
+        answer[0] = ati::encode_units(base, I.cfg.force_units, I.cfg.torque_units);
+        n = 1;
+        break;
+      case ati::kOpFirmware:
+        answer[0] = ati::encode_firmware(base, I.cfg.firmware);
+        n = 1;
+        break;
+      default: continue;
+    }
+    {
+      std::lock_guard lk(I.m);
+      ++I.stats.requests;
+      if (silent || bus_off) {
+        ++I.stats.ignored_silent;
+        continue;
+      }
+      if (op == ati::kOpReadGauges) ++I.stats.gauge_answers;
+      if (f.corrupt_fraction > 0.0 && uni(I.rng) < f.corrupt_fraction) {
+        ++I.stats.answers_corrupted;
+        answer[0].len = static_cast<std::uint8_t>(answer[0].len >= 4 ? answer[0].len - 3 : answer[0].len + 1);
+      }
+    }
+    const auto due = Clock::now() + std::chrono::nanoseconds(static_cast<std::int64_t>(f.extra_delay_s * 1e9));
+    for (std::size_t k = 0; k < n; ++k) {
+      if (f.drop_fraction > 0.0) {
+        bool drop;
+        {
+          std::lock_guard lk(I.m);
+          drop = uni(I.rng) < f.drop_fraction;
+          if (drop) ++I.stats.frames_dropped;
+        }
+        if (drop) continue;
+      }
+      if (f.extra_delay_s > 0.0)
+        I.pending.emplace_back(due, answer[k]);
+      else
+        send_now(answer[k]);
+    }
+  }
+}
+
+}  // namespace hil::drivers
