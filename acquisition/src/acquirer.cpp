@@ -234,20 +234,17 @@ void Acquirer::robot_loop() {
   while (running_) {
     const auto st = robot_->poll(s);
     const auto now = realtime_ns();
-    // Pose outside the lock: forward kinematics may take a few microseconds.
+    // Pose outside the lock.
     PoseReading r;
     Eigen::Isometry3d T_world_ee = Eigen::Isometry3d::Identity();
     bool have_pose = false;
     if (st == drivers::PollStatus::ok) {
       q = Eigen::Map<const Eigen::VectorXd>(s.joints.data(), s.joint_count);
-      if (s.has_pose) {
+      if (s.has_pose) {  // read from the controller, or from the joints by the rig's DH chain
         Eigen::Isometry3d T_base_tcp = Eigen::Isometry3d::Identity();
         T_base_tcp.linear() = s.q_base_tcp.toRotationMatrix();
         T_base_tcp.translation() = s.p_base_tcp_m;
         T_world_ee = opt_.T_world_base * T_base_tcp * opt_.T_tcp_ee;
-        have_pose = true;
-      } else if (opt_.forward_kinematics && s.joint_count > 0) {
-        T_world_ee = opt_.T_world_base * opt_.forward_kinematics(q);
         have_pose = true;
       }
       r.t_ns = s.t_ns;

@@ -16,6 +16,7 @@
 #include "hil/drivers/fake_rig.hpp"
 #include "hil/format/csv.hpp"
 #include "hil/format/run.hpp"
+#include "drivers_from_rig.hpp"
 
 using namespace hil;
 
@@ -23,17 +24,7 @@ namespace {
 
 std::shared_ptr<const drivers::Scenario> example_scenario(bool loop) {
   const auto run = format::load_run(std::string(HIL_SOURCE_DIR) + "/examples/runs/press_slide");
-  std::vector<drivers::ScenarioPoint> pts;
-  for (const auto& s : run.samples.samples) {
-    drivers::ScenarioPoint p;
-    p.t_s = s.t_s;
-    p.w_fp << s.f_fp_n, s.m_fp_nm;
-    p.p_base_tcp_m = s.p_world_ee_m;
-    p.q_base_tcp = s.q_world_ee;
-    p.joints_rad.assign(6, 0.1);
-    pts.push_back(p);
-  }
-  return std::make_shared<const drivers::Scenario>(std::move(pts), loop);
+  return std::make_shared<const drivers::Scenario>(rig::scenario_from_run(run, Eigen::Isometry3d::Identity(), loop));
 }
 
 int test_domain(int base) { return base + static_cast<int>(getpid() % 40); }

@@ -23,6 +23,7 @@
 #include "hil/dds/topics.hpp"
 #include "hil/drivers/fake_rig.hpp"
 #include "hil/format/run.hpp"
+#include "drivers_from_rig.hpp"
 
 namespace {
 
@@ -34,16 +35,7 @@ struct ChildResult {
 
 std::shared_ptr<const hil::drivers::Scenario> scenario() {
   const auto run = hil::format::load_run(std::string(HIL_SOURCE_DIR) + "/examples/runs/press_slide");
-  std::vector<hil::drivers::ScenarioPoint> pts;
-  for (const auto& s : run.samples.samples) {
-    hil::drivers::ScenarioPoint p;
-    p.t_s = s.t_s;
-    p.w_fp << s.f_fp_n, s.m_fp_nm;
-    p.p_base_tcp_m = s.p_world_ee_m;
-    p.joints_rad.assign(6, 0.0);
-    pts.push_back(p);
-  }
-  return std::make_shared<const hil::drivers::Scenario>(std::move(pts), true);
+  return std::make_shared<const hil::drivers::Scenario>(hil::rig::scenario_from_run(run, Eigen::Isometry3d::Identity(), true));
 }
 
 int subscriber(int domain, int done_fd, int result_fd) {

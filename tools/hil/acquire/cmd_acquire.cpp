@@ -18,7 +18,7 @@
 #include "hil/acquisition/acquirer.hpp"
 #include "hil/drivers/socketcan.hpp"
 #include "hil/format/error.hpp"
-#include "rig_devices.hpp"
+#include "drivers_from_rig.hpp"
 
 namespace hil::cli {
 namespace {
@@ -36,10 +36,10 @@ AcquireResult run_acquisition(const AcquireOptions& o, const std::function<void(
     rig_text = ss.str();
   }
   if (!rig.devices.force_plate) throw format::FormatError({o.rig, 0, 0, "devices.force_plate"}, "acquisition needs a force plate section");
-  auto pcfg = plate_config(*rig.devices.force_plate);
+  auto pcfg = rig::force_plate_config(rig);
   if (!o.can_interface.empty()) pcfg.interface = o.can_interface;
   const bool with_robot = rig.devices.robot.has_value() && !o.no_robot;
-  const Eigen::Isometry3d T_world_base = rig.robot ? rig.robot->T_world_base.isometry() : Eigen::Isometry3d::Identity();
+  const Eigen::Isometry3d T_world_base = rig::world_to_base(rig);
 
   // The in-process fake rig, when asked for.
   std::shared_ptr<drivers::CanLoopbackBus> loop;
@@ -48,10 +48,10 @@ AcquireResult run_acquisition(const AcquireOptions& o, const std::function<void(
   std::unique_ptr<drivers::CanChannel> channel;
   double play_duration_s = 0.0;
   drivers::ModbusConfig mcfg;
-  if (with_robot) mcfg = modbus_config(*rig.devices.robot);
+  if (with_robot) mcfg = rig::robot_controller_config(rig);
   if (!o.play.empty()) {
     const auto played = format::load_run(o.play);
-    auto scenario = scenario_from_run(played, T_world_base);
+    auto scenario = std::make_shared<const drivers::Scenario>(rig::scenario_from_run(played, T_world_base, false));
     play_duration_s = scenario->duration_s() / o.play_speed;
     drivers::FakeAtiConfig fc;
     fc.base_id = pcfg.base_id;
@@ -86,6 +86,20 @@ AcquireResult run_acquisition(const AcquireOptions& o, const std::function<void(
   if (with_robot && !o.robot_host.empty()) mcfg.host = o.robot_host;
   if (with_robot && o.robot_port > 0) mcfg.port = o.robot_port;
 
+  format::RunInfo info;
+  info.rig = rig.name;
+  info.output_rate_hz = o.output_rate_hz;
+  info.sources.push_back({"force_plate", "can", pcfg.rate_hz, "raw/force_plate.candump.log"});
+  if (with_robot) info.sources.push_back({"robot", "modbus", mcfg.rate_hz, "raw/robot.csv"});
+  info.notes = o.play.empty() ? "Recorded by hil acquire." : "Recorded by hil acquire from the fake rig playing " + o.play + ".";
+  const auto start_ns = acquisition::realtime_ns();
+  acquisition::RunRecorder recorder(o.out, info, rig_text, start_ns, with_robot ? mcfg.map.joint_count() : 0);
+
+  // Every CAN frame both ways, as candump -L, next to the readings (raw/force_plate.csv).
+  auto can_log = drivers::CanLogChannel::open_write(recorder.raw_path("force_plate.candump.log"),
+                                                    drivers::CanLogOptions{pcfg.interface, false, 1.0, {}});
+  drivers::CanLogChannel* can_log_ptr = can_log.get();
+  channel = std::make_unique<drivers::CanRecordingChannel>(std::move(channel), std::move(can_log));
   auto plate = drivers::make_force_plate(pcfg, std::move(channel));
   std::unique_ptr<drivers::RobotControllerDriver> robot;
   if (with_robot) robot = std::make_unique<drivers::RobotControllerDriver>(mcfg);
@@ -95,29 +109,13 @@ AcquireResult run_acquisition(const AcquireOptions& o, const std::function<void(
   if (!o.no_bus)
     bus = std::make_unique<dds::Participant>(dds::ParticipantOptions{g.dds_domain >= 0 ? g.dds_domain : dds::domain_from_env(),
                                                                      g.dds_profile, g.dds_profile_name, "hil-acquire"});
-  format::RunInfo info;
-  info.rig = rig.name;
-  info.output_rate_hz = o.output_rate_hz;
-  info.sources.push_back({"force_plate", "can", pcfg.rate_hz, "raw/force_plate.csv"});
-  if (with_robot) info.sources.push_back({"robot", "modbus", mcfg.rate_hz, "raw/robot.csv"});
-  info.notes = o.play.empty() ? "Recorded by hil acquire." : "Recorded by hil acquire from the fake rig playing " + o.play + ".";
-  const auto start_ns = acquisition::realtime_ns();
-  acquisition::RunRecorder recorder(o.out, info, rig_text, start_ns, with_robot ? mcfg.map.joint_count() : 0);
-
   acquisition::AcquirerOptions ao;
   ao.sync.wrench_rate_hz = pcfg.rate_hz;
   ao.sync.output_rate_hz = o.output_rate_hz;
   ao.T_world_base = T_world_base;
   ao.ros_topics = o.ros_topics;
-  if (with_robot && !mcfg.map.has_pose()) {
-    if (!rig.robot) throw format::FormatError({o.rig, 0, 0, "robot"}, "the register map reads joints only: the rig needs a robot DH table");
-    const auto model = robot_model(*rig.robot);
-    if (static_cast<unsigned>(model.dof()) != mcfg.map.joint_count())
-      throw format::FormatError({o.rig, 0, 0, "robot.joints"}, fmt::format("the register map reads {} joints but the DH table has {}",
-                                                                          mcfg.map.joint_count(), model.dof()));
-    const Eigen::Isometry3d T_base_world = model.T_world_base.inverse();
-    ao.forward_kinematics = [model, T_base_world](const Eigen::VectorXd& q) { return T_base_world * calibration::tool_pose(model, q); };
-  }
+  if (with_robot && !mcfg.map.has_pose() && !mcfg.kinematics)
+    throw format::FormatError({o.rig, 0, 0, "robot"}, "the register map reads joints only: the rig needs a robot DH table");
   acquisition::Acquirer acq(ao, std::move(plate), std::move(robot), bus.get(), &recorder);
   if (observer) acq.on_sample(observer);
 
@@ -130,9 +128,14 @@ AcquireResult run_acquisition(const AcquireOptions& o, const std::function<void(
   const double duration = o.duration_s > 0 ? o.duration_s : play_duration_s;
   const auto t0 = std::chrono::steady_clock::now();
   auto next_progress = t0 + std::chrono::seconds(5);
+  auto next_flush = t0 + std::chrono::seconds(1);
   while (!g_stop) {
     const auto now = std::chrono::steady_clock::now();
     if (duration > 0 && now - t0 >= std::chrono::duration<double>(duration)) break;
+    if (now >= next_flush) {  // the CAN log is written by the plate thread; FILE* locks make this safe
+      can_log_ptr->flush();
+      next_flush += std::chrono::seconds(1);
+    }
     if (o.progress && now >= next_progress) {
       spdlog::info("acquire: {} samples, {:.0f} s", acq.samples(), std::chrono::duration<double>(now - t0).count());
       next_progress += std::chrono::seconds(5);

@@ -18,7 +18,7 @@ namespace hil::cli {
 namespace {
 
 std::atomic<bool> g_stop{false};
-extern "C" void on_signal(int) { g_stop = true; }
+extern "C" void on_echo_signal(int) { g_stop = true; }
 
 struct EchoOptions {
   std::string topic;
@@ -100,8 +100,8 @@ void add_echo(CLI::App& app) {
   cmd->add_option("--timeout", o.timeout_s, "give up after this many seconds (0: never)");
   cmd->callback([] {
     set_action([] {
-      std::signal(SIGINT, on_signal);
-      std::signal(SIGTERM, on_signal);
+      std::signal(SIGINT, on_echo_signal);
+      std::signal(SIGTERM, on_echo_signal);
       auto& g = globals();
       dds::Participant p({g.dds_domain >= 0 ? g.dds_domain : dds::domain_from_env(), g.dds_profile, g.dds_profile_name, "hil-echo"});
       const auto topic = resolve(o.topic);

@@ -26,8 +26,6 @@ struct AcquirerOptions {
   SyncConfig sync;
   Eigen::Isometry3d T_world_base = Eigen::Isometry3d::Identity();  ///< robot base in world
   Eigen::Isometry3d T_tcp_ee = Eigen::Isometry3d::Identity();      ///< ee in the controller's tool frame
-  /// Joints -> T_base_ee, used when the register map has no tool pose (from the rig's DH table).
-  std::function<Eigen::Isometry3d(const Eigen::VectorXd&)> forward_kinematics;
   double status_period_s = 1.0;
   /// Also publish rt/hil/wrench (every force-plate reading as it arrives: the low-latency live
   /// stream), rt/hil/pose and rt/hil/joint_states (at the output rate).
