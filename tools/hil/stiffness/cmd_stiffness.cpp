@@ -1,6 +1,460 @@
-// `hil stiffness ...`: filled in by its issue. Registers nothing until then.
+// `hil stiffness identify|predict|simulate|table1|replay|worker`: elastostatic calibration of
+// serial robots (issue 4). Numerics in hil::calibration; this file is command-line plumbing.
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
+#include <csignal>
+#include <fstream>
+#include <iostream>
+#include <thread>
+
 #include "../commands.hpp"
+#include "hil/calibration/experiment.hpp"
+#include "hil/calibration/online.hpp"
+#include "hil/dds/topics.hpp"
+#include "hil/format/error.hpp"
+#include "stiffness_io.hpp"
+#include "worker.hpp"
 
 namespace hil::cli {
-void add_stiffness(CLI::App& /*app*/) {}
+namespace hc = hil::calibration;
+using format::FormatError;
+using namespace stiffness;
+
+namespace {
+
+struct ReductionArgs {
+  double noise_pos_m = 0.0;
+  double noise_rot_rad = 0.0;
+  double neglect_below = 2.0;
+  double pnr_low = 2.0;
+  double pnr_high = 5.0;
+  double rank_tol = 1e-9;
+  bool complete_ranks = false;
+  bool no_sparsing = false;
+  std::vector<std::string> priorities;  // NAME=P
+  std::vector<std::string> fixes;       // NAME=VALUE
+  std::vector<std::string> templates;   // Lk=beam|full|36 chars of 0/1
+};
+
+std::pair<std::string, double> name_value(const std::string& s, const char* option) {
+  const auto eq = s.find('=');
+  if (eq == std::string::npos || eq == 0) throw FormatError({"command line", 0, 0, option}, "expected NAME=VALUE, found '" + s + "'");
+  try {
+    std::size_t used = 0;
+    const double v = std::stod(s.substr(eq + 1), &used);
+    if (used != s.size() - eq - 1) throw std::invalid_argument("trailing");
+    return {s.substr(0, eq), v};
+  } catch (const std::exception&) {
+    throw FormatError({"command line", 0, 0, option}, "not a number after '=' in '" + s + "'");
+  }
+}
+
+hc::PipelineOptions pipeline_options(const ReductionArgs& a, const hc::VjmModel& model) {
+  hc::PipelineOptions o;
+  o.sparsify = !a.no_sparsing;
+  o.neglect_below = a.neglect_below;
+  o.pnr = {a.pnr_low, a.pnr_high};
+  o.algebraic.rank.tolerance = a.rank_tol;
+  o.complete_ranks = a.complete_ranks;
+  const auto all = hc::m1_symmetrise(hc::complete_parameters(model));
+  auto known = [&](const std::string& name, const char* opt) {
+    if (hc::find_parameter(all, name) < 0 && hc::find_parameter(hc::complete_parameters(model), name) < 0)
+      throw FormatError({"command line", 0, 0, opt}, "unknown parameter '" + name + "' (names like L2.k44, L3.k26, J1.k)");
+  };
+  for (const auto& p : a.priorities) {
+    const auto [n, v] = name_value(p, "--priority");
+    known(n, "--priority");
+    o.priorities[n] = v;
+  }
+  for (const auto& f : a.fixes) {
+    const auto [n, v] = name_value(f, "--fix");
+    known(n, "--fix");
+    o.fixed_values[n] = v;
+  }
+  for (const auto& t : a.templates) {
+    const auto eq = t.find('=');
+    const std::string link = eq == std::string::npos ? "" : t.substr(0, eq);
+    const int s = model.find(link);
+    if (s < 0 || model.springs()[static_cast<std::size_t>(s)].kind != hc::SpringKind::link)
+      throw FormatError({"command line", 0, 0, "--template"}, "expected Lk=beam|full|<36 digits 0/1>, found '" + t + "'");
+    const std::string v = t.substr(eq + 1);
+    hc::Template tp;
+    if (v == "beam") tp = hc::beam_template();
+    else if (v == "full") tp = hc::full_template();
+    else if (v.size() == 36 && v.find_first_not_of("01") == std::string::npos) {
+      for (int i = 0; i < 36; ++i) tp(i / 6, i % 6) = v[static_cast<std::size_t>(i)] == '1';
+    } else {
+      throw FormatError({"command line", 0, 0, "--template"}, "expected beam, full or 36 digits 0/1 (row-major), found '" + v + "'");
+    }
+    o.templates[model.springs()[static_cast<std::size_t>(s)].index] = tp;
+  }
+  return o;
+}
+
+void add_reduction_options(CLI::App* cmd, ReductionArgs& a) {
+  cmd->add_option("--noise-pos-m", a.noise_pos_m, "position noise σ per axis, m (default: estimated from the residuals)");
+  cmd->add_option("--noise-rot-rad", a.noise_rot_rad, "rotation noise σ per axis, rad (default: estimated)");
+  cmd->add_option("--neglect-below", a.neglect_below, "M6: neglect parameters whose parameter-to-noise ratio stays below this (0: off)")->capture_default_str();
+  cmd->add_option("--pnr-low", a.pnr_low, "G1- below, G1~ from")->capture_default_str();
+  cmd->add_option("--pnr-high", a.pnr_high, "G1+ from")->capture_default_str();
+  cmd->add_option("--rank-tol", a.rank_tol, "rank tolerance on the column-scaled singular values")->capture_default_str();
+  cmd->add_flag("--complete-ranks", a.complete_ranks, "also compute the ranks of the complete (258) and symmetrised models");
+  cmd->add_flag("--no-sparsing", a.no_sparsing, "skip M2 (no link template)");
+  cmd->add_option("--priority", a.priorities, "M5b priority NAME=P (higher kept first; default joints 3, diagonal 2, couplings 1)");
+  cmd->add_option("--fix", a.fixes, "M5c value NAME=VALUE for a parameter that gets fixed (default 0)");
+  cmd->add_option("--template", a.templates, "M2 template for a link: Lk=beam|full|<36 digits 0/1, row-major>");
+}
+
+std::ostream& output(const std::string& path, std::ofstream& file) {
+  if (path.empty() || path == "-") return std::cout;
+  file.open(path);
+  if (!file) throw std::runtime_error(path + ": cannot write");
+  return file;
+}
+
+// ---- identify
+int identify(const std::string& data_path, const std::string& rig, const std::string& json_out, const ReductionArgs& a) {
+  const hc::VjmModel model(load_robot(rig));
+  const auto table = read_stiffness_table(data_path, model.dof(), true);
+  const auto opt = pipeline_options(a, model);
+  const auto r = hc::calibrate(model, table.rows, {a.noise_pos_m, a.noise_rot_rad}, opt);
+  print_report(std::cout, model, r);
+  if (!json_out.empty()) {
+    std::ofstream f;
+    output(json_out, f) << result_to_json(model, r).dump(2) << '\n';
+    if (json_out != "-") spdlog::info("model written to {}", json_out);
+  }
+  return 0;
+}
+
+// ---- predict
+struct ModelFile {
+  hc::VjmModel model;
+  hc::ComplianceSet k;
+};
+
+ModelFile load_model(const std::string& path, const std::string& rig) {
+  const auto j = load_json(path);
+  if (!j.is_object() || !j.contains("springs")) throw FormatError({path, 0, 0, "springs"}, "a model file needs a \"springs\" object");
+  hc::SerialRobot robot;
+  if (!rig.empty()) robot = load_robot(rig);
+  else if (j.contains("robot")) robot = robot_from_json(j.at("robot"), path);
+  else throw FormatError({path, 0, 0, "robot"}, "no robot in the model file: give --rig");
+  hc::VjmModel model(robot);
+  auto k = read_springs(j.at("springs"), model, path);
+  return {std::move(model), std::move(k)};
+}
+
+int predict(const std::string& model_path, const std::string& data_path, const std::string& rig, bool compensate, const std::string& out_path) {
+  const auto mf = load_model(model_path, rig);
+  const auto table = read_stiffness_table(data_path, mf.model.dof(), false);
+  std::ofstream f;
+  std::ostream& os = output(out_path, f);
+  const int n = mf.model.dof();
+  const auto& first = table.rows.front();
+  const bool markers = first.kind == hc::MeasurementKind::markers;
+  os << "config";
+  for (int j = 1; j <= n; ++j) os << ",j" << j;
+  if (markers) {
+    for (std::size_t k = 1; k <= first.p_ee_marker_m.size(); ++k) os << fmt::format(",m{0}_dx,m{0}_dy,m{0}_dz", k);
+  } else {
+    os << ",dx,dy,dz,rx,ry,rz";
+  }
+  if (compensate) {
+    os << ",x,y,z,qx,qy,qz,cx,cy,cz,cqx,cqy,cqz";
+    for (int j = 1; j <= n; ++j) os << ",cj" << j;
+  }
+  os << '\n';
+  for (const auto& row : table.rows) {
+    hc::Measurement m = row;
+    if (!markers) m.kind = hc::MeasurementKind::pose6;
+    const Eigen::VectorXd d = hc::predict(mf.model, mf.k, m);
+    os << m.config;
+    for (int j = 0; j < n; ++j) os << fmt::format(",{:.9g}", m.q_rad[j]);
+    for (Eigen::Index i = 0; i < d.size(); ++i) os << fmt::format(",{:.6e}", d[i]);
+    if (compensate) {
+      // Target = the nominal pose at the given joints. First order: command the target moved by the
+      // opposite of the deflection (position, and rotation vector composed on the left); in joint
+      // space, Newton iterations q ← q - J⁺ (pose(q) ⊕ t(q) ⊖ target) on the deflected robot.
+      const Eigen::Isometry3d T = hc::tool_pose(mf.model.robot(), m.q_rad);
+      const hc::Vector6d t = mf.model.deflection(mf.k, m.q_rad, m.w_world);
+      Eigen::Isometry3d Tc = T;
+      Tc.translation() -= t.head<3>();
+      if (t.tail<3>().norm() > 0) Tc.linear() = Eigen::AngleAxisd(t.tail<3>().norm(), -t.tail<3>().normalized()).toRotationMatrix() * T.linear();
+      const Eigen::AngleAxisd aa(T.linear()), aac(Tc.linear());
+      const Eigen::Vector3d rv = aa.angle() * aa.axis(), rvc = aac.angle() * aac.axis();
+      const Eigen::VectorXd qc = mf.model.compensate(mf.k, m.q_rad, m.w_world);
+      os << fmt::format(",{:.9f},{:.9f},{:.9f},{:.9f},{:.9f},{:.9f}", T.translation().x(), T.translation().y(), T.translation().z(), rv.x(),
+                        rv.y(), rv.z());
+      os << fmt::format(",{:.9f},{:.9f},{:.9f},{:.9f},{:.9f},{:.9f}", Tc.translation().x(), Tc.translation().y(), Tc.translation().z(), rvc.x(),
+                        rvc.y(), rvc.z());
+      for (int j = 0; j < n; ++j) os << fmt::format(",{:.9f}", qc[j]);
+    }
+    os << '\n';
+  }
+  return 0;
+}
+
+// ---- simulate
+struct SimArgs {
+  std::string rig, truth, out;
+  int configs = 50;
+  int loads = 1;
+  double force_n = 1000.0;
+  double moment_nm = 0.0;
+  std::string measure = "pose6";
+  std::vector<std::string> markers;
+  double noise_pos_m = 10e-6;
+  double noise_rot_rad = 10e-6;
+  std::uint64_t seed = 1;
+};
+
+int simulate(const SimArgs& a) {
+  const hc::VjmModel model(load_robot(a.rig));
+  const auto j = load_json(a.truth);
+  if (!j.is_object() || !j.contains("springs")) throw FormatError({a.truth, 0, 0, "springs"}, "a truth file needs a \"springs\" object");
+  const auto truth = read_springs(j.at("springs"), model, a.truth);
+  for (const auto& c : hc::check_spd(model, truth))
+    if (!c.positive_definite && c.max_eigenvalue != 0.0) spdlog::warn("truth: {} is not symmetric positive definite", c.spring);
+  hc::ExperimentPlan plan;
+  plan.configurations = a.configs;
+  plan.loads_per_config = a.loads;
+  plan.force_n = a.force_n;
+  plan.moment_nm = a.moment_nm;
+  plan.seed = a.seed;
+  plan.kind = a.measure == "pose6" ? hc::MeasurementKind::pose6 : a.measure == "point3" ? hc::MeasurementKind::point3 : hc::MeasurementKind::markers;
+  for (const auto& m : a.markers) {
+    double x = 0, y = 0, z = 0;
+    char c1 = 0, c2 = 0;
+    std::istringstream is(m);
+    if (!(is >> x >> c1 >> y >> c2 >> z) || c1 != ',' || c2 != ',')
+      throw FormatError({"command line", 0, 0, "--marker"}, "expected X,Y,Z in metres (tool frame), found '" + m + "'");
+    plan.p_ee_marker_m.emplace_back(x, y, z);
+  }
+  if (plan.kind == hc::MeasurementKind::markers && plan.p_ee_marker_m.empty())
+    throw FormatError({"command line", 0, 0, "--marker"}, "--measure markers needs at least one --marker X,Y,Z");
+  const auto rows = hc::simulate(model, truth, plan, {a.noise_pos_m, a.noise_rot_rad});
+  std::ofstream f;
+  std::ostream& os = output(a.out, f);
+  os << fmt::format("# hil stiffness simulate: rig {}, truth {}, seed {}, noise σ {} m / {} rad\n", a.rig, a.truth, a.seed, a.noise_pos_m,
+                    a.noise_rot_rad);
+  write_stiffness_table(os, rows, model.dof());
+  return 0;
+}
+
+// ---- table1
+int table1(const std::string& rig, int configs, const std::string& measure, std::uint64_t seed, bool complete_ranks) {
+  const hc::VjmModel model(rig.empty() ? hc::kr270_like() : load_robot(rig));
+  hc::ExperimentPlan plan;
+  plan.configurations = configs;
+  plan.loads_per_config = 2;
+  plan.moment_nm = measure == "point3-forces" ? 0.0 : 300.0;
+  plan.kind = measure == "pose6" ? hc::MeasurementKind::pose6 : hc::MeasurementKind::point3;
+  if (measure == "markers") {
+    plan.kind = hc::MeasurementKind::markers;
+    plan.p_ee_marker_m = {{0.2, 0.0, 0.0}, {0.0, 0.2, 0.0}, {0.0, 0.0, 0.1}};
+  }
+  plan.seed = seed;
+  const auto data = hc::simulate(model, hc::example_compliance(model), plan, {});
+  hc::PipelineOptions opt;
+  opt.neglect_below = 0.0;  // M6 needs real noise; the counting stops at M5
+  opt.complete_ranks = complete_ranks;
+  const auto r = hc::calibrate(model, data, {1e-5, 1e-5}, opt);
+  std::cout << fmt::format("Table I counting for robot '{}' ({} configurations x 2 loads, measurement {}, noise-free)\n\n", model.robot().name,
+                           configs, measure);
+  print_reduction_table(std::cout, r.reduction);
+  std::cout << fmt::format("\nrank(A) physical model {} = after M5 {} = dim {}\n", r.rank_physical, r.rank_algebraic, r.kept.size());
+  auto names = [&](const char* label, const std::vector<int>& cols) {
+    std::cout << label;
+    for (int c : cols) std::cout << ' ' << r.base[static_cast<std::size_t>(c)].name;
+    std::cout << '\n';
+  };
+  names("G1 (identifiable):", r.partition.g1);
+  names("G2 (non-identifiable):", r.partition.g2);
+  for (std::size_t g = 0; g < r.splitting.groups.size(); ++g) {
+    const auto& grp = r.splitting.groups[g];
+    std::cout << fmt::format("G3 group {} keeps {} of {}:", g + 1, grp.rank, grp.cols.size());
+    for (int c : grp.cols) std::cout << ' ' << r.base[static_cast<std::size_t>(c)].name;
+    std::cout << '\n';
+  }
+  std::cout << "kept:";
+  for (const auto& k : r.kept) std::cout << ' ' << k.parameter.name;
+  std::cout << '\n';
+  return 0;
+}
+
+// ---- replay / worker
+dds::ParticipantOptions participant_options(const char* name) {
+  const auto& g = globals();
+  dds::ParticipantOptions o;
+  o.domain_id = g.dds_domain >= 0 ? g.dds_domain : dds::domain_from_env(0);
+  o.profile_file = g.dds_profile;
+  o.profile_name = g.dds_profile_name;
+  o.name = name;
+  return o;
+}
+
+std::atomic<bool> g_stop{false};
+extern "C" void on_signal(int) { g_stop = true; }
+
+int replay(const std::string& data_path, int dof_from_rig, double rate_hz, double wait_s) {
+  const auto table = read_stiffness_table(data_path, dof_from_rig, true);
+  dds::Participant p(participant_options("hil-stiffness-replay"));
+  dds::Writer<hil_msgs::msg::StiffnessMeasurement> w(p, dds::topics::kStiffnessMeasurement);
+  if (wait_s > 0 && !w.wait_for_readers(1, std::chrono::milliseconds(static_cast<long>(wait_s * 1e3))))
+    spdlog::warn("replay: no reader matched within {} s; publishing anyway", wait_s);
+  std::size_t i = 0;
+  for (const auto& m : table.rows) {
+    hil_msgs::msg::StiffnessMeasurement msg;
+    try {
+      msg = to_message(m);
+    } catch (const std::invalid_argument& e) {
+      throw FormatError({data_path, table.lines[i], 0, "m1_dx"}, e.what());
+    }
+    if (!w.write(msg)) throw std::runtime_error("replay: DDS refused a sample");
+    ++i;
+    if (rate_hz > 0) std::this_thread::sleep_for(std::chrono::duration<double>(1.0 / rate_hz));
+  }
+  w.wait_for_acknowledgments(std::chrono::seconds(10));
+  std::cout << fmt::format("replay: {} measurements published on {}\n", table.rows.size(), dds::topics::kStiffnessMeasurement);
+  return 0;
+}
+
+int worker(const std::string& rig, const std::string& model_path, const ReductionArgs& a, std::size_t count, double timeout_s) {
+  hc::SerialRobot robot = load_robot(rig);
+  const hc::VjmModel model(robot);
+  if (!(a.noise_pos_m > 0.0) || !(a.noise_rot_rad > 0.0))
+    throw FormatError({"command line", 0, 0, "--noise-pos-m"}, "the worker needs the noise: --noise-pos-m and --noise-rot-rad (> 0)");
+  const auto opt = pipeline_options(a, model);
+  std::unique_ptr<hc::OnlineIdentifier> id;
+  if (!model_path.empty()) {
+    // Keep the reduced model of an earlier `identify --json`: its kept parameters are estimated,
+    // its fixed ones stay at their values.
+    const auto j = load_json(model_path);
+    const auto all = hc::m1_symmetrise(hc::complete_parameters(model));
+    auto lookup = [&](const nlohmann::json& e, const char* list) {
+      const std::string name = e.at("name").get<std::string>();
+      const int i = hc::find_parameter(all, name);
+      if (i < 0) throw FormatError({model_path, 0, 0, std::string(list) + ".name"}, "unknown parameter '" + name + "'");
+      return all[static_cast<std::size_t>(i)];
+    };
+    hc::ParameterSet free, fixed;
+    std::vector<double> vals;
+    try {
+      for (const auto& e : j.at("parameters")) free.push_back(lookup(e, "parameters"));
+      for (const auto& e : j.at("fixed")) {
+        fixed.push_back(lookup(e, "fixed"));
+        vals.push_back(e.at("value").get<double>());
+      }
+    } catch (const nlohmann::json::exception& e) {
+      throw FormatError({model_path, 0, 0, "parameters"}, std::string("not an identify --json model: ") + e.what());
+    }
+    id = std::make_unique<hc::OnlineIdentifier>(model, free, fixed, Eigen::Map<Eigen::VectorXd>(vals.data(), static_cast<Eigen::Index>(vals.size())),
+                                                hc::NoiseModel{a.noise_pos_m, a.noise_rot_rad}, opt, false);
+  } else {
+    std::vector<hc::ReductionLine> lines;
+    id = std::make_unique<hc::OnlineIdentifier>(model, hc::physical_reduction(model, opt, lines), hc::ParameterSet{}, Eigen::VectorXd(),
+                                                hc::NoiseModel{a.noise_pos_m, a.noise_rot_rad}, opt, true);
+  }
+  dds::Participant p(participant_options("hil-stiffness-worker"));
+  StiffnessWorker w(p, std::move(id));
+  std::signal(SIGINT, on_signal);
+  std::signal(SIGTERM, on_signal);
+  spdlog::info("stiffness worker: listening on {}, publishing on {}", dds::topics::kStiffnessMeasurement, dds::topics::kStiffnessEstimate);
+  const auto start = std::chrono::steady_clock::now();
+  while (!g_stop && (count == 0 || w.processed() < count)) {
+    if (timeout_s > 0 && std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() > timeout_s) break;
+    if (w.spin(std::chrono::milliseconds(200)) > 0) {
+      const auto& e = w.last();
+      spdlog::info("estimate after {} measurements ({} configurations): rank {}, {} parameters", e.measurements, e.configurations, e.rank,
+                   e.kept.size());
+    }
+  }
+  w.spin(std::chrono::milliseconds(0));
+  std::cout << fmt::format("worker: {} measurements processed, {} rejected; last rank {}\n", w.processed(), w.rejected(), w.last().rank);
+  return count > 0 && w.processed() < count ? 1 : 0;
+}
+
+}  // namespace
+
+void add_stiffness(CLI::App& app) {
+  auto* st = app.add_subcommand("stiffness", "Elastostatic calibration of serial robots (VJM model, reduction M1-M6)");
+  st->require_subcommand(1);
+
+  {
+    auto* cmd = st->add_subcommand("identify", "Reduce the complete VJM model and identify it from a stiffness-experiment table");
+    static std::string data, rig, json;
+    static ReductionArgs a;
+    cmd->add_option("DATA", data, "stiffness-experiment table (CSV, docs/calibration.md)")->required();
+    cmd->add_option("--rig", rig, "rig file with the robot's DH table")->required();
+    cmd->add_option("--json", json, "write the report and the identified model as JSON (- for stdout)");
+    add_reduction_options(cmd, a);
+    cmd->callback([] { set_action([] { return identify(data, rig, json, a); }); });
+  }
+  {
+    auto* cmd = st->add_subcommand("predict", "Predict deflections for configurations and loads; --compensate prints corrected targets");
+    static std::string model, data, rig, out;
+    static bool compensate = false;
+    cmd->add_option("MODEL", model, "model file (identify --json output, or a truth file with --rig)")->required();
+    cmd->add_option("--data", data, "table of configurations and loads (measured columns optional)")->required();
+    cmd->add_option("--rig", rig, "rig file (default: the robot stored in the model)");
+    cmd->add_flag("--compensate", compensate, "also print the target pose, the compensated pose and joints");
+    cmd->add_option("--out", out, "output CSV (default stdout)");
+    cmd->callback([] { set_action([] { return predict(model, data, rig, compensate, out); }); });
+  }
+  {
+    auto* cmd = st->add_subcommand("simulate", "Generate a stiffness-experiment table from a known compliance set, with noise");
+    static SimArgs a;
+    cmd->add_option("--rig", a.rig, "rig file with the robot's DH table")->required();
+    cmd->add_option("--truth", a.truth, "truth file (JSON \"springs\", docs/calibration.md)")->required();
+    cmd->add_option("--configs", a.configs, "random configurations within the joint limits")->capture_default_str()->check(CLI::Range(1, 1000000));
+    cmd->add_option("--loads-per-config", a.loads, "random loads per configuration")->capture_default_str()->check(CLI::Range(1, 1000));
+    cmd->add_option("--force-n", a.force_n, "force magnitude of each load, N")->capture_default_str();
+    cmd->add_option("--moment-nm", a.moment_nm, "moment magnitude of each load, N·m")->capture_default_str();
+    cmd->add_option("--measure", a.measure, "pose6 (dx..rz), point3 (dx dy dz) or markers")->capture_default_str()->check(CLI::IsMember({"pose6", "point3", "markers"}));
+    cmd->add_option("--marker", a.markers, "marker position X,Y,Z in the tool frame, m (repeat)");
+    cmd->add_option("--noise-pos-m", a.noise_pos_m, "position noise σ, m")->capture_default_str();
+    cmd->add_option("--noise-rot-rad", a.noise_rot_rad, "rotation noise σ, rad")->capture_default_str();
+    cmd->add_option("--seed", a.seed, "random seed")->capture_default_str();
+    cmd->add_option("--out", a.out, "output CSV (default stdout)");
+    cmd->callback([] { set_action([] { return simulate(a); }); });
+  }
+  {
+    auto* cmd = st->add_subcommand("table1", "Reproduce the counting of the paper's Table I and print it beside the paper's");
+    static std::string rig, measure = "pose6";
+    static int configs = 60;
+    static std::uint64_t seed = 1;
+    static bool complete = true;
+    cmd->add_option("--rig", rig, "rig file (default: the built-in KR-270-like robot)");
+    cmd->add_option("--configs", configs, "random configurations (2 loads each)")->capture_default_str();
+    cmd->add_option("--measure", measure, "pose6, point3, point3-forces or markers")->capture_default_str()->check(CLI::IsMember({"pose6", "point3", "point3-forces", "markers"}));
+    cmd->add_option("--seed", seed, "random seed")->capture_default_str();
+    cmd->callback([] { set_action([] { return table1(rig, configs, measure, seed, complete); }); });
+  }
+  {
+    auto* cmd = st->add_subcommand("replay", "Publish a stiffness-experiment table on the measurement topic");
+    static std::string data, rig;
+    static double rate = 0.0, wait = 5.0;
+    cmd->add_option("DATA", data, "stiffness-experiment table (tool displacement columns)")->required();
+    cmd->add_option("--rig", rig, "rig file (for the joint count)")->required();
+    cmd->add_option("--rate-hz", rate, "measurements per second (0: as fast as possible)")->capture_default_str();
+    cmd->add_option("--wait-readers-s", wait, "wait this long for a worker to match")->capture_default_str();
+    cmd->callback([] { set_action([] { return replay(data, load_robot(rig).dof(), rate, wait); }); });
+  }
+  {
+    auto* cmd = st->add_subcommand("worker", "Online identification: measurements in, an estimate out after each one");
+    static std::string rig, model;
+    static ReductionArgs a;
+    static std::size_t count = 0;
+    static double timeout = 0.0;
+    cmd->add_option("--rig", rig, "rig file with the robot's DH table")->required();
+    cmd->add_option("--model", model, "keep the reduced model of an identify --json output (default: reduce online)");
+    add_reduction_options(cmd, a);
+    cmd->add_option("--count", count, "stop after this many measurements (0: run until interrupted)")->capture_default_str();
+    cmd->add_option("--timeout-s", timeout, "stop after this long (0: never)")->capture_default_str();
+    cmd->callback([] { set_action([] { return worker(rig, model, a, count, timeout); }); });
+  }
+}
+
 }  // namespace hil::cli

@@ -1,0 +1,460 @@
+#include "stiffness_io.hpp"
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <fstream>
+#include <map>
+#include <sstream>
+
+#include "hil/calibration/experiment.hpp"
+#include "hil/format/csv.hpp"
+#include "hil/format/error.hpp"
+
+namespace hil::cli::stiffness {
+namespace hc = hil::calibration;
+using format::FormatError;
+
+hc::SerialRobot to_serial_robot(const format::RobotSpec& spec) {
+  hc::SerialRobot r;
+  r.name = spec.name;
+  r.convention = spec.convention == format::DhConvention::standard ? hc::DhConvention::standard : hc::DhConvention::modified;
+  for (const auto& j : spec.joints) {
+    hc::DhRow row;
+    row.name = j.name;
+    row.kind = j.type == format::JointType::revolute ? hc::JointKind::revolute : hc::JointKind::prismatic;
+    row.a_m = j.a_m;
+    row.alpha_rad = j.alpha_rad;
+    row.d_m = j.d_m;
+    row.theta_offset_rad = j.theta_offset_rad;
+    row.lower = j.lower;
+    row.upper = j.upper;
+    r.joints.push_back(row);
+  }
+  r.T_world_base = spec.T_world_base.isometry();
+  r.T_flange_ee = spec.T_flange_ee.isometry();
+  return r;
+}
+
+hc::SerialRobot load_robot(const std::string& rig_path) {
+  const auto rig = format::load_rig(rig_path);
+  if (!rig.robot) throw FormatError({rig_path, 0, 0, "robot"}, "the rig has no robot: stiffness calibration needs its DH table");
+  return to_serial_robot(*rig.robot);
+}
+
+namespace {
+
+const char* const kLoad[] = {"fx", "fy", "fz", "mx", "my", "mz"};
+const char* const kDisp[] = {"dx", "dy", "dz", "rx", "ry", "rz"};
+
+bool is_marker_column(const std::string& c, int& k, std::string& what) {
+  if (c.size() < 5 || c[0] != 'm' || !std::isdigit(static_cast<unsigned char>(c[1]))) return false;
+  const auto us = c.find('_');
+  if (us == std::string::npos) return false;
+  try {
+    k = std::stoi(c.substr(1, us - 1));
+  } catch (...) {
+    return false;
+  }
+  what = c.substr(us + 1);
+  static const char* const names[] = {"px", "py", "pz", "dx", "dy", "dz"};
+  for (const char* n : names)
+    if (what == n) return k >= 1;
+  return false;
+}
+
+StiffnessTable from_csv(const format::CsvTable& t, int dof, bool require_measured) {
+  for (int j = 1; j <= dof; ++j)
+    if (!t.has("j" + std::to_string(j)))
+      throw FormatError({t.file, 1, 0, "j" + std::to_string(j)}, fmt::format("missing joint column: the robot has {} joints", dof));
+  for (const auto& h : t.header) {
+    if (h.size() > 1 && h[0] == 'j' && std::isdigit(static_cast<unsigned char>(h[1]))) {
+      const int j = std::atoi(h.c_str() + 1);
+      if (j > dof) throw FormatError({t.file, 1, 0, h}, fmt::format("the robot has only {} joints", dof));
+    }
+  }
+  int markers = 0;
+  for (const auto& h : t.header) {
+    int k = 0;
+    std::string what;
+    if (is_marker_column(h, k, what)) markers = std::max(markers, k);
+  }
+  for (int k = 1; k <= markers; ++k)
+    for (const char* w : {"px", "py", "pz"}) {
+      const std::string c = fmt::format("m{}_{}", k, w);
+      if (!t.has(c)) throw FormatError({t.file, 1, 0, c}, fmt::format("marker {} needs its position columns m{}_px m{}_py m{}_pz", k, k, k, k));
+    }
+  StiffnessTable out;
+  const bool has_tool = t.has("dx");
+  const bool has_markers_d = markers > 0 && t.has("m1_dx");
+  if (has_tool && markers > 0)
+    throw FormatError({t.file, 1, 0, "m1_px"}, "give either the tool displacement (dx dy dz) or marker columns, not both");
+  if (has_tool)
+    for (const char* c : {"dy", "dz"})
+      if (!t.has(c)) throw FormatError({t.file, 1, 0, c}, "dx dy dz come together");
+  const bool has_rot = t.has("rx");
+  if (has_rot)
+    for (const char* c : {"ry", "rz"})
+      if (!t.has(c)) throw FormatError({t.file, 1, 0, c}, "rx ry rz come together");
+  if (has_rot && !has_tool) throw FormatError({t.file, 1, 0, "rx"}, "rx ry rz need dx dy dz");
+  if (has_markers_d)
+    for (int k = 1; k <= markers; ++k)
+      for (const char* w : {"dx", "dy", "dz"}) {
+        const std::string c = fmt::format("m{}_{}", k, w);
+        if (!t.has(c)) throw FormatError({t.file, 1, 0, c}, fmt::format("marker {} needs m{}_dx m{}_dy m{}_dz", k, k, k, k));
+      }
+  out.has_measured = has_tool || has_markers_d;
+  if (require_measured && !out.has_measured)
+    throw FormatError({t.file, 1, 0, "dx"}, "no measured columns: expected dx dy dz [rx ry rz] or marker columns mK_dx mK_dy mK_dz");
+  const auto& config = t.numeric("config");
+  for (std::size_t i = 0; i < t.rows(); ++i) {
+    hc::Measurement m;
+    if (config[i] != std::floor(config[i]) || config[i] < 0 || config[i] > 4e9)
+      throw FormatError({t.file, t.row_line[i], 0, "config"}, fmt::format("expected a non-negative integer, found {}", config[i]));
+    m.config = static_cast<int>(config[i]);
+    m.q_rad.resize(dof);
+    for (int j = 0; j < dof; ++j) m.q_rad[j] = t.numeric("j" + std::to_string(j + 1))[i];
+    for (int c = 0; c < 6; ++c) m.w_world[c] = t.numeric(kLoad[c])[i];
+    if (markers > 0) {
+      m.kind = hc::MeasurementKind::markers;
+      for (int k = 1; k <= markers; ++k)
+        m.p_ee_marker_m.emplace_back(t.numeric(fmt::format("m{}_px", k))[i], t.numeric(fmt::format("m{}_py", k))[i],
+                                     t.numeric(fmt::format("m{}_pz", k))[i]);
+      if (has_markers_d) {
+        m.displacement.resize(3 * markers);
+        for (int k = 1; k <= markers; ++k)
+          for (int a = 0; a < 3; ++a) m.displacement[3 * (k - 1) + a] = t.numeric(fmt::format("m{}_{}", k, kDisp[a]))[i];
+      }
+    } else {
+      m.kind = (has_rot || !has_tool) ? hc::MeasurementKind::pose6 : hc::MeasurementKind::point3;
+      if (has_tool) {
+        m.displacement.resize(has_rot ? 6 : 3);
+        for (int a = 0; a < (has_rot ? 6 : 3); ++a) m.displacement[a] = t.numeric(kDisp[a])[i];
+      }
+    }
+    out.rows.push_back(std::move(m));
+    out.lines.push_back(t.row_line[i]);
+  }
+  if (out.rows.empty()) throw FormatError({t.file, 0, 0, ""}, "the table has no rows");
+  return out;
+}
+
+format::CsvOptions table_options(const std::string& name) {
+  format::CsvOptions o;
+  o.required = {"config", "fx", "fy", "fz", "mx", "my", "mz"};
+  o.numeric_if_present = [](const std::string& c) {
+    if (c.size() > 1 && c[0] == 'j' && std::isdigit(static_cast<unsigned char>(c[1]))) return true;
+    for (const char* d : kDisp)
+      if (c == d) return true;
+    int k = 0;
+    std::string w;
+    return is_marker_column(c, k, w);
+  };
+  o.display_name = name;
+  return o;
+}
+
+}  // namespace
+
+StiffnessTable read_stiffness_table(const std::string& path, int dof, bool require_measured) {
+  return from_csv(format::read_csv(path, table_options(path)), dof, require_measured);
+}
+
+StiffnessTable parse_stiffness_table(const std::string& text, const std::string& display_name, int dof, bool require_measured) {
+  return from_csv(format::parse_csv(text, table_options(display_name)), dof, require_measured);
+}
+
+void write_stiffness_table(std::ostream& os, const std::vector<hc::Measurement>& rows, int dof) {
+  if (rows.empty()) return;
+  const hc::Measurement& first = rows.front();
+  os << "config";
+  for (int j = 1; j <= dof; ++j) os << ",j" << j;
+  for (const char* c : kLoad) os << ',' << c;
+  if (first.kind == hc::MeasurementKind::markers) {
+    for (std::size_t k = 1; k <= first.p_ee_marker_m.size(); ++k)
+      os << fmt::format(",m{0}_px,m{0}_py,m{0}_pz,m{0}_dx,m{0}_dy,m{0}_dz", k);
+  } else {
+    const int n = first.kind == hc::MeasurementKind::pose6 ? 6 : 3;
+    for (int a = 0; a < n; ++a) os << ',' << kDisp[a];
+  }
+  os << '\n';
+  for (const auto& m : rows) {
+    os << m.config;
+    for (int j = 0; j < dof; ++j) os << fmt::format(",{:.17g}", m.q_rad[j]);
+    for (int c = 0; c < 6; ++c) os << fmt::format(",{:.17g}", m.w_world[c]);
+    if (m.kind == hc::MeasurementKind::markers) {
+      for (std::size_t k = 0; k < m.p_ee_marker_m.size(); ++k) {
+        for (int a = 0; a < 3; ++a) os << fmt::format(",{:.17g}", m.p_ee_marker_m[k][a]);
+        for (int a = 0; a < 3; ++a) os << fmt::format(",{:.17g}", m.displacement[static_cast<Eigen::Index>(3 * k) + a]);
+      }
+    } else {
+      for (Eigen::Index a = 0; a < m.displacement.size(); ++a) os << fmt::format(",{:.17g}", m.displacement[a]);
+    }
+    os << '\n';
+  }
+}
+
+nlohmann::json load_json(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw FormatError({path, 0, 0, ""}, "cannot open file");
+  try {
+    return nlohmann::json::parse(in);
+  } catch (const nlohmann::json::parse_error& e) {
+    throw FormatError({path, 0, 0, ""}, fmt::format("not valid JSON (byte {}): {}", e.byte, e.what()));
+  }
+}
+
+namespace {
+
+double number(const nlohmann::json& j, const std::string& file, const std::string& field) {
+  if (!j.is_number()) throw FormatError({file, 0, 0, field}, "expected a number");
+  const double v = j.get<double>();
+  if (!std::isfinite(v)) throw FormatError({file, 0, 0, field}, "expected a finite number");
+  return v;
+}
+
+double positive(const nlohmann::json& obj, const char* key, const std::string& file, const std::string& field) {
+  if (!obj.contains(key)) throw FormatError({file, 0, 0, field + "." + key}, "missing");
+  const double v = number(obj.at(key), file, field + "." + key);
+  if (!(v > 0.0)) throw FormatError({file, 0, 0, field + "." + key}, "must be > 0");
+  return v;
+}
+
+}  // namespace
+
+hc::ComplianceSet read_springs(const nlohmann::json& springs, const hc::VjmModel& model, const std::string& file) {
+  if (!springs.is_object()) throw FormatError({file, 0, 0, "springs"}, "expected an object {\"J1\": ..., \"L2\": ...}");
+  hc::ComplianceSet k = model.zero_compliance();
+  for (const auto& [name, value] : springs.items()) {
+    const std::string field = "springs." + name;
+    const int s = model.find(name);
+    if (s < 0) throw FormatError({file, 0, 0, field}, fmt::format("unknown spring (the robot has J1..J{0} and L0..L{0})", model.dof()));
+    const auto& sp = model.springs()[static_cast<std::size_t>(s)];
+    auto& K = k[static_cast<std::size_t>(s)];
+    if (sp.kind == hc::SpringKind::joint) {
+      K(0, 0) = number(value, file, field);
+      if (!(K(0, 0) >= 0.0)) throw FormatError({file, 0, 0, field}, "a joint compliance must be ≥ 0");
+      continue;
+    }
+    if (value.is_array()) {
+      if (value.size() != 6) throw FormatError({file, 0, 0, field}, "expected 6 rows of 6 numbers");
+      for (std::size_t r = 0; r < 6; ++r) {
+        if (!value[r].is_array() || value[r].size() != 6) throw FormatError({file, 0, 0, fmt::format("{}[{}]", field, r)}, "expected 6 numbers");
+        for (std::size_t c = 0; c < 6; ++c)
+          K(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(c)) = number(value[r][c], file, fmt::format("{}[{}][{}]", field, r, c));
+      }
+    } else if (value.is_object() && value.contains("beam")) {
+      const auto& b = value.at("beam");
+      const std::string bf = field + ".beam";
+      // One at a time, in this order, so that the first missing value is the one reported.
+      const double L = positive(b, "length_m", file, bf);
+      const double EA = positive(b, "EA_n", file, bf);
+      const double EIy = positive(b, "EIy_nm2", file, bf);
+      const double EIz = positive(b, "EIz_nm2", file, bf);
+      const double GJ = positive(b, "GJ_nm2", file, bf);
+      K = hc::beam_compliance(L, EA, EIy, EIz, GJ);
+    } else if (value.is_object()) {
+      for (const auto& [key, v] : value.items()) {
+        if (key == "diagonal") {
+          if (!v.is_array() || v.size() != 6) throw FormatError({file, 0, 0, field + ".diagonal"}, "expected 6 numbers");
+          for (std::size_t i = 0; i < 6; ++i)
+            K(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(i)) = number(v[i], file, fmt::format("{}.diagonal[{}]", field, i));
+        } else if (key.size() == 3 && key[0] == 'k' && key[1] >= '1' && key[1] <= '6' && key[2] >= '1' && key[2] <= '6') {
+          const int r = key[1] - '1', c = key[2] - '1';
+          K(r, c) = K(c, r) = number(v, file, field + "." + key);
+        } else {
+          throw FormatError({file, 0, 0, field + "." + key}, "unknown key: expected diagonal or kRC (R, C in 1..6, symmetric)");
+        }
+      }
+    } else {
+      throw FormatError({file, 0, 0, field}, "expected a 6x6 array, {\"beam\": {...}} or {\"diagonal\": [...], \"kRC\": v}");
+    }
+  }
+  return k;
+}
+
+nlohmann::json springs_to_json(const hc::VjmModel& model, const hc::ComplianceSet& k) {
+  nlohmann::json j = nlohmann::json::object();
+  for (std::size_t s = 0; s < k.size(); ++s) {
+    const auto& sp = model.springs()[s];
+    if (sp.kind == hc::SpringKind::joint) {
+      j[sp.name] = k[s](0, 0);
+    } else {
+      nlohmann::json rows = nlohmann::json::array();
+      for (int r = 0; r < 6; ++r) {
+        nlohmann::json row = nlohmann::json::array();
+        for (int c = 0; c < 6; ++c) row.push_back(k[s](r, c));
+        rows.push_back(row);
+      }
+      j[sp.name] = rows;
+    }
+  }
+  return j;
+}
+
+nlohmann::json robot_to_json(const hc::SerialRobot& robot) {
+  nlohmann::json j;
+  j["name"] = robot.name;
+  j["convention"] = robot.convention == hc::DhConvention::standard ? "standard" : "modified";
+  j["joints"] = nlohmann::json::array();
+  for (const auto& r : robot.joints)
+    j["joints"].push_back({{"name", r.name}, {"type", r.kind == hc::JointKind::revolute ? "revolute" : "prismatic"}, {"a_m", r.a_m},
+                           {"alpha_rad", r.alpha_rad}, {"d_m", r.d_m}, {"theta_offset_rad", r.theta_offset_rad}, {"lower", r.lower},
+                           {"upper", r.upper}});
+  auto pose = [](const Eigen::Isometry3d& T) {
+    const Eigen::Matrix4d M = T.matrix();
+    nlohmann::json m = nlohmann::json::array();
+    for (int r = 0; r < 4; ++r) m.push_back({M(r, 0), M(r, 1), M(r, 2), M(r, 3)});
+    return m;
+  };
+  j["T_world_base"] = pose(robot.T_world_base);
+  j["T_flange_ee"] = pose(robot.T_flange_ee);
+  return j;
+}
+
+hc::SerialRobot robot_from_json(const nlohmann::json& j, const std::string& file) {
+  try {
+    hc::SerialRobot r;
+    r.name = j.at("name").get<std::string>();
+    const auto conv = j.at("convention").get<std::string>();
+    if (conv != "standard" && conv != "modified") throw FormatError({file, 0, 0, "robot.convention"}, "expected standard or modified");
+    r.convention = conv == "standard" ? hc::DhConvention::standard : hc::DhConvention::modified;
+    for (const auto& jr : j.at("joints")) {
+      hc::DhRow row;
+      row.name = jr.at("name").get<std::string>();
+      row.kind = jr.at("type").get<std::string>() == "prismatic" ? hc::JointKind::prismatic : hc::JointKind::revolute;
+      row.a_m = jr.at("a_m").get<double>();
+      row.alpha_rad = jr.at("alpha_rad").get<double>();
+      row.d_m = jr.at("d_m").get<double>();
+      row.theta_offset_rad = jr.at("theta_offset_rad").get<double>();
+      row.lower = jr.at("lower").get<double>();
+      row.upper = jr.at("upper").get<double>();
+      r.joints.push_back(row);
+    }
+    auto pose = [&](const char* key) {
+      Eigen::Matrix4d M;
+      const auto& m = j.at(key);
+      for (int rr = 0; rr < 4; ++rr)
+        for (int c = 0; c < 4; ++c) M(rr, c) = m.at(static_cast<std::size_t>(rr)).at(static_cast<std::size_t>(c)).get<double>();
+      Eigen::Isometry3d T;
+      T.matrix() = M;
+      return T;
+    };
+    r.T_world_base = pose("T_world_base");
+    r.T_flange_ee = pose("T_flange_ee");
+    if (r.joints.empty()) throw FormatError({file, 0, 0, "robot.joints"}, "no joints");
+    return r;
+  } catch (const nlohmann::json::exception& e) {
+    throw FormatError({file, 0, 0, "robot"}, std::string("bad robot description: ") + e.what());
+  }
+}
+
+namespace {
+
+std::string paper_count(const std::string& step) {
+  for (const auto& row : hc::paper_table1())
+    if (step == row.step) return row.count;
+  return "";
+}
+
+nlohmann::json number_or_null(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(); }
+
+const char* const kAxis[] = {"dx", "dy", "dz", "rx", "ry", "rz"};
+
+}  // namespace
+
+nlohmann::json result_to_json(const hc::VjmModel& model, const hc::CalibrationResult& r) {
+  nlohmann::json j;
+  j["format"] = "hil-stiffness-model";
+  j["version"] = 1;
+  j["parameters"] = nlohmann::json::array();
+  for (const auto& p : r.kept)
+    j["parameters"].push_back({{"name", p.parameter.name}, {"value", p.value}, {"std", number_or_null(p.std_dev)},
+                               {"ci95", {number_or_null(p.ci95_low), number_or_null(p.ci95_high)}}, {"pnr", number_or_null(p.pnr)},
+                               {"class", hc::to_string(p.cls)}});
+  j["fixed"] = nlohmann::json::array();
+  for (const auto& f : r.fixed) j["fixed"].push_back({{"name", f.parameter.name}, {"value", f.value}, {"step", f.step}});
+  j["reduction"] = nlohmann::json::array();
+  for (const auto& l : r.reduction) {
+    nlohmann::json row = {{"step", l.step}, {"description", l.description}, {"count", l.count}};
+    if (l.rank >= 0) row["rank"] = l.rank;
+    const auto pc = paper_count(l.step);
+    if (!pc.empty()) row["paper"] = pc;
+    j["reduction"].push_back(row);
+  }
+  j["rank"] = r.rank_final;
+  j["rank_physical"] = r.rank_physical;
+  j["rank_algebraic"] = r.rank_algebraic;
+  j["condition"] = number_or_null(r.solution.condition);
+  // Singular values of the column-scaled weighted observation matrix: of the physical (M3) set,
+  // whose count above the tolerance is its rank, and of the final set.
+  j["singular_values_physical"] = std::vector<double>(r.partition.singular_values.data(),
+                                                      r.partition.singular_values.data() + r.partition.singular_values.size());
+  j["singular_values"] = std::vector<double>(r.solution.singular_values.data(), r.solution.singular_values.data() + r.solution.singular_values.size());
+  j["sigma0_sq"] = number_or_null(r.solution.sigma0_sq);
+  j["measurements"] = r.measurements;
+  j["equations"] = r.equations;
+  j["residual_rms"] = nlohmann::json::object();
+  for (std::size_t a = 0; a < 6; ++a)
+    if (r.residual_rows[a] > 0) j["residual_rms"][kAxis[a]] = r.residual_rms[a];
+  j["noise"] = {{"position_m", r.noise.position_m}, {"rotation_rad", r.noise.rotation_rad}, {"estimated", r.noise_estimated}};
+  j["spd"] = nlohmann::json::array();
+  for (const auto& c : r.spd)
+    j["spd"].push_back({{"spring", c.spring}, {"symmetric", c.symmetric}, {"positive_definite", c.positive_definite},
+                        {"min_eigenvalue", c.min_eigenvalue}, {"max_eigenvalue", c.max_eigenvalue}});
+  j["springs"] = springs_to_json(model, r.compliance);
+  j["robot"] = robot_to_json(model.robot());
+  return j;
+}
+
+void print_reduction_table(std::ostream& os, const std::vector<hc::ReductionLine>& lines) {
+  os << fmt::format("{:<8} {:>6} {:>6} {:>8}  {}\n", "step", "count", "rank", "paper", "description");
+  for (const auto& l : lines)
+    os << fmt::format("{:<8} {:>6} {:>6} {:>8}  {}\n", l.step, l.count, l.rank >= 0 ? std::to_string(l.rank) : "-", paper_count(l.step),
+                      l.description);
+}
+
+void print_report(std::ostream& os, const hc::VjmModel& model, const hc::CalibrationResult& r) {
+  os << fmt::format("stiffness identification: {} measurements, {} equations, robot '{}' ({} joints)\n", r.measurements, r.equations,
+                    model.robot().name, model.dof());
+  os << fmt::format("noise (σ per axis): position {:.3g} m, rotation {:.3g} rad{}\n\n", r.noise.position_m, r.noise.rotation_rad,
+                    r.noise_estimated ? " (estimated from the residuals of a first fit)" : "");
+  os << "model reduction (paper column: Table I, KUKA KR-270; see docs/calibration.md)\n";
+  print_reduction_table(os, r.reduction);
+  os << fmt::format("\nrank: complete physical model {}, after M5 {}, final {} = {} parameters{}\n", r.rank_physical, r.rank_algebraic,
+                    r.rank_final, r.kept.size(), r.solution.full_rank ? "" : "  ** RANK DEFICIENT: standard deviations undefined **");
+  const auto& sv = r.solution.singular_values;
+  if (sv.size() > 0)
+    os << fmt::format("singular values of the final column-scaled weighted observation matrix: {:.3g} .. {:.3g} (all in --json)\n", sv[0],
+                      sv[sv.size() - 1]);
+  os << fmt::format("condition number (column-scaled, weighted): {:.3g}; variance factor σ0² = {:.3f} (about 1 if the noise model fits)\n\n",
+                    r.solution.condition, r.solution.sigma0_sq);
+  os << fmt::format("{:<10} {:>13} {:>11} {:>27} {:>9} {:>5}\n", "parameter", "value", "std", "95% interval", "pnr", "class");
+  for (const auto& p : r.kept)
+    os << fmt::format("{:<10} {:>13.5e} {:>11.3e} [{:>12.4e}, {:>12.4e}] {:>9.1f} {:>5}\n", p.parameter.name, p.value, p.std_dev, p.ci95_low,
+                      p.ci95_high, p.pnr, hc::to_string(p.cls));
+  std::map<std::string, int> by_step;
+  for (const auto& f : r.fixed) ++by_step[f.step];
+  os << "\nfixed parameters:";
+  for (const auto& [step, n] : by_step) os << fmt::format(" {} {} ({})", n, step == "M4b" ? "non-identifiable" : step == "M5c" ? "assigned" : "neglected", step);
+  os << (r.fixed.empty() ? " none\n" : "\n");
+  os << "\nresidual RMS per axis:";
+  for (std::size_t a = 0; a < 6; ++a)
+    if (r.residual_rows[a] > 0) os << fmt::format(" {} {:.3g} {}", kAxis[a], r.residual_rms[a], a < 3 ? "m" : "rad");
+  os << "\n\nphysical checks (compliance matrices of the identified model, fixed entries included):\n";
+  for (const auto& c : r.spd) {
+    const bool zero = c.max_eigenvalue == 0.0 && c.min_eigenvalue == 0.0;
+    if (zero) {
+      os << fmt::format("  {:<4} rigid in this model (no parameter kept{})\n", c.spring, c.spring[0] == 'J' ? "; aggregated into the preceding link by M3" : "");
+      continue;
+    }
+    if (c.positive_definite)
+      os << fmt::format("  {:<4} symmetric positive definite (eigenvalues {:.3g} .. {:.3g})\n", c.spring, c.min_eigenvalue, c.max_eigenvalue);
+    else
+      os << fmt::format("  {:<4} NOT positive definite: eigenvalues {:.3g} .. {:.3g}{}\n", c.spring, c.min_eigenvalue, c.max_eigenvalue,
+                        c.symmetric ? " (entries fixed by M4b/M5c/M6 or absorbed by other links make it so; only combinations are identified)"
+                                    : " and not symmetric");
+  }
+}
+
+}  // namespace hil::cli::stiffness
