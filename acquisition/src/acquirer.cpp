@@ -142,6 +142,9 @@ void Acquirer::start() {
     robot_->connect();
     spdlog::info("robot controller: {}", robot_->config().describe());
   }
+  if (opt_.wait_for_subscribers > 0 && w_sample_ &&
+      !w_sample_->wait_for_readers(opt_.wait_for_subscribers, std::chrono::seconds(10)))
+    spdlog::warn("acquire: fewer than {} subscribers after 10 s; starting anyway", opt_.wait_for_subscribers);
   running_ = true;
   plate_thread_ = std::thread([this] { plate_loop(); });
   if (robot_) robot_thread_ = std::thread([this] { robot_loop(); });

@@ -62,6 +62,7 @@ int demo(const DemoOptions& o) {
   ao.play_speed = o.speed;
   ao.output_rate_hz = played.info.output_rate_hz;
   ao.progress = false;
+  ao.wait_subscribers = 1;  // our own monitor sees the run from its first sample
   std::atomic<std::uint64_t> n{0};
   const double total_s = played.samples.samples.back().t_s / o.speed;
   const auto t0 = std::chrono::steady_clock::now();

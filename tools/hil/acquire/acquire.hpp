@@ -22,6 +22,7 @@ struct AcquireOptions {
   bool ros_topics = true;
   bool no_bus = false;
   bool progress = true;
+  int wait_subscribers = 0;
   std::string play;  ///< run folder for the in-process fake rig
   double play_speed = 1.0;
   bool play_over_socketcan = false;  ///< the fake plate talks on the SocketCAN interface instead of loopback

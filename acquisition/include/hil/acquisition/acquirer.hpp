@@ -27,6 +27,9 @@ struct AcquirerOptions {
   Eigen::Isometry3d T_world_base = Eigen::Isometry3d::Identity();  ///< robot base in world
   Eigen::Isometry3d T_tcp_ee = Eigen::Isometry3d::Identity();      ///< ee in the controller's tool frame
   double status_period_s = 1.0;
+  /// start() waits (up to 10 s) for this many PoseWrenchSample subscribers before polling, so
+  /// that they see the run from its first sample.
+  int wait_for_subscribers = 0;
   /// Also publish rt/hil/wrench (every force-plate reading as it arrives: the low-latency live
   /// stream), rt/hil/pose and rt/hil/joint_states (at the output rate).
   bool ros_topics = true;
