@@ -1,7 +1,8 @@
 #!/bin/sh
-# In the vcan guest (or on a host with SocketCAN): the fake ATI plate answers on vcan0, hil
-# acquire polls it through a real CAN_RAW socket with kernel timestamps, candump -L captures the
-# traffic, and the recorded run must be valid and carry the played wrench.
+# In the vcan guest (or on a host with SocketCAN), three processes: `hil fake-rig` plays the
+# example run (ATI plate on vcan0, Modbus controller on 127.0.0.1), `hil acquire` polls both
+# through a real CAN_RAW socket with kernel timestamps and libmodbus, and candump -L watches the
+# bus. The recorded run must be valid and carry the played wrench.
 # usage: vcan_acquire.sh HIL SOURCE_DIR WORK_DIR
 set -eu
 HIL=$1 SRC=$2 WORK=$3
@@ -9,9 +10,21 @@ rm -rf "$WORK"; mkdir -p "$WORK"
 candump -L vcan0 > "$WORK/candump.log" &
 CD=$!
 sleep 0.3
+PORT=${HIL_FAKE_PORT:-15020}
+"$HIL" fake-rig --rig "$SRC/examples/rigs/press_bench.yaml" --run "$SRC/examples/runs/press_slide" --loop \
+  --can vcan0 --port $PORT > "$WORK/fake-rig.log" 2>&1 &
+FR=$!
+# The guest is slow (TCG): wait until the fake rig says it is serving, at most 30 s.
+i=0
+until grep -q "robot controller Modbus" "$WORK/fake-rig.log" 2>/dev/null; do
+  i=$((i + 1)); [ $i -le 300 ] || { echo "fake-rig did not start"; cat "$WORK/fake-rig.log"; exit 1; }
+  sleep 0.1
+done
+sleep 0.5
 HIL_DDS_DOMAIN=${HIL_DDS_DOMAIN:-171} "$HIL" acquire --rig "$SRC/examples/rigs/press_bench.yaml" --out "$WORK/run" \
-  --play "$SRC/examples/runs/press_slide" --play-on-can --can-interface vcan0 --play-speed 2
-kill $CD; wait $CD 2>/dev/null || true
+  --can-interface vcan0 --robot-port $PORT --duration 6.5 > "$WORK/acquire.log" 2>&1 ||
+  { echo "hil acquire failed:"; cat "$WORK/acquire.log"; echo "fake-rig:"; cat "$WORK/fake-rig.log"; exit 1; }
+kill $FR $CD; wait $FR 2>/dev/null || true; wait $CD 2>/dev/null || true
 "$HIL" validate "$WORK/run" > "$WORK/validate.txt"
 /usr/bin/python3 - "$WORK" <<'PY'
 import csv, sys
