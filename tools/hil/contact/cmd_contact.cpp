@@ -1,6 +1,180 @@
-// `hil contact ...`: filled in by its issue. Registers nothing until then.
+// `hil contact simulate|identify|worker`: contact-parameter identification (issue 5).
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
+#include <atomic>
+#include <chrono>
+#include <csignal>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <thread>
+
 #include "../commands.hpp"
+#include "hil/format/error.hpp"
+#include "hil/format/run.hpp"
+#include "identify.hpp"
+#include "rig_adapter.hpp"
+#include "worker.hpp"
 
 namespace hil::cli {
-void add_contact(CLI::App& /*app*/) {}
+
+namespace cid = hil::contact_id;
+namespace fs = std::filesystem;
+
+namespace {
+
+struct SimulateArgs {
+  std::string rig, trajectory, truth, out;
+  int decimate = 1;
+  double force_resolution = -1, moment_resolution = -1, position_resolution = -1, velocity_resolution = -1;
+  double force_noise = -1, moment_noise = -1;
+  int seed = -1;
+};
+
+int simulate(const SimulateArgs& a) {
+  const auto rig = format::load_rig(a.rig);
+  const auto scene = contact::scene_from_rig(rig);
+  contact::Truth truth;
+  if (!a.truth.empty()) {
+    truth = contact::read_truth(a.truth, rig);
+  } else {
+    truth.model = contact::model_from_rig(rig);
+  }
+  auto& s = truth.sensor;
+  if (a.force_resolution >= 0) s.force_resolution_n = a.force_resolution;
+  if (a.moment_resolution >= 0) s.moment_resolution_nm = a.moment_resolution;
+  if (a.position_resolution >= 0) s.position_resolution_m = a.position_resolution;
+  if (a.velocity_resolution >= 0) s.velocity_resolution_m_per_s = a.velocity_resolution;
+  if (a.force_noise >= 0) s.force_noise_n = a.force_noise;
+  if (a.moment_noise >= 0) s.moment_noise_nm = a.moment_noise;
+  if (a.seed >= 0) s.seed = static_cast<unsigned>(a.seed);
+  if (a.decimate < 1) throw std::runtime_error("--decimate must be >= 1");
+  const Eigen::VectorXd x_true = contact::uncertainty_vector(scene, truth.geometric, a.truth.empty() ? a.rig : a.truth);
+  const auto traj = contact::read_trajectory(a.trajectory);
+  const auto sim = cid::simulate(scene, truth.model, x_true, traj.kin, s);
+
+  fs::create_directories(a.out);
+  format::SampleTable table;
+  std::size_t in_contact = 0;
+  for (std::size_t i = 0; i < sim.size(); i += static_cast<std::size_t>(a.decimate)) {
+    format::Sample smp;
+    smp.t_s = traj.t[i] - traj.t[0];
+    smp.p_world_ee_m = sim[i].kin.T_world_ee.translation();
+    smp.q_world_ee = Eigen::Quaterniond(sim[i].kin.T_world_ee.linear());
+    smp.v_world_ee_m_per_s = sim[i].kin.v_world_ee;
+    smp.w_world_ee_rad_per_s = sim[i].kin.w_world_ee;
+    smp.f_fp_n = sim[i].w_fp.head<3>();
+    smp.m_fp_nm = sim[i].w_fp.tail<3>();
+    table.samples.push_back(smp);
+    if (sim[i].contacts > 0) ++in_contact;
+  }
+  format::write_samples((fs::path(a.out) / "samples.csv").string(), table);
+  const double rate = traj.t.size() > 1 ? static_cast<double>(traj.t.size() - 1) / (traj.t.back() - traj.t.front()) : 0.0;
+  format::RunInfo info;
+  info.rig = rig.name;
+  info.start_time_utc = "2026-01-01T00:00:00.000Z";
+  info.output_rate_hz = rate / a.decimate;
+  info.sources.push_back({"simulation", "simulation", rate, ""});
+  info.notes = fmt::format(
+      "Simulated by `hil contact simulate` from {} ({} samples at {:.4g} Hz, decimated by {}), truth {}. Sensor: "
+      "position resolution {} m, velocity resolution {} m/s, force resolution {} N (noise {} N), moment resolution {} N m "
+      "(noise {} N m), seed {}.",
+      a.trajectory, traj.t.size(), rate, a.decimate, a.truth.empty() ? "= the rig's nominal model" : a.truth,
+      s.position_resolution_m, s.velocity_resolution_m_per_s, s.force_resolution_n, s.force_noise_n, s.moment_resolution_nm,
+      s.moment_noise_nm, s.seed);
+  format::write_run_info((fs::path(a.out) / "run.yaml").string(), info);
+  fs::copy_file(a.rig, fs::path(a.out) / "rig.yaml", fs::copy_options::overwrite_existing);
+  std::cout << fmt::format("wrote run {}: {} samples at {:.4g} Hz, {} in contact (K = {:.4g} N/m, mu = {:.3g})\n", a.out,
+                           table.samples.size(), info.output_rate_hz, in_contact, truth.model.K, truth.model.mu);
+  return 0;
+}
+
+struct IdentifyArgs {
+  std::string run, rig, json, report;
+  bool geometric = false;
+  bool include_weak = false;
+  std::string lambda = "auto", solver = "lm", jacobian = "golub-pereyra";
+  int window = 25;
+  int lcurve_points = 30;
+};
+
+int identify(const IdentifyArgs& a) {
+  const auto run = format::load_run(a.run, a.rig);
+  if (!run.rig) throw format::FormatError({a.run, 0, 0, ""}, "no rig: pass --rig or put rig.yaml in the run folder");
+  const auto& rig = *run.rig;
+  const auto scene = contact::scene_from_rig(rig);
+  const auto model = contact::model_from_rig(rig);
+  cid::ProblemOptions po;
+  po.v_tm = model.v_tm;
+  po.force_scale_n = rig.model.contact->force_scale_n;
+  po.moment_scale_nm = rig.model.contact->moment_scale_nm;
+  std::optional<cid::ContactProblem> problem;
+  try {
+    problem.emplace(scene, contact::measurements(run.samples), po);
+  } catch (const std::exception& e) {
+    throw std::runtime_error(a.run + ": " + e.what());
+  }
+  contact::IdentifyOptions o;
+  o.geometric = a.geometric;
+  o.lambda = a.lambda;
+  o.solver = a.solver;
+  o.jacobian = a.jacobian;
+  o.window = a.window;
+  o.lcurve_points = a.lcurve_points;
+  o.include_weak = a.include_weak;
+  const auto r = contact::identify(*problem, o);
+  contact::print(std::cout, *problem, r);
+  if (!a.json.empty()) {
+    std::ofstream f(a.json);
+    f << contact::to_json(*problem, r).dump(2) << "\n";
+    if (!f) throw std::runtime_error(a.json + ": cannot write");
+  }
+  if (!a.report.empty()) {
+    contact::write_report(a.report, fs::path(a.run).filename().string(), *problem, r);
+    std::cout << "report: " << (fs::path(a.report) / "index.html").string() << "\n";
+  }
+  return 0;
+}
+
+}  // namespace
+
+void add_contact(CLI::App& app) {
+  auto* contact = app.add_subcommand("contact", "Contact-parameter identification (stiffness, friction, geometry)");
+  contact->require_subcommand(1);
+
+  static SimulateArgs sa;
+  auto* sim = contact->add_subcommand("simulate", "Simulate a run of the rig's contact scene along a trajectory");
+  sim->add_option("--rig", sa.rig, "rig file (objects, frames, contact model)")->required();
+  sim->add_option("--trajectory", sa.trajectory, "CSV: t,px,py,pz,qw,qx,qy,qz[,vx,vy,vz,wx,wy,wz] (ee in world)")->required();
+  sim->add_option("--out", sa.out, "run folder to write")->required();
+  sim->add_option("--truth", sa.truth, "YAML with the true K, mu, sensor model and geometric uncertainties");
+  sim->add_option("--decimate", sa.decimate, "keep every Nth sample (e.g. 20: 1 kHz -> 50 Hz)")->capture_default_str();
+  sim->add_option("--force-resolution", sa.force_resolution, "N");
+  sim->add_option("--moment-resolution", sa.moment_resolution, "N m");
+  sim->add_option("--position-resolution", sa.position_resolution, "m");
+  sim->add_option("--velocity-resolution", sa.velocity_resolution, "m/s");
+  sim->add_option("--force-noise", sa.force_noise, "N (Gaussian std)");
+  sim->add_option("--moment-noise", sa.moment_noise, "N m (Gaussian std)");
+  sim->add_option("--seed", sa.seed, "noise seed");
+  sim->callback([] { set_action([] { return simulate(sa); }); });
+
+  static IdentifyArgs ia;
+  auto* id = contact->add_subcommand("identify", "Identify K and mu (and optionally the geometric uncertainties) from a run");
+  id->add_option("RUN", ia.run, "run folder")->required();
+  id->add_option("--rig", ia.rig, "rig file (default: the run's rig.yaml)");
+  id->add_flag("--geometric", ia.geometric, "also identify the rig's geometric uncertainties (variable projection)");
+  id->add_flag("--include-weak", ia.include_weak, "also fit the weakly observable uncertainties");
+  id->add_option("--lambda", ia.lambda, "Tikhonov weight, or 'auto' for the L-curve corner")->capture_default_str();
+  id->add_option("--solver", ia.solver, "lm (Levenberg-Marquardt) or nm (Nelder-Mead)")->capture_default_str();
+  id->add_option("--jacobian", ia.jacobian, "golub-pereyra or kaufman (lm only)")->capture_default_str();
+  id->add_option("--window", ia.window, "sliding window (samples) of the instantaneous estimates")->capture_default_str();
+  id->add_option("--lcurve-points", ia.lcurve_points, "values of lambda on the L-curve")->capture_default_str();
+  id->add_option("--json", ia.json, "write the results as JSON");
+  id->add_option("--report", ia.report, "write an HTML report into this folder");
+  id->callback([] { set_action([] { return identify(ia); }); });
+
+  add_contact_worker(*contact);
+}
+
 }  // namespace hil::cli

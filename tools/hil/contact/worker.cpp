@@ -1,0 +1,106 @@
+#include "worker.hpp"
+
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <csignal>
+#include <mutex>
+#include <thread>
+
+#include "../commands.hpp"
+#include "hil/acquisition/sample_msg.hpp"
+#include "hil/dds/bus.hpp"
+#include "hil/dds/topics.hpp"
+#include "hil/format/rig.hpp"
+#include "rig_adapter.hpp"
+
+namespace hil::cli {
+
+namespace cid = hil::contact_id;
+
+namespace {
+std::atomic<bool> g_stop{false};
+void on_signal(int) { g_stop = true; }
+
+double finite_or(double v, double fallback) { return std::isfinite(v) ? v : fallback; }
+
+struct WorkerArgs {
+  std::string rig;
+  long count = 0;        ///< stop after this many samples (0: run until interrupted)
+  double duration = 0;   ///< stop after this many seconds (0: no limit)
+};
+
+int worker(const WorkerArgs& a) {
+  const auto rig = format::load_rig(a.rig);
+  const auto scene = contact::scene_from_rig(rig);
+  const auto model = contact::model_from_rig(rig);
+  const double F = rig.model.contact->force_scale_n > 0 ? rig.model.contact->force_scale_n : 50.0;
+  const double M = rig.model.contact->moment_scale_nm > 0 ? rig.model.contact->moment_scale_nm : 5.0;
+  cid::OnlineEstimator est(scene, model.v_tm, F, M);
+  auto& g = globals();
+  dds::Participant participant({g.dds_domain >= 0 ? g.dds_domain : dds::domain_from_env(), g.dds_profile,
+                                g.dds_profile_name, "hil-contact-worker"});
+  dds::Writer<hil_msgs::msg::ContactEstimate> writer(participant, dds::topics::kContactEstimate);
+  std::atomic<long> processed{0};
+  std::mutex mu;
+  dds::Reader<hil_msgs::msg::PoseWrenchSample> reader(
+      participant, dds::topics::kPoseWrenchSample, [&](const hil_msgs::msg::PoseWrenchSample& m, const auto&) {
+        const auto s = acquisition::from_message(m);
+        cid::Measurement meas;
+        meas.t_s = s.t_s;
+        meas.kin.T_world_ee.linear() = s.q_world_ee.normalized().toRotationMatrix();
+        meas.kin.T_world_ee.translation() = s.p_world_ee_m;
+        meas.kin.v_world_ee = s.v_world_ee_m_per_s;
+        meas.kin.w_world_ee = s.w_world_ee_rad_per_s;
+        meas.w_fp << s.f_fp_n, s.m_fp_nm;
+        std::lock_guard<std::mutex> lock(mu);
+        writer.write(to_message(est.update(meas)));
+        ++processed;
+      });
+  std::signal(SIGINT, on_signal);
+  std::signal(SIGTERM, on_signal);
+  spdlog::info("contact worker: {} -> {} (rig {})", dds::topics::kPoseWrenchSample, dds::topics::kContactEstimate, rig.name);
+  const auto t0 = std::chrono::steady_clock::now();
+  while (!g_stop && (a.count <= 0 || processed < a.count) &&
+         (a.duration <= 0 || std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() < a.duration))
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  writer.wait_for_acknowledgments(std::chrono::seconds(2));
+  std::lock_guard<std::mutex> lock(mu);
+  const auto& e = est.global();
+  std::cout << fmt::format("contact worker: {} samples, running global K = {:.5g} ± {:.3g} N/m, mu = {:.4g} ± {:.3g}\n",
+                           processed.load(), e.K, e.K_std, e.mu, e.mu_std);
+  return 0;
+}
+}  // namespace
+
+hil_msgs::msg::ContactEstimate to_message(const cid::OnlineEstimate& e) {
+  hil_msgs::msg::ContactEstimate m;
+  m.stamp(acquisition::to_time(e.t_s));
+  m.t_s(e.t_s);
+  m.contact_points(static_cast<uint32_t>(e.contacts));
+  m.instantaneous_valid(e.instantaneous_valid);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  m.k_instant_n_per_m(e.instantaneous_valid ? e.K_instant : nan);
+  m.mu_instant(e.instantaneous_valid ? e.mu_instant : nan);
+  m.k_global_n_per_m(e.global.rank > 0 ? e.global.K : nan);
+  m.k_global_std(e.global.rank > 0 ? e.global.K_std : nan);
+  m.mu_global(e.global.mu_identifiable ? e.global.mu : nan);
+  m.mu_global_std(e.global.mu_identifiable ? e.global.mu_std : nan);
+  m.samples_used(static_cast<uint64_t>(e.global.rows / 6));
+  m.relative_force_error(finite_or(e.global.relative_force_error, nan));
+  return m;
+}
+
+void add_contact_worker(CLI::App& contact) {
+  static WorkerArgs wa;
+  auto* w = contact.add_subcommand("worker", "Online estimates: subscribe to PoseWrenchSample, publish ContactEstimate");
+  w->add_option("--rig", wa.rig, "rig file (geometry, contact model, F_max/M_max)")->required();
+  w->add_option("--count", wa.count, "stop after this many samples (0: until interrupted)")->capture_default_str();
+  w->add_option("--duration", wa.duration, "stop after this many seconds (0: no limit)")->capture_default_str();
+  w->callback([] { set_action([] { return worker(wa); }); });
+}
+
+}  // namespace hil::cli
