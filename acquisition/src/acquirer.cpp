@@ -296,15 +296,8 @@ void Acquirer::emit(const SyncedSample& s) {
     if (raw_ && s.index % 50 == 0) raw_->flush();
   }
   if (!w_sample_) return;
-  format::Sample row;
-  row.t_s = static_cast<double>(s.t_ns) * 1e-9;
-  row.p_world_ee_m = s.p_world_ee_m;
-  row.q_world_ee = s.q_world_ee;
-  row.v_world_ee_m_per_s = s.v_world_ee_m_per_s;
-  row.w_world_ee_rad_per_s = s.w_world_ee_rad_per_s;
-  row.f_fp_n = s.wrench_fp.head<3>();
-  row.m_fp_nm = s.wrench_fp.tail<3>();
-  auto m = to_message(row, s.index, s.joints_rad.transpose());
+  // Header stamp: the sample's absolute time; t_s: since the run's start.
+  auto m = to_message(to_row(s, static_cast<double>(s.t_ns) * 1e-9), s.index, s.joints_rad.transpose());
   m.t_s(static_cast<double>(s.t_ns - start_ns_) * 1e-9);
   m.wrench_seq(s.wrench_seq);
   m.pose_seq(s.pose_seq);

@@ -19,7 +19,7 @@ const char* to_string(DeviceState s) {
 
 DeviceMonitor::DeviceMonitor(std::string device, double nominal_rate_hz, double silence_periods, double lost_per_s_tolerated)
     : device_(std::move(device)), period_s_(1.0 / nominal_rate_hz), silence_periods_(silence_periods),
-      drops_tolerated_(lost_per_s_tolerated >= 0 ? lost_per_s_tolerated : std::max(1.0, 0.01 * nominal_rate_hz)) {}
+      drops_tolerated_(lost_per_s_tolerated >= 0 ? lost_per_s_tolerated : std::max(1.0, 0.05 * nominal_rate_hz)) {}
 
 void DeviceMonitor::sample(std::int64_t t_ns) {
   ++samples_;

@@ -1,5 +1,7 @@
 #include "hil/acquisition/recorder.hpp"
 
+#include "hil/acquisition/sample_msg.hpp"
+
 #include <fmt/format.h>
 
 #include <ctime>
@@ -27,7 +29,7 @@ std::string iso8601_utc(std::int64_t t_ns) {
 RunRecorder::RunRecorder(const std::string& dir, format::RunInfo info, const std::string& rig_yaml_text, std::int64_t start_ns,
                          std::size_t joint_count, double flush_period_s)
     : dir_(dir), info_(std::move(info)), start_ns_(start_ns), joints_(joint_count),
-      flush_period_ns_(static_cast<std::int64_t>(flush_period_s * 1e9)) {
+      flush_period_ns_(static_cast<std::int64_t>(flush_period_s * 1e9)), joints_buf_(joint_count) {
   if (fs::exists(dir_) && !fs::is_empty(dir_)) throw std::runtime_error(dir_ + ": exists and is not empty; refusing to overwrite a run");
   fs::create_directories(fs::path(dir_) / "raw");
   info_.start_time_utc = iso8601_utc(start_ns_);
@@ -50,19 +52,12 @@ RunRecorder::~RunRecorder() {
 }
 
 void RunRecorder::append(const SyncedSample& s) {
-  format::Sample row;
-  row.t_s = (s.t_ns - start_ns_) * 1e-9;
-  row.p_world_ee_m = s.p_world_ee_m;
-  row.q_world_ee = s.q_world_ee;
-  row.v_world_ee_m_per_s = s.v_world_ee_m_per_s;
-  row.w_world_ee_rad_per_s = s.w_world_ee_rad_per_s;
-  row.f_fp_n = s.wrench_fp.head<3>();
-  row.m_fp_nm = s.wrench_fp.tail<3>();
-  double joints[32] = {};
-  for (std::size_t j = 0; j < joints_ && j < 32; ++j)
-    joints[j] = j < static_cast<std::size_t>(s.joints_rad.size()) ? s.joints_rad[static_cast<Eigen::Index>(j)] : 0.0;
+  const auto row = to_row(s, static_cast<double>(s.t_ns - start_ns_) * 1e-9);
+  // A sample without joints (no pose yet) writes zeros in the joint columns.
+  for (std::size_t j = 0; j < joints_; ++j)
+    joints_buf_[j] = j < static_cast<std::size_t>(s.joints_rad.size()) ? s.joints_rad[static_cast<Eigen::Index>(j)] : 0.0;
   const double extras[3] = {static_cast<double>(s.quality), s.wrench_age_s, std::isfinite(s.pose_age_s) ? s.pose_age_s : -1.0};
-  writer_->append(row, joints, extras);
+  writer_->append(row, joints_buf_.data(), extras);
   ++rows_;
   if (s.quality & kGapBefore) ++gaps_;
   if (s.t_ns - last_flush_ns_ >= flush_period_ns_) {

@@ -30,6 +30,18 @@ geometry_msgs::msg::Vector3 vec(const Eigen::Vector3d& v) {
 Eigen::Vector3d vec(const geometry_msgs::msg::Vector3& m) { return {m.x(), m.y(), m.z()}; }
 }  // namespace
 
+format::Sample to_row(const SyncedSample& s, double t_s) {
+  format::Sample row;
+  row.t_s = t_s;
+  row.p_world_ee_m = s.p_world_ee_m;
+  row.q_world_ee = s.q_world_ee;
+  row.v_world_ee_m_per_s = s.v_world_ee_m_per_s;
+  row.w_world_ee_rad_per_s = s.w_world_ee_rad_per_s;
+  row.f_fp_n = s.wrench_fp.head<3>();
+  row.m_fp_nm = s.wrench_fp.tail<3>();
+  return row;
+}
+
 hil_msgs::msg::PoseWrenchSample to_message(const format::Sample& s, std::uint64_t index,
                                            const Eigen::Ref<const Eigen::RowVectorXd>& joints_rad) {
   hil_msgs::msg::PoseWrenchSample m;

@@ -123,8 +123,14 @@ TEST(EndToEnd, ThirtySecondsAt1kHzNoneLost) {
     fz_max = std::max(fz_max, s.f_fp_n.z());
     px_max = std::max(px_max, s.p_world_ee_m.x());
   }
-  EXPECT_NEAR(fz_min, -360.2, 1.0);
-  EXPECT_NEAR(fz_max, 0.25, 1.0);
+  const auto played = format::load_run(std::string(HIL_SOURCE_DIR) + "/examples/runs/press_slide");
+  double fz_min_played = 0, fz_max_played = 0;
+  for (const auto& s : played.samples.samples) {
+    fz_min_played = std::min(fz_min_played, s.f_fp_n.z());
+    fz_max_played = std::max(fz_max_played, s.f_fp_n.z());
+  }
+  EXPECT_NEAR(fz_min, fz_min_played, 1.0);
+  EXPECT_NEAR(fz_max, fz_max_played, 1.0);
   EXPECT_NEAR(px_max, 0.02, 1e-6);
 }
 
@@ -281,7 +287,12 @@ TEST(EndToEnd, FaultSwitchesAreReportedWithinThreePeriods) {
     std::this_thread::sleep_for(std::chrono::milliseconds(300));
     const auto t_off = acquisition::realtime_ns();
     c.off();
-    std::this_thread::sleep_for(std::chrono::milliseconds(1300));
+    // Losses are remembered for a second; give the device up to 3 s to be ok again.
+    for (int k = 0; k < 30; ++k) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(100));
+      std::lock_guard<std::mutex> lock(log.m);
+      if (k >= 12 && log.first_ok(c.device, t_off)) break;
+    }
     std::lock_guard<std::mutex> lock(log.m);
     const StatusLog::Entry* bad = nullptr;
     for (const auto& e : log.entries) {

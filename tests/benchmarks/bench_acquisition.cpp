@@ -25,13 +25,7 @@ void run_pipeline(benchmark::State& state, double output_rate_hz) {
   std::uint64_t outputs = 0;
   Synchronizer sync({1000.0, output_rate_hz}, [&](const SyncedSample& s) {
     rec.append(s);
-    hil::format::Sample row;
-    row.t_s = (s.t_ns - t0) * 1e-9;
-    row.p_world_ee_m = s.p_world_ee_m;
-    row.q_world_ee = s.q_world_ee;
-    row.f_fp_n = s.wrench_fp.head<3>();
-    row.m_fp_nm = s.wrench_fp.tail<3>();
-    auto m = to_message(row, s.index, s.joints_rad.transpose());
+    auto m = to_message(to_row(s, static_cast<double>(s.t_ns - t0) * 1e-9), s.index, s.joints_rad.transpose());
     payload.length = 0;
     ts.serialize(&m, &payload);
     ++outputs;

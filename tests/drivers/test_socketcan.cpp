@@ -298,7 +298,7 @@ TEST_F(SocketCan, HilFakeRigPlateCapturedByCandump) {
   auto plate = make_force_plate(pc, open(ch));
   plate->start();
   Vector6d first;
-  first << -0.05, 0.05, 0, -0.002, -0.005, -0.001;  // samples.csv, t = 0
+  first << 0.1, -0.1, 0.05, 0.007, -0.008, -0.004;  // examples/runs/press_slide/samples.csv, t = 0
   const int polls = 20;
   for (int i = 0; i < polls; ++i) {
     WrenchSample s;

@@ -29,8 +29,8 @@ struct DeviceHealth {
 class DeviceMonitor {
  public:
   /// \param lost_per_s_tolerated  readings lost per second before the device counts as degraded
-  ///        (default: 1 % of the nominal rate, at least 1): an occasional late answer on a busy
-  ///        machine is counted but does not flap the state.
+  ///        (default: 5 % of the nominal rate, at least 1): late answers on a busy machine are
+  ///        counted (and bridged, with GAP_BEFORE) but do not flap the state.
   DeviceMonitor(std::string device, double nominal_rate_hz, double silence_periods = 2.0, double lost_per_s_tolerated = -1.0);
 
   void sample(std::int64_t t_ns);

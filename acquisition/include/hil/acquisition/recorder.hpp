@@ -6,6 +6,7 @@
 /// `pose_age_s`: gaps and faults stay visible in the recording.
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "hil/acquisition/streams.hpp"
 #include "hil/format/run.hpp"
@@ -41,6 +42,7 @@ class RunRecorder {
   std::size_t joints_;
   std::int64_t flush_period_ns_;
   std::int64_t last_flush_ns_ = 0;
+  std::vector<double> joints_buf_;
   std::unique_ptr<format::SamplesWriter> writer_;
   std::uint64_t rows_ = 0, gaps_ = 0;
   bool closed_ = false;

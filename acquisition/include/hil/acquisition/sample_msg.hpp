@@ -2,6 +2,7 @@
 /// \file Conversions between run-format samples and bus messages.
 #include <Eigen/Core>
 
+#include "hil/acquisition/streams.hpp"
 #include "hil/dds/types.hpp"
 #include "hil/format/samples.hpp"
 
@@ -10,6 +11,9 @@ namespace hil::acquisition {
 /// Time since the epoch (or since run start) in seconds -> ROS 2 Time.
 builtin_interfaces::msg::Time to_time(double t_s);
 double from_time(const builtin_interfaces::msg::Time& t);
+
+/// A synchronized sample as a run-format row with time `t_s` (joints are kept apart).
+format::Sample to_row(const SyncedSample& s, double t_s);
 
 /// A sample as a PoseWrenchSample; `index` becomes sample_index, stamp = t_s.
 hil_msgs::msg::PoseWrenchSample to_message(const format::Sample& s, std::uint64_t index,
