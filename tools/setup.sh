@@ -16,7 +16,7 @@ deps() {
     libeigen3-dev libspdlog-dev libfmt-dev libyaml-cpp-dev libcli11-dev nlohmann-json3-dev
     libmodbus-dev libfastrtps-dev libfastcdr-dev fastddsgen fastdds-tools default-jre-headless
     can-utils iproute2 libgtest-dev libgmock-dev libbenchmark-dev
-    python3-can python3-pymodbus python3-numpy
+    python3-can python3-pymodbus python3-serial-asyncio python3-numpy
   )
   local missing=()
   for p in "${pkgs[@]}"; do dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p"); done

@@ -72,7 +72,8 @@ class Cli(unittest.TestCase):
         try:
             r = hil("demo", "--out", os.path.join(out, "run"), "--speed", "2")
             self.assertEqual(r.returncode, 0, r.stdout + r.stderr)
-            self.assertIn("[4/4] done", r.stdout)
+            self.assertIn("[5/5] done", r.stdout)
+            self.assertRegex(r.stdout, r"K = 1\.[6-9]\d*e\+05")
             self.assertEqual(hil("validate", os.path.join(out, "run")).returncode, 0)
         finally:
             shutil.rmtree(out)
@@ -120,6 +121,25 @@ class Cli(unittest.TestCase):
             self.assertGreaterEqual(int(m.group(1)), 50)
         finally:
             shutil.rmtree(out)
+
+    def test_contact_worker_estimates_online(self):
+        env = dict(os.environ)
+        env["HIL_DDS_DOMAIN"] = str(230 + os.getpid() % 3)
+        with open(os.path.join(EXAMPLE_RUN, "samples.csv")) as f:
+            rows = sum(1 for _ in f) - 1
+        worker = subprocess.Popen([HIL, "contact", "worker", "--rig", os.path.join(EXAMPLE_RUN, "rig.yaml"),
+                                   "--count", str(rows), "--duration", "60"],
+                                  stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
+        r = subprocess.run([HIL, "replay", EXAMPLE_RUN, "--speed", "0", "--wait-subscribers", "1"],
+                           capture_output=True, text=True, timeout=120, env=env)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        out, err = worker.communicate(timeout=90)
+        self.assertEqual(worker.returncode, 0, err)
+        m = __import__("re").search(r"(\d+) samples, running global K = ([0-9.e+]+) .* mu = ([0-9.]+)", out)
+        self.assertIsNotNone(m, out)
+        self.assertEqual(int(m.group(1)), rows)
+        self.assertAlmostEqual(float(m.group(2)) / 1.8e5, 1.0, delta=0.05)
+        self.assertAlmostEqual(float(m.group(3)), 0.2, delta=0.03)
 
     def test_echo_unknown_topic(self):
         r = hil("echo", "nonsense", "--timeout", "1")

@@ -12,6 +12,7 @@
 #include <mutex>
 
 #include "acquire/acquire.hpp"
+#include "contact/identify.hpp"
 #include "commands.hpp"
 #include "hil/acquisition/recorder.hpp"
 #include "hil/dds/bus.hpp"
@@ -35,9 +36,10 @@ int demo(const DemoOptions& o) {
                                            fmt::format("run-{}", acquisition::realtime_ns() / 1'000'000)).string()
                                         : o.out;
   const auto played = format::load_run(o.example);
-  std::cout << "hil demo: the fake rig plays an example run; hil acquires, records and publishes it.\n"
-               "  (contact identification and diagnosis join this demo as they are built: see the issue tracker)\n\n";
-  std::cout << fmt::format("[1/4] example run {}: {} samples, {:.1f} s; rig {}\n", o.example, played.samples.size(),
+  std::cout << "hil demo: the fake rig plays an example run; hil acquires, records and publishes it, then\n"
+               "  identifies the contact stiffness and friction from the recording.\n"
+               "  (the diagnosis of what the simulation gets wrong joins this demo when it is built: issue 6)\n\n";
+  std::cout << fmt::format("[1/5] example run {}: {} samples, {:.1f} s; rig {}\n", o.example, played.samples.size(),
                            played.samples.samples.back().t_s, o.rig);
 
   auto& g = globals();
@@ -54,7 +56,7 @@ int demo(const DemoOptions& o) {
     last_status = s.device() + (s.connected() ? " connected" : " disconnected");
   }, dds::StreamQos{true, 0, 10});
 
-  std::cout << fmt::format("[2/4] acquiring from the fake rig (in-process CAN bus, Modbus on 127.0.0.1) into {}\n", out);
+  std::cout << fmt::format("[2/5] acquiring from the fake rig (in-process CAN bus, Modbus on 127.0.0.1) into {}\n", out);
   AcquireOptions ao;
   ao.rig = o.rig;
   ao.out = out;
@@ -78,7 +80,7 @@ int demo(const DemoOptions& o) {
   std::cout << "\n" << fmt::format("      {}\n      bus: {} PoseWrenchSample, {} DeviceStatus messages received\n", result.summary,
                                    bus_samples.load(), bus_status.load());
 
-  std::cout << fmt::format("[3/4] checking the recorded run {}\n", out);
+  std::cout << fmt::format("[3/5] checking the recorded run {}\n", out);
   const auto rec = format::load_run(out);
   print_samples_summary(std::cout, rec.samples);
   double fz_rec = 0, fz_played = 0;
@@ -86,8 +88,21 @@ int demo(const DemoOptions& o) {
   for (const auto& s : played.samples.samples) fz_played = std::min(fz_played, s.f_fp_n.z());
   std::cout << fmt::format("      peak fz played {:.2f} N, recorded {:.2f} N\n", fz_played, fz_rec);
 
-  std::cout << "[4/4] done. Look at it live with `hil echo pose_wrench`, replay it with `hil replay " << out << "`.\n";
-  const bool ok = rec.samples.size() > 0 && bus_samples == rec.samples.size() && std::abs(fz_rec - fz_played) < 5.0;
+  std::cout << "[4/5] contact identification on the recorded run (K, mu by least squares, paper 2)\n";
+  const auto problem = contact::problem_from_run(rec);
+  contact::IdentifyOptions io;
+  const auto ident = contact::identify(problem, io);
+  const auto report_dir = (fs::path(out).parent_path() / (fs::path(out).filename().string() + "-report")).string();
+  contact::write_report(report_dir, fs::path(out).filename().string(), problem, ident);
+  const auto& rig_contact = *rec.rig->model.contact;
+  std::cout << fmt::format("      K = {:.4g} +- {:.2g} N/m (rig: {:.4g}), mu = {:.3f} +- {:.2g} (rig: {:.3f}), mean relative force error {:.1f} %\n",
+                           ident.nominal.K, ident.nominal.K_std, rig_contact.stiffness_n_per_m, ident.nominal.mu, ident.nominal.mu_std,
+                           rig_contact.friction_coefficient, 100.0 * ident.nominal.relative_force_error);
+  std::cout << "      report: " << (fs::path(report_dir) / "index.html").string() << "\n";
+
+  std::cout << "[5/5] done. Look at it live with `hil echo pose_wrench`, replay it with `hil replay " << out << "`.\n";
+  const bool ok = rec.samples.size() > 0 && bus_samples == rec.samples.size() && std::abs(fz_rec - fz_played) < 5.0 &&
+                  std::abs(ident.nominal.K / rig_contact.stiffness_n_per_m - 1.0) < 0.2;
   if (!ok) std::cout << "demo: the bus, the recording and the played run disagree (see above)\n";
   return ok ? 0 : 1;
 }

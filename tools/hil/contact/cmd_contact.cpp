@@ -101,20 +101,7 @@ struct IdentifyArgs {
 
 int identify(const IdentifyArgs& a) {
   const auto run = format::load_run(a.run, a.rig);
-  if (!run.rig) throw format::FormatError({a.run, 0, 0, ""}, "no rig: pass --rig or put rig.yaml in the run folder");
-  const auto& rig = *run.rig;
-  const auto scene = contact::scene_from_rig(rig);
-  const auto model = contact::model_from_rig(rig);
-  cid::ProblemOptions po;
-  po.v_tm = model.v_tm;
-  po.force_scale_n = rig.model.contact->force_scale_n;
-  po.moment_scale_nm = rig.model.contact->moment_scale_nm;
-  std::optional<cid::ContactProblem> problem;
-  try {
-    problem.emplace(scene, contact::measurements(run.samples), po);
-  } catch (const std::exception& e) {
-    throw std::runtime_error(a.run + ": " + e.what());
-  }
+  const auto problem = contact::problem_from_run(run);
   contact::IdentifyOptions o;
   o.geometric = a.geometric;
   o.lambda = a.lambda;
@@ -123,15 +110,15 @@ int identify(const IdentifyArgs& a) {
   o.window = a.window;
   o.lcurve_points = a.lcurve_points;
   o.include_weak = a.include_weak;
-  const auto r = contact::identify(*problem, o);
-  contact::print(std::cout, *problem, r);
+  const auto r = contact::identify(problem, o);
+  contact::print(std::cout, problem, r);
   if (!a.json.empty()) {
     std::ofstream f(a.json);
-    f << contact::to_json(*problem, r).dump(2) << "\n";
+    f << contact::to_json(problem, r).dump(2) << "\n";
     if (!f) throw std::runtime_error(a.json + ": cannot write");
   }
   if (!a.report.empty()) {
-    contact::write_report(a.report, fs::path(a.run).filename().string(), *problem, r);
+    contact::write_report(a.report, fs::path(a.run).filename().string(), problem, r);
     std::cout << "report: " << (fs::path(a.report) / "index.html").string() << "\n";
   }
   return 0;

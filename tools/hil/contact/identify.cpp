@@ -1,4 +1,6 @@
 #include "identify.hpp"
+#include "hil/format/error.hpp"
+#include "rig_adapter.hpp"
 
 #include <fmt/format.h>
 
@@ -54,6 +56,25 @@ std::vector<cid::Vec6> reconstruct(const cid::ContactProblem& p, const Eigen::Ve
 nlohmann::json num_or_null(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(); }
 
 }  // namespace
+
+cid::ContactProblem problem_from_run(const format::Run& run) {
+  if (!run.rig) throw format::FormatError({run.dir, 0, 0, ""}, "no rig: pass --rig or put rig.yaml in the run folder");
+  const auto& rig = *run.rig;
+  if (!rig.model.contact) throw format::FormatError({rig.source, 0, 0, "model.contact"}, "the rig has no contact model");
+  const auto scene = scene_from_rig(rig);
+  const auto model = model_from_rig(rig);
+  cid::ProblemOptions po;
+  po.v_tm = model.v_tm;
+  po.force_scale_n = rig.model.contact->force_scale_n;
+  po.moment_scale_nm = rig.model.contact->moment_scale_nm;
+  try {
+    return cid::ContactProblem(scene, measurements(run.samples), po);
+  } catch (const format::FormatError&) {
+    throw;
+  } catch (const std::exception& e) {
+    throw std::runtime_error(run.dir + ": " + e.what());
+  }
+}
 
 IdentifyResult identify(const cid::ContactProblem& p, const IdentifyOptions& o) {
   IdentifyResult r;

@@ -6,6 +6,7 @@
 #include <string>
 
 #include "hil/contact_id/identification.hpp"
+#include "hil/format/run.hpp"
 
 namespace hil::cli::contact {
 
@@ -33,6 +34,9 @@ struct IdentifyResult {
 };
 
 IdentifyResult identify(const contact_id::ContactProblem& p, const IdentifyOptions& o);
+/// The identification problem of a run against its rig (the run's rig.yaml or the one given).
+/// \throws format::FormatError or std::runtime_error naming the run on bad input.
+contact_id::ContactProblem problem_from_run(const format::Run& run);
 void print(std::ostream& out, const contact_id::ContactProblem& p, const IdentifyResult& r);
 nlohmann::json to_json(const contact_id::ContactProblem& p, const IdentifyResult& r);
 /// Writes DIR/index.html with the paper-like figures.
