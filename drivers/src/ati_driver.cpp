@@ -171,25 +171,9 @@ PollStatus AtiFtCanDriver::poll(WrenchSample& out) noexcept {
   CanFrame f;
   char msg[128];
   for (;;) {
-    const auto now = Clock::now();
-    if (now >= deadline) break;
-    const auto r = channel_->receive(f, deadline - now);
-    if (r == IoStatus::timeout) break;
-    if (r == IoStatus::closed) {
-      problem("CAN channel closed");
-      return PollStatus::closed;
-    }
-    if (r == IoStatus::error) {
-      ++counters_.bad_frames;
-      ++counters_.consecutive_failures;
-      problem("CAN channel error while waiting for gauges");
-      return PollStatus::bad_frame;
-    }
-    if (f.error) {
-      book_error_frame(f);
-      ++out.error_frames;
-      continue;
-    }
+    const auto st = next_data_frame(deadline, f, out, "gauges");
+    if (st == PollStatus::timeout) break;
+    if (st != PollStatus::ok) return st;
     if (!is_plain(f)) continue;
     if (f.id == id_a && f.len != 0) {
       if (!ati::decode_gauges_first(f, out.status_word, out.gauges)) {

@@ -77,25 +77,9 @@ PollStatus DeclarativeForcePlate::poll(WrenchSample& out) noexcept {
                         std::chrono::nanoseconds(static_cast<std::int64_t>(cfg_.response_timeout() * 1e9));
   CanFrame f;
   for (;;) {
-    const auto now = std::chrono::steady_clock::now();
-    if (now >= deadline) break;
-    const auto r = channel_->receive(f, deadline - now);
-    if (r == IoStatus::timeout) break;
-    if (r == IoStatus::closed) {
-      problem("CAN channel closed");
-      return PollStatus::closed;
-    }
-    if (r == IoStatus::error) {
-      ++counters_.bad_frames;
-      ++counters_.consecutive_failures;
-      problem("CAN channel error");
-      return PollStatus::bad_frame;
-    }
-    if (f.error) {
-      book_error_frame(f);
-      ++out.error_frames;
-      continue;
-    }
+    const auto st = next_data_frame(deadline, f, out, "the signal frames");
+    if (st == PollStatus::timeout) break;
+    if (st != PollStatus::ok) return st;
     bad_ = false;
     if (feed(f, out)) {
       finish(out);

@@ -222,6 +222,36 @@ void ForcePlate::book_error_frame(const CanFrame& f) noexcept {
   }
 }
 
+PollStatus ForcePlate::next_data_frame(std::chrono::steady_clock::time_point deadline, CanFrame& f, WrenchSample& out,
+                                       const char* context) noexcept {
+  for (;;) {
+    const auto now = std::chrono::steady_clock::now();
+    if (now >= deadline) return PollStatus::timeout;
+    const auto r = channel_->receive(f, deadline - now);
+    if (r == IoStatus::timeout) return PollStatus::timeout;
+    if (r == IoStatus::closed) {
+      problem("CAN channel closed");
+      return PollStatus::closed;
+    }
+    if (r == IoStatus::error) {
+      ++counters_.bad_frames;
+      ++counters_.consecutive_failures;
+      char msg[128];
+      std::snprintf(msg, sizeof msg, "CAN channel error while waiting for %s", context);
+      problem(msg);
+      return PollStatus::bad_frame;
+    }
+    if (!f.error) return PollStatus::ok;
+    book_error_frame(f);
+    ++out.error_frames;
+    if (last_bus_error_.bus_off) {  // the controller is off the bus: no answer will come, say so now
+      ++counters_.consecutive_failures;
+      problem("bus-off (error frame from the CAN controller)");
+      return PollStatus::bus_error;
+    }
+  }
+}
+
 void ForcePlate::problem(const char* what) noexcept {
   try {
     last_problem_.assign(what);

@@ -6,6 +6,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <array>
+#include <chrono>
 #include <atomic>
 #include <cstdint>
 #include <memory>
@@ -129,6 +130,12 @@ class ForcePlate {
   /// Books an error frame (bus-off state, counters).
   void book_error_frame(const CanFrame& f) noexcept;
   void problem(const char* what) noexcept;
+  /// Waits until `deadline` for the next data frame: error frames are booked (and counted in
+  /// `out`) on the way. \returns ok with `f` filled, timeout at the deadline, closed, bus_error
+  /// at once on a bus-off error frame, or bad_frame on a channel error (`context` names what was
+  /// awaited). Real-time safe.
+  PollStatus next_data_frame(std::chrono::steady_clock::time_point deadline, CanFrame& f, WrenchSample& out,
+                             const char* context) noexcept;
 
   ForcePlateConfig cfg_;
   std::unique_ptr<CanChannel> channel_;
