@@ -63,15 +63,60 @@ ContactProblem::ContactProblem(Scene scene, std::vector<Measurement> data, const
   for (const auto& u : scene_.uncertainties) uncertain[static_cast<std::size_t>(u.body)][static_cast<std::size_t>(u.feature)] = true;
   touched_.assign(M, false);
 
-  MindistWorkspace ws;
+  // Feature transforms at x_u^d (the same for every sample); the polyhedra of a body that does not
+  // move with the end effector (object 2, normally) are posed once, the others once per sample.
+  for (int b = 0; b < 2; ++b) {
+    const auto& body = scene_.bodies[static_cast<std::size_t>(b)];
+    fixed_body_[static_cast<std::size_t>(b)] = !body.on_end_effector;
+    Tf_[static_cast<std::size_t>(b)].resize(body.features.size());
+    disp_[static_cast<std::size_t>(b)].assign(body.features.size(), 0.0);
+    for (std::size_t f = 0; f < body.features.size(); ++f)
+      Tf_[static_cast<std::size_t>(b)][f] = feature_transform(scene_.uncertainties, xd, b, static_cast<int>(f));
+    posed_[static_cast<std::size_t>(b)].resize(index_[static_cast<std::size_t>(b)].size());
+  }
+  reach_.assign(M, 0.0);
+  for (std::size_t u = 0; u < M; ++u) {
+    // How far a vertex of the feature can move per unit |x_u - x_u^d|: 1 for a translation; for a
+    // rotation, the largest distance from the axis of a vertex placed by the uncertainties listed
+    // before it (at their design values; the chord is at most the arc).
+    const auto& U = scene_.uncertainties[u];
+    if (U.kind == Uncertainty::Kind::translation) {
+      reach_[u] = 1.0;
+      continue;
+    }
+    Eigen::Isometry3d Tprev = Eigen::Isometry3d::Identity();
+    for (std::size_t v = 0; v < u; ++v) {
+      const auto& V = scene_.uncertainties[v];
+      if (V.body == U.body && V.feature == U.feature) Tprev = uncertainty_transform(V, xd[static_cast<Eigen::Index>(v)]) * Tprev;
+    }
+    const auto& feat = scene_.bodies[static_cast<std::size_t>(U.body)].features[static_cast<std::size_t>(U.feature)];
+    for (const auto& poly : feat.polyhedra)
+      for (const auto& v : poly.vertices()) {
+        const Vec3 d = Tprev * v - U.point;
+        reach_[u] = std::max(reach_[u], (d - U.axis * U.axis.dot(d)).norm());
+      }
+    reach_[u] *= 1.0 + 1e-9;
+  }
+  for (int b = 0; b < 2; ++b)
+    if (fixed_body_[static_cast<std::size_t>(b)]) pose_body(b, scene_.bodies[static_cast<std::size_t>(b)].T_attach, posed_[static_cast<std::size_t>(b)]);
+
+  ClipWorkspace clip;
+  std::vector<VarPair> pending;
+  std::vector<Regressor> var_rows, design_rows;
+  var_.reserve(4 * data_.size());
   for (std::size_t k = 0; k < data_.size(); ++k) {
     const auto& kin = data_[k].kin;
-    pose_scene(scene_, xd, kin.T_world_ee, ws.posed);
-    const auto& A = ws.posed.polys[0];
-    const auto& B = ws.posed.polys[1];
+    std::array<Eigen::Isometry3d, 2> Tb;
+    for (int b = 0; b < 2; ++b) {
+      Tb[static_cast<std::size_t>(b)] = body_pose(scene_.bodies[static_cast<std::size_t>(b)], kin.T_world_ee);
+      if (!fixed_body_[static_cast<std::size_t>(b)]) pose_body(b, Tb[static_cast<std::size_t>(b)], posed_[static_cast<std::size_t>(b)]);
+    }
+    const auto& A = posed_[0];
+    const auto& B = posed_[1];
     Regressor fixed = Regressor::Zero();
     int fixed_n = 0, var_n = 0;
-    std::vector<VarPair> pending;
+    pending.clear();
+    var_rows.clear();
     const int a = static_cast<int>(used_.size());
     for (std::size_t i = 0; i < A.size(); ++i)
       for (std::size_t j = 0; j < B.size(); ++j) {
@@ -81,24 +126,28 @@ ContactProblem::ContactProblem(Scene scene, std::vector<Measurement> data, const
         if (var) {
           // Keep the pair if it interferes now, or could within the margin.
           PairContact pc;
-          VarPair vp{a, static_cast<int>(i), static_cast<int>(j), f1, f2, Regressor::Zero(), 0};
-          if (near(A[i], B[j]) && penetration(A[i], B[j], pc, ws.clip)) {
+          VarPair vp{a, static_cast<int>(i), static_cast<int>(j), f1, f2, -std::numeric_limits<double>::infinity()};
+          // One separating-axis pass: the contact, or the gap with an early exit once the pair is
+          // known to be farther apart than the margin. A kept pair gets the full bound (used to skip
+          // it while x_u cannot close the gap).
+          double gap = 0.0;
+          if (penetration_or_gap(A[i], B[j], opt_.broad_margin_m, pc, gap, clip)) {
             ContactPoint c{pc.delta, pc.point, pc.normal, Vec3::Zero(), 0.0, vp.p1, vp.p2};
             tangent(scene_, kin, opt_.v_tm, c);
-            vp.at_design = regressor_row(c, ws.posed.T_world_body[0]);
-            vp.contact_at_design = 1;
+            var_rows.push_back(regressor_row(c, Tb[0]));
             ++var_n;
-          } else if (separation_lower_bound(A[i], B[j]) > opt_.broad_margin_m) {
-            continue;
+          } else {
+            if (gap > opt_.broad_margin_m) continue;
+            vp.gap = gap;
           }
           pending.push_back(vp);
           continue;
         }
         PairContact pc;
-        if (!penetration(A[i], B[j], pc, ws.clip)) continue;
+        if (!penetration(A[i], B[j], pc, clip)) continue;
         ContactPoint c{pc.delta, pc.point, pc.normal, Vec3::Zero(), 0.0, static_cast<int>(i), static_cast<int>(j)};
         tangent(scene_, kin, opt_.v_tm, c);
-        fixed += regressor_row(c, ws.posed.T_world_body[0]);
+        fixed += regressor_row(c, Tb[0]);
         ++fixed_n;
       }
     // Feature-touch bookkeeping uses all candidate pairs of all samples.
@@ -112,9 +161,14 @@ ContactProblem::ContactProblem(Scene scene, std::vector<Measurement> data, const
     fixed_.push_back(fixed);
     fixed_contacts_.push_back(fixed_n);
     var_.insert(var_.end(), pending.begin(), pending.end());
-    T_o1_.push_back(ws.posed.T_world_body[0]);
-    T_o2_.push_back(ws.posed.T_world_body[1]);
-    y_o1_.push_back(plate_to_object1(data_[k].w_fp, scene_.T_world_fp, ws.posed.T_world_body[0]));
+    // Φ at the design geometry: the fixed pairs, then the contacts of the pairs x_u may move.
+    Regressor design = fixed;
+    for (const auto& r : var_rows) design += r;
+    design_rows.push_back(design);
+    contacts_design_.push_back(fixed_n + var_n);
+    T_o1_.push_back(Tb[0]);
+    if (!fixed_body_[1]) T_o2_.push_back(Tb[1]);  // a fixed body's pose is T_attach for every sample
+    y_o1_.push_back(plate_to_object1(data_[k].w_fp, scene_.T_world_fp, Tb[0]));
   }
   if (used_.empty())
     throw std::runtime_error("no sample of the run brings the objects into contact (" + std::to_string(data_.size()) +
@@ -137,12 +191,7 @@ ContactProblem::ContactProblem(Scene scene, std::vector<Measurement> data, const
   }
   // Φ at the design geometry from the pair contributions computed above (no second mindist pass).
   A_design_.resize(6 * L, 2);
-  contacts_design_.assign(fixed_contacts_.begin(), fixed_contacts_.end());
-  for (Eigen::Index a = 0; a < L; ++a) A_design_.block<6, 2>(6 * a, 0) = fixed_[static_cast<std::size_t>(a)];
-  for (const auto& vp : var_) {
-    A_design_.block<6, 2>(6 * vp.a, 0) += vp.at_design;
-    contacts_design_[static_cast<std::size_t>(vp.a)] += vp.contact_at_design;
-  }
+  for (Eigen::Index a = 0; a < L; ++a) A_design_.block<6, 2>(6 * a, 0) = design_rows[static_cast<std::size_t>(a)];
   A_design_.array().colwise() *= w_.array();
 }
 
@@ -152,22 +201,52 @@ double ContactProblem::fd_step(int j) const {
   return u.kind == Uncertainty::Kind::translation ? 1e-7 : 1e-6;
 }
 
-Regressor ContactProblem::pair_regressor(const VarPair& vp, const Eigen::VectorXd& x, int* in_contact) const {
-  const auto& s = scene_;
-  const auto [f1, q1] = index_[0][static_cast<std::size_t>(vp.p1)];
-  const auto [f2, q2] = index_[1][static_cast<std::size_t>(vp.p2)];
-  const auto& T1 = T_o1_[static_cast<std::size_t>(vp.a)];
-  const auto& T2 = T_o2_[static_cast<std::size_t>(vp.a)];
-  pa_.pose(s.bodies[0].features[static_cast<std::size_t>(f1)].polyhedra[static_cast<std::size_t>(q1)],
-           T1 * feature_transform(s.uncertainties, x, 0, f1));
-  pb_.pose(s.bodies[1].features[static_cast<std::size_t>(f2)].polyhedra[static_cast<std::size_t>(q2)],
-           T2 * feature_transform(s.uncertainties, x, 1, f2));
+void ContactProblem::pose_body(int b, const Eigen::Isometry3d& T_world_body, std::vector<PosedPolyhedron>& out) const {
+  const auto& body = scene_.bodies[static_cast<std::size_t>(b)];
+  const auto& index = index_[static_cast<std::size_t>(b)];
+  out.resize(index.size());
+  for (std::size_t q = 0; q < index.size(); ++q) {
+    const auto [f, k] = index[q];
+    out[q].pose(body.features[static_cast<std::size_t>(f)].polyhedra[static_cast<std::size_t>(k)],
+                T_world_body * Tf_[static_cast<std::size_t>(b)][static_cast<std::size_t>(f)]);
+  }
+}
+
+void ContactProblem::prepare(const Eigen::VectorXd& x) const {
+  const auto& us = scene_.uncertainties;
+  for (int b = 0; b < 2; ++b) {
+    const auto& body = scene_.bodies[static_cast<std::size_t>(b)];
+    for (std::size_t f = 0; f < body.features.size(); ++f) {
+      Tf_[static_cast<std::size_t>(b)][f] = feature_transform(us, x, b, static_cast<int>(f));
+      disp_[static_cast<std::size_t>(b)][f] = 0.0;
+    }
+  }
+  for (std::size_t u = 0; u < us.size(); ++u)
+    disp_[static_cast<std::size_t>(us[u].body)][static_cast<std::size_t>(us[u].feature)] +=
+        reach_[u] * std::abs(x[static_cast<Eigen::Index>(u)] - us[u].design_value);
+  for (int b = 0; b < 2; ++b)
+    if (fixed_body_[static_cast<std::size_t>(b)]) pose_body(b, scene_.bodies[static_cast<std::size_t>(b)].T_attach, posed_[static_cast<std::size_t>(b)]);
+}
+
+const PosedPolyhedron& ContactProblem::posed(int b, int q, int a, const Eigen::Isometry3d& Tf, PosedPolyhedron& scratch) const {
+  const auto [f, k] = index_[static_cast<std::size_t>(b)][static_cast<std::size_t>(q)];
+  const auto& T = (b == 0 ? T_o1_ : T_o2_)[static_cast<std::size_t>(a)];
+  scratch.pose(scene_.bodies[static_cast<std::size_t>(b)].features[static_cast<std::size_t>(f)].polyhedra[static_cast<std::size_t>(k)], T * Tf);
+  return scratch;
+}
+
+bool ContactProblem::out_of_reach(const VarPair& vp, double d1, double d2) const {
+  // The pair was at least vp.gap apart under x_u^d; its polyhedra moved by at most d1 and d2 since.
+  return vp.gap > (d1 + d2) * (1.0 + 1e-9) + 1e-12;
+}
+
+Regressor ContactProblem::pair_contact(const VarPair& vp, const PosedPolyhedron& A, const PosedPolyhedron& B, int* in_contact) const {
   PairContact pc;
-  if (!near(pa_, pb_) || !penetration(pa_, pb_, pc, clip_)) return Regressor::Zero();
+  if (!near(A, B) || !penetration(A, B, pc, clip_)) return Regressor::Zero();
   if (in_contact) ++*in_contact;
   ContactPoint c{pc.delta, pc.point, pc.normal, Vec3::Zero(), 0.0, vp.p1, vp.p2};
-  tangent(s, data_[static_cast<std::size_t>(used_[static_cast<std::size_t>(vp.a)])].kin, opt_.v_tm, c);
-  return regressor_row(c, T1);
+  tangent(scene_, data_[static_cast<std::size_t>(used_[static_cast<std::size_t>(vp.a)])].kin, opt_.v_tm, c);
+  return regressor_row(c, T_o1_[static_cast<std::size_t>(vp.a)]);
 }
 
 void ContactProblem::regressor(const Eigen::VectorXd& x, Eigen::MatrixX2d& A, std::vector<int>* contacts) const {
@@ -180,9 +259,13 @@ void ContactProblem::regressor(const Eigen::VectorXd& x, Eigen::MatrixX2d& A, st
   A.resize(6 * L, 2);
   for (Eigen::Index a = 0; a < L; ++a) A.block<6, 2>(6 * a, 0) = fixed_[static_cast<std::size_t>(a)];
   if (contacts) contacts->assign(fixed_contacts_.begin(), fixed_contacts_.end());
+  prepare(x);
   for (const auto& vp : var_) {
+    if (out_of_reach(vp, disp_[0][static_cast<std::size_t>(vp.f1)], disp_[1][static_cast<std::size_t>(vp.f2)])) continue;
+    const auto& P1 = fixed_body_[0] ? posed_[0][static_cast<std::size_t>(vp.p1)] : posed(0, vp.p1, vp.a, Tf_[0][static_cast<std::size_t>(vp.f1)], pa_);
+    const auto& P2 = fixed_body_[1] ? posed_[1][static_cast<std::size_t>(vp.p2)] : posed(1, vp.p2, vp.a, Tf_[1][static_cast<std::size_t>(vp.f2)], pb_);
     int n = 0;
-    A.block<6, 2>(6 * vp.a, 0) += pair_regressor(vp, x, &n);
+    A.block<6, 2>(6 * vp.a, 0) += pair_contact(vp, P1, P2, &n);
     if (contacts) (*contacts)[static_cast<std::size_t>(vp.a)] += n;
   }
   A.array().colwise() *= w_.array();
@@ -192,12 +275,39 @@ void ContactProblem::sensitivity(const Eigen::VectorXd& x, int j, double h, Eige
   const Eigen::Index L = static_cast<Eigen::Index>(used_.size());
   dA.setZero(6 * L, 2);
   const auto& U = scene_.uncertainties[static_cast<std::size_t>(j)];
+  const auto mb = static_cast<std::size_t>(U.body), ob = 1 - mb;  // moved body, other body
   Eigen::VectorXd xp = x, xm = x;
   xp[j] += h;
   xm[j] -= h;
+  prepare(x);  // the other body's features stay at x
+  const Eigen::Isometry3d Tp = feature_transform(scene_.uncertainties, xp, U.body, U.feature);
+  const Eigen::Isometry3d Tm = feature_transform(scene_.uncertainties, xm, U.body, U.feature);
+  // Displacement bound of the moved feature at x ± h.
+  const double dmoved = disp_[mb][static_cast<std::size_t>(U.feature)] + reach_[static_cast<std::size_t>(j)] * std::abs(h);
+  if (fixed_body_[mb]) {
+    const auto& index = index_[mb];
+    const auto& feat = scene_.bodies[mb].features[static_cast<std::size_t>(U.feature)];
+    const auto& Tb = scene_.bodies[mb].T_attach;
+    plus_.resize(index.size());
+    minus_.resize(index.size());
+    for (std::size_t q = 0; q < index.size(); ++q)
+      if (index[q].first == U.feature) {
+        plus_[q].pose(feat.polyhedra[static_cast<std::size_t>(index[q].second)], Tb * Tp);
+        minus_[q].pose(feat.polyhedra[static_cast<std::size_t>(index[q].second)], Tb * Tm);
+      }
+  }
   for (const auto& vp : var_) {
-    if (!((U.body == 0 && U.feature == vp.f1) || (U.body == 1 && U.feature == vp.f2))) continue;
-    dA.block<6, 2>(6 * vp.a, 0) += (pair_regressor(vp, xp, nullptr) - pair_regressor(vp, xm, nullptr)) / (2.0 * h);
+    const int f_moved = mb == 0 ? vp.f1 : vp.f2, f_other = mb == 0 ? vp.f2 : vp.f1;
+    if (f_moved != U.feature) continue;
+    if (out_of_reach(vp, dmoved, disp_[ob][static_cast<std::size_t>(f_other)])) continue;
+    const int q_moved = mb == 0 ? vp.p1 : vp.p2, q_other = mb == 0 ? vp.p2 : vp.p1;
+    const auto& O = fixed_body_[ob] ? posed_[ob][static_cast<std::size_t>(q_other)]
+                                    : posed(static_cast<int>(ob), q_other, vp.a, Tf_[ob][static_cast<std::size_t>(f_other)], pb_);
+    const auto& Pp = fixed_body_[mb] ? plus_[static_cast<std::size_t>(q_moved)] : posed(static_cast<int>(mb), q_moved, vp.a, Tp, pa_);
+    const Regressor rp = mb == 0 ? pair_contact(vp, Pp, O, nullptr) : pair_contact(vp, O, Pp, nullptr);
+    const auto& Pm = fixed_body_[mb] ? minus_[static_cast<std::size_t>(q_moved)] : posed(static_cast<int>(mb), q_moved, vp.a, Tm, pa_);
+    const Regressor rm = mb == 0 ? pair_contact(vp, Pm, O, nullptr) : pair_contact(vp, O, Pm, nullptr);
+    dA.block<6, 2>(6 * vp.a, 0) += (rp - rm) / (2.0 * h);
   }
   dA.array().colwise() *= w_.array();
 }
@@ -457,49 +567,81 @@ GeometricEstimate identify_geometry(const ContactProblem& p, const GeometricOpti
   double f = vp.residual(z, R, th);
 
   if (o.solver == Solver::levenberg_marquardt) {
-    double mu = 1e-3;
+    // Levenberg-Marquardt in prior-std units (z), damping μ D with a per-parameter diagonal D.
+    //
+    // Where the max-depth δ has a kink (a face turning through parallel: the deepest vertex jumps
+    // to the other end) the objective is V-shaped along that parameter and its minimum sits on the
+    // kink. The Gauss-Newton model, built from the slope of one side, then overshoots across the
+    // kink at every step; a single μ for all parameters makes every other parameter crawl with it
+    // (the old behaviour: 200 iterations). A change of sign of ∂f/∂z_j between two accepted
+    // iterates says the step went past the minimum along z_j, so z_j's own damping D_jj is raised
+    // (x8, relaxed /2 while the sign holds): a parameter sitting on a kink converges to it
+    // geometrically while the smooth ones keep Gauss-Newton steps.
+    //
+    // Stopping: besides the relative tolerance, progress is statistically meaningless once an
+    // accepted step lowers the objective by less than statistical_tolerance × σ²/(6L), σ² ≈ the force
+    // cost (a change of Δχ² = 6L Δf/σ² < statistical_tolerance), twice in a row.
+    const double n_data = static_cast<double>(p.rows());
     Eigen::MatrixXd J;
     vp.jacobian(z, R, th, o.jacobian, J);
+    Eigen::VectorXd grad = J.transpose() * R;
+    const double jmax = J.colwise().squaredNorm().maxCoeff();
+    const double mu0 = 1e-3 * (jmax > 0.0 ? jmax : 1.0);  // Madsen-Nielsen-Tingleff start and update
+    double mu = mu0, nu = 2.0;
+    Eigen::VectorXd D = Eigen::VectorXd::Ones(m);
     std::vector<double> history{f};
+    int small_gains = 0;
     for (g.iterations = 0; g.iterations < o.max_iterations; ++g.iterations) {
-      // Stall: where the objective has kinks (the max-depth δ of a face turning through parallel)
-      // LM creeps; stop when five iterations together gained less than 100 x tolerance.
+      // Stall: five iterations together gained less than 100 x tolerance.
       if (history.size() > 5 && history[history.size() - 6] - f <= 100.0 * o.tolerance * f) {
         g.converged = true;
         break;
       }
-      const Eigen::VectorXd grad = J.transpose() * R;
       if (grad.lpNorm<Eigen::Infinity>() < 1e-14 * std::max(1.0, f)) {
         g.converged = true;
         break;
       }
+      // J = Q [Rj; 0]: each damped trial solves a small (2m x m) problem.
+      Eigen::HouseholderQR<Eigen::MatrixXd> qr(J);
+      const Eigen::MatrixXd Rj = qr.matrixQR().topRows(m).triangularView<Eigen::Upper>();
+      const Eigen::VectorXd c = -(qr.householderQ().transpose() * R).head(m);
       bool accepted = false;
       for (int tries = 0; tries < 30 && !accepted; ++tries) {
-        Eigen::MatrixXd Aug(J.rows() + m, m);
-        Aug << J, std::sqrt(mu) * Eigen::MatrixXd::Identity(m, m);
-        Eigen::VectorXd rhs = Eigen::VectorXd::Zero(J.rows() + m);
-        rhs.head(J.rows()) = -R;
+        Eigen::MatrixXd Aug(2 * m, m);
+        Aug << Rj, Eigen::MatrixXd((mu * D).cwiseSqrt().asDiagonal());
+        Eigen::VectorXd rhs = Eigen::VectorXd::Zero(2 * m);
+        rhs.head(m) = c;
         const Eigen::VectorXd step = Aug.colPivHouseholderQr().solve(rhs);
+        // Decrease predicted by the undamped linear model.
+        const double predicted = c.squaredNorm() - (c - Rj * step).squaredNorm();
         Eigen::VectorXd Rn;
         Eigen::Vector2d thn;
         const Eigen::VectorXd zn = z + step;
         const double fn = vp.residual(zn, Rn, thn);
         if (fn < f) {
           const double df = f - fn;
+          const double rho = predicted > 0.0 ? df / predicted : 0.0;
           z = zn;
           R = Rn;
           th = thn;
           f = fn;
-          mu = std::max(mu / 3.0, 1e-12);
+          mu = std::max(mu * std::max(1.0 / 3.0, 1.0 - std::pow(2.0 * rho - 1.0, 3)), 1e-12 * mu0);
+          nu = 2.0;
           accepted = true;
           history.push_back(f);
-          if (df <= o.tolerance * f || step.norm() <= o.x_tolerance * (1.0 + z.norm())) {
+          const double sigma2 = R.head(R.size() - m).squaredNorm();  // force cost ≈ weighted noise variance
+          small_gains = df <= o.statistical_tolerance * sigma2 / n_data ? small_gains + 1 : 0;
+          if (df <= o.tolerance * f || small_gains >= 2 || step.norm() <= o.x_tolerance * (1.0 + z.norm())) {
             g.converged = true;
           } else {
             vp.jacobian(z, R, th, o.jacobian, J);
+            const Eigen::VectorXd gn = J.transpose() * R;
+            for (int i = 0; i < m; ++i) D[i] = gn[i] * grad[i] < 0.0 ? 8.0 * D[i] : std::max(1.0, 0.5 * D[i]);
+            grad = gn;
           }
         } else {
-          mu *= 4.0;
+          mu *= nu;
+          nu *= 2.0;
           if (step.norm() <= o.x_tolerance * (1.0 + z.norm())) {
             g.converged = true;
             break;

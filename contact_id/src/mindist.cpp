@@ -18,9 +18,18 @@ inline void project(const std::vector<Vec3>& v, const Vec3& u, double& lo, doubl
   }
 }
 
+/// A monotone substitute for atan2(y, x) on (-π, π], with values in (-2, 2] ("diamond angle").
+inline double pseudo_angle(double y, double x) {
+  const double l = std::abs(x) + std::abs(y);
+  if (!(l > 0.0)) return 0.0;
+  const double t = x / l;
+  return y >= 0.0 ? 1.0 - t : t - 1.0;
+}
+
 /// Clips the polytope (pts/start of `in`) by {x : n.x <= d} into `out`.
-void clip(const std::vector<Vec3>& ip, const std::vector<int>& is, std::vector<Vec3>& op, std::vector<int>& os,
-          std::vector<Vec3>& cap, const Vec3& n, double d, double tol) {
+/// `sd` holds the signed distances n.p - d of the points of `ip`.
+void clip(const std::vector<Vec3>& ip, const std::vector<int>& is, const std::vector<double>& sd, std::vector<Vec3>& op,
+          std::vector<int>& os, std::vector<Vec3>& cap, const Vec3& n, double tol) {
   op.clear();
   os.clear();
   cap.clear();
@@ -29,9 +38,10 @@ void clip(const std::vector<Vec3>& ip, const std::vector<int>& is, std::vector<V
     const int b = is[static_cast<std::size_t>(f)], e = is[static_cast<std::size_t>(f) + 1];
     const int first = static_cast<int>(op.size());
     for (int i = b; i < e; ++i) {
+      const auto iq = static_cast<std::size_t>(i + 1 < e ? i + 1 : b);
       const Vec3& P = ip[static_cast<std::size_t>(i)];
-      const Vec3& Q = ip[static_cast<std::size_t>(i + 1 < e ? i + 1 : b)];
-      const double sp = n.dot(P) - d, sq = n.dot(Q) - d;
+      const Vec3& Q = ip[iq];
+      const double sp = sd[static_cast<std::size_t>(i)], sq = sd[iq];
       if (sp <= 0.0) op.push_back(P);
       if ((sp < 0.0 && sq > 0.0) || (sp > 0.0 && sq < 0.0)) {
         const Vec3 X = P + (sp / (sp - sq)) * (Q - P);
@@ -63,8 +73,10 @@ void clip(const std::vector<Vec3>& ip, const std::vector<int>& is, std::vector<V
       c /= static_cast<double>(m);
       const Vec3 a = (std::abs(n.x()) < 0.9 ? Vec3::UnitX() : Vec3::UnitY()).cross(n).normalized();
       const Vec3 bb = n.cross(a);
+      // Order by angle about c. The pseudo-angle is a monotone function of atan2 (same order, no
+      // transcendental call inside the comparator).
       std::sort(cap.begin(), cap.end(), [&](const Vec3& p, const Vec3& q) {
-        return std::atan2((p - c).dot(bb), (p - c).dot(a)) < std::atan2((q - c).dot(bb), (q - c).dot(a));
+        return pseudo_angle((p - c).dot(bb), (p - c).dot(a)) < pseudo_angle((q - c).dot(bb), (q - c).dot(a));
       });
       os.push_back(static_cast<int>(op.size()));
       op.insert(op.end(), cap.begin(), cap.end());
@@ -88,11 +100,18 @@ double intersection_centroid(const PosedPolyhedron& a, const PosedPolyhedron& b,
   }
   S->push_back(static_cast<int>(P->size()));
   const double tol = 1e-12 * (a.radius + b.radius);
+  auto& sd = ws.dist;
   for (std::size_t k = 0; k < b.normals.size(); ++k) {
+    const Vec3& n = b.normals[k];
+    const double d = b.offsets[k];
+    sd.resize(P->size());
     bool all_in = true;
-    for (const auto& p : *P) all_in = all_in && (b.normals[k].dot(p) <= b.offsets[k]);
+    for (std::size_t i = 0; i < P->size(); ++i) {
+      sd[i] = n.dot((*P)[i]) - d;
+      all_in = all_in && sd[i] <= 0.0;
+    }
     if (all_in) continue;
-    clip(*P, *S, *P2, *S2, ws.cap, b.normals[k], b.offsets[k], tol);
+    clip(*P, *S, sd, *P2, *S2, ws.cap, n, tol);
     std::swap(P, P2);
     std::swap(S, S2);
     if (S->size() < 2) break;
@@ -118,35 +137,24 @@ double intersection_centroid(const PosedPolyhedron& a, const PosedPolyhedron& b,
   return vol;
 }
 
-double separation_lower_bound(const PosedPolyhedron& a, const PosedPolyhedron& b) {
-  double gap = -std::numeric_limits<double>::infinity();
-  auto test = [&](const Vec3& u) {
-    double la, ha, lb, hb;
-    project(a.vertices, u, la, ha);
-    project(b.vertices, u, lb, hb);
-    gap = std::max(gap, std::max(la - hb, lb - ha));
-  };
-  for (const auto& n : a.normals) test(n);
-  for (const auto& n : b.normals) test(n);
-  for (const auto& ea : a.edge_dirs)
-    for (const auto& eb : b.edge_dirs) {
-      const Vec3 c = ea.cross(eb);
-      const double len = c.norm();
-      if (len >= 1e-6) test(c / len);
-    }
-  return gap;
-}
+namespace {
 
-bool penetration(const PosedPolyhedron& a, const PosedPolyhedron& b, PairContact& out, ClipWorkspace& ws) {
-  double best = std::numeric_limits<double>::infinity();
-  Vec3 axis = Vec3::UnitZ();
+/// One separating-axis pass over the candidate axes (faces of a, faces of b, edge pairs, in this
+/// order). Returns the largest projection gap found (a lower bound on the distance, >= 0 when the
+/// pair does not interfere); stops as soon as it exceeds `stop` (or reaches it, if `inclusive`).
+/// While every axis overlaps, `best` is the smallest push separating the pair and `axis` its
+/// direction (pushing a out of b).
+double sat(const PosedPolyhedron& a, const PosedPolyhedron& b, double stop, bool inclusive, double& best, Vec3& axis) {
+  double gap = -std::numeric_limits<double>::infinity();
+  best = std::numeric_limits<double>::infinity();
+  axis = Vec3::UnitZ();
   auto test = [&](const Vec3& u) {
     double la, ha, lb, hb;
     project(a.vertices, u, la, ha);
     project(b.vertices, u, lb, hb);
     const double push_plus = hb - la;   // translate a by +u * push_plus to separate
     const double push_minus = ha - lb;  // translate a by -u * push_minus to separate
-    if (push_plus <= 0.0 || push_minus <= 0.0) return false;
+    gap = std::max(gap, std::max(-push_plus, -push_minus));
     if (push_plus < best) {
       best = push_plus;
       axis = u;
@@ -155,20 +163,55 @@ bool penetration(const PosedPolyhedron& a, const PosedPolyhedron& b, PairContact
       best = push_minus;
       axis = -u;
     }
-    return true;
+    return inclusive ? gap >= stop : gap > stop;
   };
   for (const auto& n : a.normals)
-    if (!test(n)) return false;
+    if (test(n)) return gap;
   for (const auto& n : b.normals)
-    if (!test(n)) return false;
+    if (test(n)) return gap;
   for (const auto& ea : a.edge_dirs)
     for (const auto& eb : b.edge_dirs) {
       Vec3 c = ea.cross(eb);
       const double len = c.norm();
       if (len < 1e-6) continue;  // parallel edges: covered by the face normals
       c /= len;
-      if (!test(c)) return false;
+      if (test(c)) return gap;
     }
+  return gap;
+}
+
+}  // namespace
+
+double separation_lower_bound(const PosedPolyhedron& a, const PosedPolyhedron& b) {
+  return separation_lower_bound(a, b, std::numeric_limits<double>::infinity());
+}
+
+double separation_lower_bound(const PosedPolyhedron& a, const PosedPolyhedron& b, double stop_above) {
+  double best;
+  Vec3 axis;
+  return sat(a, b, stop_above, false, best, axis);
+}
+
+bool penetration(const PosedPolyhedron& a, const PosedPolyhedron& b, PairContact& out, ClipWorkspace& ws) {
+  double best;
+  Vec3 axis;
+  if (sat(a, b, 0.0, true, best, axis) >= 0.0) return false;  // some axis separates (or touches)
+  Vec3 centroid;
+  intersection_centroid(a, b, centroid, ws);
+  out.delta = best;
+  out.normal = axis;
+  out.point = centroid;
+  return true;
+}
+
+bool penetration_or_gap(const PosedPolyhedron& a, const PosedPolyhedron& b, double stop_above, PairContact& out, double& gap,
+                        ClipWorkspace& ws) {
+  double best;
+  Vec3 axis;
+  // An early exit is only taken once the pair is known to be apart (stop >= 0), so a negative gap
+  // always comes from the full pass.
+  gap = sat(a, b, std::max(stop_above, 0.0), false, best, axis);
+  if (gap >= 0.0) return false;
   Vec3 centroid;
   intersection_centroid(a, b, centroid, ws);
   out.delta = best;

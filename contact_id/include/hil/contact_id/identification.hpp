@@ -73,10 +73,16 @@ class ContactProblem {
     int a;           ///< used-sample index
     int p1, p2;      ///< flattened polyhedron indices
     int f1, f2;      ///< their features
-    Regressor at_design;  ///< this pair's Φ^T contribution at x_u^d
-    int contact_at_design;
+    double gap;      ///< lower bound on the pair's distance at x_u^d (-inf when in contact)
   };
-  Regressor pair_regressor(const VarPair& vp, const Eigen::VectorXd& x, int* in_contact) const;
+  /// Feature transforms, displacement bounds and posed fixed bodies at x (into the scratch below).
+  void prepare(const Eigen::VectorXd& x) const;
+  /// Poses every polyhedron of body b with the feature transforms of the last prepare().
+  void pose_body(int b, const Eigen::Isometry3d& T_world_body, std::vector<PosedPolyhedron>& out) const;
+  const PosedPolyhedron& posed(int b, int q, int a, const Eigen::Isometry3d& Tf, PosedPolyhedron& scratch) const;
+  /// Whether a pair that was vp.gap apart under x_u^d stays apart when its polyhedra moved by d1, d2.
+  bool out_of_reach(const VarPair& vp, double d1, double d2) const;
+  Regressor pair_contact(const VarPair& vp, const PosedPolyhedron& A, const PosedPolyhedron& B, int* in_contact) const;
 
   Scene scene_;
   std::vector<Measurement> data_;
@@ -85,7 +91,7 @@ class ContactProblem {
   std::vector<Regressor> fixed_;        ///< per used sample: contribution of pairs no x_u moves
   std::vector<int> fixed_contacts_;
   std::vector<VarPair> var_;
-  std::vector<Eigen::Isometry3d> T_o1_, T_o2_;
+  std::vector<Eigen::Isometry3d> T_o1_, T_o2_;  ///< per used sample (T_o2_ empty when object 2 is fixed)
   std::vector<Vec6> y_o1_;
   std::vector<bool> touched_;
   std::array<std::vector<std::pair<int, int>>, 2> index_;  ///< flattened polyhedron -> (feature, polyhedron)
@@ -93,6 +99,12 @@ class ContactProblem {
   Eigen::MatrixX2d A_design_;           ///< W^{-1/2} Φ^T at x_u^d (computed once)
   std::vector<int> contacts_design_;
   double f_scale_ = 1.0, m_scale_ = 1.0;
+  std::array<bool, 2> fixed_body_{};    ///< body not carried by the end effector: one pose for all samples
+  std::vector<double> reach_;           ///< per uncertainty: vertex displacement per unit |x_j - x_j^d|
+  mutable std::array<std::vector<Eigen::Isometry3d>, 2> Tf_;  ///< feature transforms at the current x
+  mutable std::array<std::vector<double>, 2> disp_;           ///< per feature: displacement bound from x_u^d
+  mutable std::array<std::vector<PosedPolyhedron>, 2> posed_; ///< fixed bodies posed at the current x
+  mutable std::vector<PosedPolyhedron> plus_, minus_;         ///< moved feature at x ± h (sensitivity)
   mutable PosedPolyhedron pa_, pb_;
   mutable ClipWorkspace clip_;
 };
@@ -160,6 +172,10 @@ struct GeometricOptions {
   /// meaningful changes are of order 1/(6L), far larger).
   double tolerance = 1e-7;           ///< (LM also stops when 5 iterations gained < 100 x this)
   double x_tolerance = 1e-5;         ///< stop when a step is shorter than this (prior-std units)
+  /// LM also stops when two accepted steps in a row lowered the objective by less than this many
+  /// units of σ²/(6L) (σ² estimated by the force cost): a change of the weighted χ² = 6L f/σ² below
+  /// this is statistically meaningless (1 is the change of a one-standard-deviation parameter move).
+  double statistical_tolerance = 1e-2;
   std::vector<bool> fit;             ///< which x_j to fit (empty: all touched ones)
   /// Nelder-Mead stops as soon as its best objective is <= this (to measure the effort needed to
   /// reach another solver's optimum); -inf: off.

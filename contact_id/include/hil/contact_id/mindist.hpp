@@ -34,6 +34,7 @@ struct ClipWorkspace {
   std::vector<Vec3> pts[2];
   std::vector<int> start[2];
   std::vector<Vec3> cap;
+  std::vector<double> dist;
 };
 
 /// Penetration of `a` (object 1) and `b` (object 2). Returns false when they do not interfere
@@ -47,6 +48,16 @@ double intersection_centroid(const PosedPolyhedron& a, const PosedPolyhedron& b,
 /// separating-axis candidates (<= 0 when they interfere). Moving either by less than this keeps
 /// them apart.
 double separation_lower_bound(const PosedPolyhedron& a, const PosedPolyhedron& b);
+/// The same with an early exit: returns as soon as the bound found exceeds `stop_above` (the value
+/// returned is then a valid but possibly smaller lower bound, > stop_above); otherwise the full bound.
+double separation_lower_bound(const PosedPolyhedron& a, const PosedPolyhedron& b, double stop_above);
+
+/// `penetration` and `separation_lower_bound` in one separating-axis pass: true with `out` filled
+/// (as `penetration`) when the solids interfere; otherwise false with `gap` >= 0 the lower bound on
+/// their distance (as `separation_lower_bound(a, b, stop_above)`, same early exit; a negative
+/// `stop_above` counts as 0).
+bool penetration_or_gap(const PosedPolyhedron& a, const PosedPolyhedron& b, double stop_above, PairContact& out, double& gap,
+                        ClipWorkspace& ws);
 
 /// Broad phase (bounding spheres, then world boxes): may the two polyhedra be closer than `margin`?
 inline bool near(const PosedPolyhedron& a, const PosedPolyhedron& b, double margin = 0.0) {
