@@ -30,5 +30,6 @@ void add_echo(CLI::App& app);       // bus: print a topic
 void add_replay(CLI::App& app);     // bus: publish a recorded run
 void add_acquire(CLI::App& app);    // the rig service
 void add_import(CLI::App& app);     // marker + force-plate CSV -> run (issue 6)
+void add_diagnose(CLI::App& app);   // the diagnosis (issue 6)
 
 }  // namespace hil::cli

@@ -48,6 +48,7 @@ int main(int argc, char** argv) {
   add_replay(app);
   add_acquire(app);
   add_import(app);
+  add_diagnose(app);
 
   try {
     app.parse(argc, argv);

@@ -1,5 +1,6 @@
 // `hil contact simulate|identify|worker`: contact-parameter identification (issue 5).
 #include <fmt/format.h>
+#include <nlohmann/json.hpp>
 #include <spdlog/spdlog.h>
 
 #include <atomic>
@@ -13,6 +14,7 @@
 #include "../commands.hpp"
 #include "hil/format/error.hpp"
 #include "hil/format/run.hpp"
+#include "hil/diagnose/contact_family.hpp"
 #include "identify.hpp"
 #include "rig_adapter.hpp"
 #include "worker.hpp"
@@ -30,7 +32,33 @@ struct SimulateArgs {
   double force_resolution = -1, moment_resolution = -1, position_resolution = -1, velocity_resolution = -1;
   double force_noise = -1, moment_noise = -1;
   int seed = -1;
+  std::vector<std::string> inject;  ///< hidden effects (diagnosis candidates) drawn with effect_seed
+  unsigned effect_seed = 1;
+  std::string truth_out;
 };
+
+/// The hidden truth of an injected simulation, for the test that checks the diagnosis.
+nlohmann::json effects_json(const hil::diagnose::Effects& e, const cid::ContactModel& m, unsigned seed) {
+  nlohmann::json j;
+  j["effects"] = e.names();
+  j["effect_seed"] = seed;
+  j["K"] = m.K;
+  j["mu"] = m.mu;
+  j["geometric"] = e.geometric;
+  j["compliance"] = nlohmann::json::array();
+  for (int r = 0; r < 6; ++r) {
+    std::vector<double> row;
+    for (int c = 0; c < 6; ++c) row.push_back(e.compliance(r, c));
+    j["compliance"].push_back(row);
+  }
+  j["time_offset_s"] = e.time_offset_s;
+  j["sensor_bias"] = std::vector<double>(e.sensor_bias.data(), e.sensor_bias.data() + 6);
+  j["sensor_gain"] = std::vector<double>(e.sensor_gain.data(), e.sensor_gain.data() + 6);
+  j["viscous_n_s_per_m"] = e.viscous_n_s_per_m;
+  j["damping_n_s_per_m"] = e.damping_n_s_per_m;
+  j["stiffness_exponent"] = e.stiffness_exponent;
+  return j;
+}
 
 int simulate(const SimulateArgs& a) {
   const auto rig = format::load_rig(a.rig);
@@ -52,7 +80,21 @@ int simulate(const SimulateArgs& a) {
   if (a.decimate < 1) throw std::runtime_error("--decimate must be >= 1");
   const Eigen::VectorXd x_true = contact::uncertainty_vector(scene, truth.geometric, a.truth.empty() ? a.rig : a.truth);
   const auto traj = contact::read_trajectory(a.trajectory);
-  const auto sim = cid::simulate(scene, truth.model, x_true, traj.kin, s);
+  std::vector<cid::SimulatedSample> sim;
+  if (a.inject.empty()) {
+    if (!a.truth_out.empty()) throw std::runtime_error("--truth-out needs --inject");
+    sim = cid::simulate(scene, truth.model, x_true, traj.kin, s);
+  } else {
+    hil::diagnose::Effects e;
+    e.geometric = truth.geometric;
+    for (const auto& name : a.inject) hil::diagnose::draw_effect(name, a.effect_seed, scene, e);
+    sim = hil::diagnose::simulate_with_effects(scene, truth.model, e, traj.t, traj.kin, s);
+    if (!a.truth_out.empty()) {
+      std::ofstream f(a.truth_out);
+      f << effects_json(e, truth.model, a.effect_seed).dump(2) << "\n";
+      if (!f) throw std::runtime_error(a.truth_out + ": cannot write");
+    }
+  }
 
   fs::create_directories(a.out);
   format::SampleTable table;
@@ -83,6 +125,7 @@ int simulate(const SimulateArgs& a) {
       a.trajectory, traj.t.size(), rate, a.decimate, a.truth.empty() ? "= the rig's nominal model" : a.truth,
       s.position_resolution_m, s.velocity_resolution_m_per_s, s.force_resolution_n, s.force_noise_n, s.moment_resolution_nm,
       s.moment_noise_nm, s.seed);
+  if (!a.inject.empty()) info.notes += " Hidden effects injected (which ones is kept out of the run).";
   format::write_run_info((fs::path(a.out) / "run.yaml").string(), info);
   fs::copy_file(a.rig, fs::path(a.out) / "rig.yaml", fs::copy_options::overwrite_existing);
   std::cout << fmt::format("wrote run {}: {} samples at {:.4g} Hz, {} in contact (K = {:.4g} N/m, mu = {:.3g})\n", a.out,
@@ -144,6 +187,12 @@ void add_contact(CLI::App& app) {
   sim->add_option("--force-noise", sa.force_noise, "N (Gaussian std)");
   sim->add_option("--moment-noise", sa.moment_noise, "N m (Gaussian std)");
   sim->add_option("--seed", sa.seed, "noise seed");
+  sim->add_option("--inject", sa.inject,
+                  "hide an effect in the data (a diagnosis candidate: geometric_offset, robot_compliance, time_offset, "
+                  "sensor_bias, sensor_gain, viscous_friction, contact_damping, nonlinear_stiffness); repeatable")
+      ->delimiter(',');
+  sim->add_option("--effect-seed", sa.effect_seed, "seed of the injected effects' random magnitudes")->capture_default_str();
+  sim->add_option("--truth-out", sa.truth_out, "write the injected effects (the hidden truth) as JSON");
   sim->callback([] { set_action([] { return simulate(sa); }); });
 
   static IdentifyArgs ia;

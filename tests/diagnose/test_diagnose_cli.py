@@ -1,0 +1,135 @@
+#!/usr/bin/env python3
+"""Runs the real `hil contact simulate --inject` and `hil diagnose` on the press bench: a blind
+diagnosis of a hidden sensor bias (JSON fields, text summary, HTML report), `none` on a clean run,
+the deflection mode on the TIAGo data when ../shared is beside the checkout, and bad input."""
+import json
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+import unittest
+
+HIL, SRC = sys.argv[1], sys.argv[2]
+RIG = os.path.join(SRC, "examples", "rigs", "press_bench.yaml")
+TRAJ = os.path.join(SRC, "examples", "trajectories", "press_slide.csv")
+TIAGO = os.path.join(SRC, "..", "shared", "data", "tiago-suspension", "tiago_xyz_vicon_1640.csv")
+
+
+def hil(*args, timeout=300):
+    return subprocess.run([HIL, *args], capture_output=True, text=True, timeout=timeout)
+
+
+class Diagnose(unittest.TestCase):
+    def setUp(self):
+        self.dir = tempfile.mkdtemp()
+
+    def tearDown(self):
+        shutil.rmtree(self.dir)
+
+    def simulate(self, name, *inject):
+        out = os.path.join(self.dir, name)
+        args = ["contact", "simulate", "--rig", RIG, "--trajectory", TRAJ, "--out", out, "--force-resolution", "0.1",
+                "--force-noise", "0.1", "--moment-resolution", "0.005", "--moment-noise", "0.005", "--seed", "3"]
+        if inject:
+            args += ["--inject", ",".join(inject), "--effect-seed", "5", "--truth-out", out + ".truth.json"]
+        r = hil(*args)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        return out
+
+    def test_help(self):
+        r = hil("diagnose", "--help")
+        self.assertEqual(r.returncode, 0)
+        for opt in ("RUN", "--rig", "--json", "--report", "--candidates", "--folds"):
+            self.assertIn(opt, r.stdout)
+
+    def test_hidden_sensor_bias_is_named_with_its_magnitude(self):
+        run = self.simulate("bias", "sensor_bias")
+        truth = json.load(open(run + ".truth.json"))
+        self.assertEqual(truth["effects"], ["sensor_bias"])
+        with open(os.path.join(run, "run.yaml")) as f:
+            self.assertNotIn("sensor_bias", f.read())  # the run does not give the answer away
+        js, rep = os.path.join(self.dir, "d.json"), os.path.join(self.dir, "report")
+        r = hil("diagnose", run, "--json", js, "--report", rep)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        self.assertIn("cause:           sensor_bias", r.stdout)
+        self.assertIn("[diagnose ", r.stderr)  # progress lines
+        d = json.load(open(js))
+        self.assertEqual(d["cause"]["name"], "sensor_bias")
+        self.assertIsNone(d["second_cause"])
+        self.assertGreater(d["gain_percent"], 50)
+        self.assertLess(d["extended"]["relative_error"], d["nominal"]["relative_error"])
+        for i, c in enumerate(["fx", "fy", "fz", "mx", "my", "mz"]):
+            p = d["cause"]["parameters"]["bias_" + c]
+            self.assertLessEqual(abs(p["value"] - truth["sensor_bias"][i]), 3 * p["std"], c)
+        names = {c["name"] for c in d["candidates"]}
+        self.assertEqual(names, {"geometric_offset", "robot_compliance", "time_offset", "sensor_bias", "sensor_gain",
+                                 "viscous_friction", "contact_damping", "nonlinear_stiffness"})
+        for c in d["candidates"]:
+            for key in ("relative_error", "gain_percent", "bic", "max_pnr", "supported", "verdict"):
+                self.assertIn(key, c)
+        html = open(os.path.join(rep, "index.html")).read()
+        self.assertIn("Candidate ranking", html)
+        self.assertIn("<svg", html)
+
+    def test_clean_run_is_none(self):
+        run = self.simulate("clean")
+        js = os.path.join(self.dir, "d.json")
+        r = hil("diagnose", run, "--json", js, "--quiet")
+        self.assertEqual(r.returncode, 0, r.stderr)
+        d = json.load(open(js))
+        self.assertEqual(d["cause"]["name"], "none")
+        self.assertEqual(d["gain_percent"], 0.0)
+        self.assertEqual(r.stderr, "")
+
+    def test_candidates_option(self):
+        run = self.simulate("bias2", "sensor_bias")
+        r = hil("diagnose", run, "--candidates", "viscous_friction,sensor_bias", "--quiet")
+        self.assertEqual(r.returncode, 0, r.stderr)
+        self.assertIn("cause:           sensor_bias", r.stdout)
+        self.assertNotIn("geometric_offset", r.stdout)
+        r = hil("diagnose", run, "--candidates", "gravity")
+        self.assertNotEqual(r.returncode, 0)
+        self.assertIn("'gravity' is not a candidate", r.stderr)
+
+    def test_bad_input(self):
+        r = hil("diagnose", os.path.join(self.dir, "missing"))
+        self.assertNotEqual(r.returncode, 0)
+        self.assertIn("missing", r.stderr)
+        # A run whose poses never bring the objects into contact.
+        run = self.simulate("far")
+        lines = open(os.path.join(run, "samples.csv")).read().splitlines()
+        head = lines[0].split(",")
+        iz = head.index("pz")
+        out = [lines[0]]
+        for ln in lines[1:]:
+            cells = ln.split(",")
+            cells[iz] = repr(float(cells[iz]) + 0.5)
+            out.append(",".join(cells))
+        open(os.path.join(run, "samples.csv"), "w").write("\n".join(out) + "\n")
+        r = hil("diagnose", run, "--quiet")
+        self.assertNotEqual(r.returncode, 0)
+        self.assertIn("no sample brings the objects into contact", r.stderr)
+        self.assertIn(run, r.stderr)
+
+    @unittest.skipUnless(os.path.exists(TIAGO), "../shared/data/tiago-suspension is not beside this checkout")
+    def test_tiago_deflection_mode(self):
+        run = os.path.join(self.dir, "tiago")
+        r = hil("import", TIAGO, "--config", os.path.join(SRC, "examples", "import", "tiago_suspension.yaml"), "--out", run)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        js = os.path.join(self.dir, "t.json")
+        r = hil("diagnose", run, "--rig", os.path.join(SRC, "examples", "import", "tiago_suspension_rig.yaml"), "--json", js,
+                "--quiet")
+        self.assertEqual(r.returncode, 0, r.stderr)
+        d = json.load(open(js))
+        self.assertEqual(d["mode"], "deflection")
+        self.assertGreater(d["nominal"]["relative_error"], 0.05)  # the base moves: the rigid model is wrong
+        comp = [c for c in d["candidates"] if c["name"] == "robot_compliance"][0]
+        self.assertGreater(comp["gain_percent"], 5)
+        # ... but the compliance that fits best is not positive semi-definite (the yaw slips).
+        self.assertIn("not physical", comp["verdict"])
+        self.assertEqual(d["cause"]["name"], "none")
+
+
+if __name__ == "__main__":
+    unittest.main(argv=[sys.argv[0]], verbosity=2)

@@ -1,0 +1,278 @@
+// The diagnosis' engine, contact family, generator and deflection family on small exact cases.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+#include "hil/diagnose/contact_family.hpp"
+#include "hil/diagnose/deflection_family.hpp"
+#include "hil/diagnose/diagnose.hpp"
+#include "scenes.hpp"
+
+namespace hil::diagnose {
+namespace {
+
+/// y_c(t) = θ_0 sin(2π f t + c) + θ_1, f nonlinear: a small separable family with a known optimum.
+class SineFamily : public Model {
+ public:
+  explicit SineFamily(const Observations& o) : o_(o) {}
+  std::string name() const override { return "sine"; }
+  std::vector<Param> linear() const override { return {{"amplitude", "", 1, false}, {"offset", "", 1, true}}; }
+  std::vector<Param> nonlinear() const override { return {{"frequency", "Hz", 0.1, true, 0.1, 5}}; }
+  std::vector<Eigen::VectorXd> starts() const override { return {Eigen::VectorXd::Constant(1, 1.2)}; }
+  void design(const Eigen::VectorXd& phi, Eigen::MatrixXd& A) const override {
+    A.setZero(static_cast<Eigen::Index>(6 * o_.size()), 2);
+    for (std::size_t k = 0; k < o_.size(); ++k)
+      for (int c = 0; c < 6; ++c) {
+        A(static_cast<Eigen::Index>(6 * k) + c, 0) = std::sin(2 * M_PI * phi(0) * o_.t_s[k] + c);
+        A(static_cast<Eigen::Index>(6 * k) + c, 1) = 1.0;
+      }
+  }
+
+ private:
+  const Observations& o_;
+};
+
+Observations sine_data(double f, double amp, double off, double noise, unsigned seed) {
+  Observations o;
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> g(0, 1);
+  const int n = 400;
+  o.y.resize(n, 6);
+  for (int k = 0; k < n; ++k) {
+    o.t_s.push_back(0.01 * k);
+    for (int c = 0; c < 6; ++c) o.y(k, c) = amp * std::sin(2 * M_PI * f * o.t_s.back() + c) + off + noise * g(rng);
+  }
+  return o;
+}
+
+std::vector<int> all(std::size_t n) {
+  std::vector<int> v(n);
+  for (std::size_t i = 0; i < n; ++i) v[i] = static_cast<int>(i);
+  return v;
+}
+
+TEST(Engine, RecoversASeparableModelExactlyWithoutNoise) {
+  const auto o = sine_data(1.23, 2.5, 0.4, 0.0, 1);
+  SineFamily m(o);
+  const Fit f = fit(m, o, all(o.size()));
+  EXPECT_NEAR(f.phi(0), 1.23, 1e-7);
+  EXPECT_NEAR(f.theta(0), 2.5, 1e-6);
+  EXPECT_NEAR(f.theta(1), 0.4, 1e-6);
+  EXPECT_EQ(f.rank, 3);
+  EXPECT_LT(f.rss, 1e-12);
+}
+
+TEST(Engine, IntervalsCoverTheTruthAndCrossValidationScoresHeldOutData) {
+  const auto o = sine_data(1.23, 2.5, 0.4, 0.05, 2);
+  SineFamily m(o);
+  const Score s = score(m, o);
+  for (const auto& r : s.full.reported) {
+    const double truth = r.name == "frequency" ? 1.23 : r.name == "amplitude" ? 2.5 : 0.4;
+    EXPECT_LT(std::abs(r.value - truth), 4 * r.std) << r.name;
+    EXPECT_GT(r.std, 0.0);
+  }
+  // Held-out error is about the noise (relative to weight 1), training error slightly below.
+  EXPECT_NEAR(s.cv_error, 0.05, 0.01);
+  EXPECT_LE(s.train_error, s.cv_error);
+  EXPECT_TRUE(s.identifiable);
+}
+
+TEST(Engine, TimeBlocksPartitionTheSamplesInOrder) {
+  const auto b = time_blocks(103, 5);
+  ASSERT_EQ(b.size(), 5u);
+  int next = 0;
+  for (const auto& blk : b)
+    for (int k : blk) EXPECT_EQ(k, next++);
+  EXPECT_EQ(next, 103);
+}
+
+TEST(Engine, PairedZIsZeroForEqualPredictionsAndLargeForAConsistentGain) {
+  const auto o = sine_data(1.0, 1.0, 0.0, 0.1, 3);
+  Eigen::MatrixXd truth(static_cast<Eigen::Index>(o.size()), 6), off = truth;
+  for (Eigen::Index k = 0; k < truth.rows(); ++k)
+    for (int c = 0; c < 6; ++c) truth(k, c) = std::sin(2 * M_PI * o.t_s[static_cast<std::size_t>(k)] + c);
+  off = truth.array() + 0.2;
+  EXPECT_EQ(paired_z(o, truth, truth), 0.0);
+  EXPECT_GT(paired_z(o, off, truth), 5.0);
+  EXPECT_LT(paired_z(o, truth, off), -5.0);
+}
+
+// --- the contact family against the generator --------------------------------------------------
+
+ContactData data_of(const test::SceneRun& r, const Effects& e, bool noise = false) {
+  return make_contact_data(r.scene, r.model.v_tm, test::measure(r, e, 1, noise), r.force_scale_n, r.moment_scale_nm);
+}
+
+TEST(ContactFamily, NominalDesignTimesThetaIsTheForwardSimulation) {
+  const auto r = test::scene_run("press_slide");
+  const auto d = data_of(r, {});
+  ContactFamily m(d, {});
+  Fit f;
+  f.theta = r.model.theta();
+  f.phi.resize(0);
+  const Eigen::MatrixXd pred = predict(m, f, d.obs.size());
+  cid::MindistWorkspace ws;
+  std::vector<cid::ContactPoint> cs;
+  double peak = 0;
+  for (std::size_t k = 0; k < d.obs.size(); ++k) {
+    const Eigen::Matrix<double, 6, 1> w = cid::plate_wrench(r.scene, r.model, r.scene.design(), r.kin[k], ws, cs);
+    EXPECT_LT((pred.row(static_cast<Eigen::Index>(k)).transpose() - w).norm(), 1e-9 * (1 + w.norm())) << k;
+    peak = std::max(peak, w.norm());
+  }
+  EXPECT_GT(peak, 10.0);  // the scene is in contact
+}
+
+/// Noise-free recovery: the family with the injected extension fits the generator's data exactly.
+struct Exact {
+  const char* effect;
+  const char* param;
+  double truth;
+  double rel_tol;
+};
+
+class ExactRecovery : public ::testing::TestWithParam<Exact> {};
+
+TEST_P(ExactRecovery, OfTheInjectedParameter) {
+  const auto c = GetParam();
+  const auto r = test::scene_run("press_slide");
+  Effects e;
+  const std::string eff = c.effect;
+  if (eff == "viscous_friction") e.viscous_n_s_per_m = c.truth;
+  if (eff == "contact_damping") e.damping_n_s_per_m = c.truth;
+  if (eff == "sensor_bias") e.sensor_bias(0) = c.truth;
+  if (eff == "sensor_gain") e.sensor_gain(0) = c.truth;
+  if (eff == "nonlinear_stiffness") {
+    e.stiffness_exponent = c.truth;
+    e.delta_ref_m = data_of(r, {}).delta_ref_m;  // the family's reference interference
+  }
+  if (eff == "time_offset") e.time_offset_s = c.truth;
+  if (eff == "geometric_offset") e.geometric["block_top_z"] = c.truth;
+  const auto d = data_of(r, e);
+  ContactFamily m(d, {eff});
+  const Fit f = fit(m, d.obs, all(d.obs.size()));
+  bool found = false;
+  for (const auto& q : f.reported)
+    if (q.name == c.param) {
+      found = true;
+      EXPECT_NEAR(q.value, c.truth, c.rel_tol * std::abs(c.truth)) << c.param;
+    }
+  EXPECT_TRUE(found) << c.param;
+  EXPECT_NEAR(f.reported[0].value, r.model.K, (eff == "time_offset" ? 1e-2 : 1e-6) * r.model.K);
+}
+
+INSTANTIATE_TEST_SUITE_P(Effects, ExactRecovery,
+                         ::testing::Values(Exact{"viscous_friction", "viscous_n_s_per_m", 3000.0, 1e-6},
+                                           Exact{"contact_damping", "damping_n_s_per_m", 4000.0, 1e-6},
+                                           Exact{"sensor_bias", "bias_fx", 3.0, 1e-6},
+                                           Exact{"sensor_gain", "gain_fx", 0.1, 1e-6},
+                                           Exact{"nonlinear_stiffness", "stiffness_exponent", 1.4, 1e-6},
+                                           Exact{"geometric_offset", "block_top_z", 1.5e-4, 1e-4},
+                                           // the generator delays the 50 Hz wrench by interpolation,
+                                           // the family re-evaluates the contact at interpolated poses
+                                           Exact{"time_offset", "time_offset_s", 0.03, 0.1}),
+                         [](const auto& i) { return std::string(i.param.effect); });
+
+TEST(ContactFamily, ComplianceOfTheGeneratorIsSelfConsistent) {
+  // The generator's deflected pose and the load it carries agree (fixed point), and a compliant
+  // robot pushes less hard than a rigid one into the same commanded pose.
+  const auto r = test::scene_run("press_slide");
+  Effects e;
+  e.compliance(2, 2) = 2e-6;
+  const auto rigid = test::measure(r, {}, 1, false);
+  const auto soft = test::measure(r, e, 1, false);
+  double fz_rigid = 0, fz_soft = 0;
+  for (std::size_t k = 0; k < rigid.size(); ++k) {
+    fz_rigid = std::min(fz_rigid, rigid[k].w_fp(2));
+    fz_soft = std::min(fz_soft, soft[k].w_fp(2));
+  }
+  // Springs in series: K_eff = K / (1 + K c).
+  EXPECT_NEAR(fz_soft / fz_rigid, 1.0 / (1.0 + r.model.K * 2e-6), 0.02);
+}
+
+TEST(ContactFamily, UnknownExtensionsAndRunsWithoutContactAreClearErrors) {
+  const auto r = test::scene_run("press_slide");
+  const auto d = data_of(r, {});
+  EXPECT_THROW(ContactFamily(d, {"gravity"}), std::invalid_argument);
+  auto m = test::measure(r, {}, 1, false);
+  for (auto& s : m) s.kin.T_world_ee.translation().z() += 0.5;  // far above the block
+  try {
+    (void)make_contact_data(r.scene, r.model.v_tm, m);
+    FAIL() << "expected an error";
+  } catch (const std::runtime_error& err) {
+    EXPECT_NE(std::string(err.what()).find("no sample brings the objects into contact"), std::string::npos) << err.what();
+  }
+  m = test::measure(r, {}, 1, false);
+  m[7].w_fp(1) = std::nan("");
+  try {
+    (void)make_contact_data(r.scene, r.model.v_tm, m);
+    FAIL() << "expected an error";
+  } catch (const std::runtime_error& err) {
+    EXPECT_NE(std::string(err.what()).find("sample 7"), std::string::npos) << err.what();
+  }
+}
+
+TEST(Generator, DrawsSeededEffectsAndRefusesUnknownOnes) {
+  const auto r = test::scene_run("press_slide");
+  Effects a, b, c;
+  draw_effect("viscous_friction", 5, r.scene, a);
+  draw_effect("viscous_friction", 5, r.scene, b);
+  draw_effect("viscous_friction", 6, r.scene, c);
+  EXPECT_EQ(a.viscous_n_s_per_m, b.viscous_n_s_per_m);
+  EXPECT_NE(a.viscous_n_s_per_m, c.viscous_n_s_per_m);
+  EXPECT_EQ(a.names(), std::vector<std::string>{"viscous_friction"});
+  EXPECT_THROW(draw_effect("magnetism", 1, r.scene, a), std::invalid_argument);
+}
+
+// --- the deflection family ----------------------------------------------------------------------
+
+TEST(DeflectionFamily, NamesACompliantBaseAndNoneForARigidOne) {
+  std::mt19937 rng(4);
+  std::normal_distribution<double> g(0, 1);
+  const int n = 1500;
+  std::vector<double> t;
+  std::vector<cid::Kinematics> kin_soft, kin_rigid;
+  std::vector<Eigen::Matrix<double, 6, 1>> w;
+  Mat6 C = Mat6::Zero();
+  C(3, 4) = C(4, 3) = 0;
+  C(3, 3) = 4e-5;   // rad/(N m): tilt about x under a moment about x
+  C(4, 4) = 2.5e-5;
+  for (int k = 0; k < n; ++k) {
+    const double tk = 0.01 * k;
+    t.push_back(tk);
+    Eigen::Matrix<double, 6, 1> wk;  // plate wrench: weight plus a swinging arm's moment
+    wk << 2 * std::sin(tk), 1.5 * std::cos(0.7 * tk), -700, 40 * std::sin(0.9 * tk), 30 * std::cos(0.4 * tk), 3 * std::sin(tk);
+    w.push_back(wk);
+    // The load the body puts on its support: the plate's wrench (the plate is at the rest position).
+    const Eigen::Matrix<double, 6, 1> load = wk;
+    const Eigen::Matrix<double, 6, 1> dflt = C * load;
+    cid::Kinematics ks, kr;
+    Eigen::Matrix<double, 6, 1> noise;
+    for (int i = 0; i < 6; ++i) noise(i) = (i < 3 ? 1e-5 : 1e-5) * g(rng);
+    ks.T_world_ee.translation() = dflt.head<3>() + noise.head<3>();
+    ks.T_world_ee.linear() = Eigen::AngleAxisd((dflt.tail<3>() + noise.tail<3>()).norm(),
+                                               (dflt.tail<3>() + noise.tail<3>()).normalized()).toRotationMatrix();
+    kr.T_world_ee.translation() = noise.head<3>();
+    kr.T_world_ee.linear() = Eigen::AngleAxisd(noise.tail<3>().norm(), noise.tail<3>().normalized()).toRotationMatrix();
+    kin_soft.push_back(ks);
+    kin_rigid.push_back(kr);
+  }
+  const auto soft = make_deflection_data(t, kin_soft, w, Eigen::Isometry3d::Identity());
+  const auto rigid = make_deflection_data(t, kin_rigid, w, Eigen::Isometry3d::Identity());
+  auto factory = [](const DeflectionData& d) {
+    return [&d](const std::set<std::string>& e) { return std::make_unique<DeflectionFamily>(d, e); };
+  };
+  const auto ds = diagnose(factory(soft), deflection_extensions(), soft.obs, {});
+  EXPECT_EQ(ds.cause, "robot_compliance");
+  EXPECT_GT(ds.gain_percent, 10.0);  // the translations are pure noise here: the gain is in the tilts
+  for (const auto& q : ds.extended->full.reported)
+    if (q.name == "C_rx_rx" || q.name == "C_ry_ry") {
+      const double truth = q.name == "C_rx_rx" ? 4e-5 : 2.5e-5;
+      EXPECT_LT(std::abs(q.value - truth), 3 * q.std) << q.name << " " << q.value << " ± " << q.std;
+    }
+  const auto dr = diagnose(factory(rigid), deflection_extensions(), rigid.obs, {});
+  EXPECT_EQ(dr.cause, "none");
+}
+
+}  // namespace
+}  // namespace hil::diagnose

@@ -1,0 +1,70 @@
+// `hil diagnose RUN`: what the nominal simulation gets wrong, the named cause, the extended model
+// and its held-out gain (issue 6).
+#include <fmt/format.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+
+#include "../commands.hpp"
+#include "hil/format/run.hpp"
+#include "run_diagnosis.hpp"
+
+namespace hil::cli {
+
+namespace {
+
+struct DiagnoseArgs {
+  std::string run, rig, json, report;
+  std::vector<std::string> candidates;
+  int folds = 5;
+  bool quiet = false;
+};
+
+int diagnose_cmd(const DiagnoseArgs& a) {
+  const auto run = format::load_run(a.run, a.rig);
+  diagnose::Options o;
+  o.candidates = a.candidates;
+  o.folds = a.folds;
+  if (o.folds < 2) throw std::runtime_error("--folds must be at least 2");
+  const bool tty = isatty(STDERR_FILENO) != 0;
+  if (!a.quiet)
+    o.progress = [tty](int step, int total, const std::string& what) {
+      if (tty)
+        std::cerr << fmt::format("\r[diagnose {}/{}] {:<60}", step, total, what) << std::flush;
+      else
+        std::cerr << fmt::format("[diagnose {}/{}] {}\n", step, total, what);
+    };
+  const auto r = diagnose::diagnose_run(run, o);
+  if (!a.quiet && tty) std::cerr << "\r" << std::string(80, ' ') << "\r";
+  diagnose::print_summary(std::cout, r);
+  if (!a.json.empty()) {
+    std::ofstream f(a.json);
+    f << diagnose::to_json(r).dump(2) << "\n";
+    if (!f) throw std::runtime_error(a.json + ": cannot write");
+  }
+  if (!a.report.empty()) {
+    diagnose::write_report(a.report, r);
+    std::cout << "report: " << (std::filesystem::path(a.report) / "index.html").string() << "\n";
+  }
+  return 0;
+}
+
+}  // namespace
+
+void add_diagnose(CLI::App& app) {
+  static DiagnoseArgs da;
+  auto* d = app.add_subcommand("diagnose",
+                               "What the nominal model gets wrong on a run, the named cause, the extended model and its held-out gain");
+  d->add_option("RUN", da.run, "run folder")->required();
+  d->add_option("--rig", da.rig, "rig file (default: the run's rig.yaml)");
+  d->add_option("--json", da.json, "write the diagnosis as JSON");
+  d->add_option("--report", da.report, "write an HTML report into this folder");
+  d->add_option("--candidates", da.candidates, "only these candidate causes (default: all that apply)")->delimiter(',');
+  d->add_option("--folds", da.folds, "blocks of the cross-validation over time")->capture_default_str();
+  d->add_flag("--quiet", da.quiet, "no progress lines");
+  d->callback([] { set_action([] { return diagnose_cmd(da); }); });
+}
+
+}  // namespace hil::cli

@@ -1,0 +1,127 @@
+#pragma once
+/// \file The contact model family of the diagnosis: the nominal surface-compliance model (contact
+/// paper eq. 2-7, θ = (K, μK)) and its candidate extensions, and the hidden-effect generator that
+/// injects the same effects into a simulation.
+///
+/// Every extension is documented with its parameterisation (docs/diagnosis.md):
+///   geometric_offset    φ: the rig's observable feature uncertainties x_u - x_u^d (m, rad)
+///   robot_compliance    φ: coordinates of a symmetric 6x6 Cartesian compliance C (ee frame) on its
+///                          identifiable directions; the true ee pose is T_meas Exp(C w_ee), w_ee the
+///                          measured contact wrench on the held object about the ee origin, ee frame
+///   time_offset         φ: τ (s), the wrench stream lags the pose stream: w_meas(t) = w(t - τ), the
+///                          model evaluated on the poses interpolated at t - τ
+///   sensor_bias         θ: b (N, N m), added to each plate component
+///   sensor_gain         φ: γ_c, w_meas,c = (1 + γ_c) w_c for the 5 components other than the
+///                          reference (the largest; its gain is absorbed by K)
+///   viscous_friction    θ: c_v (N s/m), per sliding contact a tangential force c_v |v_t| e_t
+///   contact_damping     θ: D (N s/m), per contact a normal force D δ̇ e_n (δ̇ the penetration rate)
+///   nonlinear_stiffness φ: p - 1, normal force K δ_ref (δ/δ_ref)^p (friction scales with it)
+/// Pure numerics on hil::contact_id: no I/O.
+#include <Eigen/Geometry>
+#include <map>
+#include <optional>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "hil/contact_id/identification.hpp"
+#include "hil/contact_id/model.hpp"
+#include "hil/diagnose/engine.hpp"
+
+namespace hil::diagnose {
+
+namespace cid = hil::contact_id;
+using Vec6 = Eigen::Matrix<double, 6, 1>;
+using Mat6 = Eigen::Matrix<double, 6, 6>;
+
+/// The candidate causes of the contact family, in the order they are reported.
+const std::vector<std::string>& contact_extensions();
+/// One sentence on what each extension means physically.
+std::string describe_extension(const std::string& name);
+
+/// The measured run in the form the contact family needs.
+struct ContactData {
+  cid::Scene scene;
+  double v_tm = 1e-3;                       ///< sticking threshold, m/s
+  std::vector<cid::Kinematics> kin;         ///< measured ee pose and twist per sample
+  Observations obs;                         ///< plate wrench (fp frame, about the fp origin)
+  std::vector<std::vector<cid::ContactPoint>> contacts;  ///< per sample, nominal geometry and measured pose
+  double delta_ref_m = 1e-4;                ///< median interference in contact (nonlinear_stiffness)
+  std::vector<int> fit_uncertainties;       ///< observable x_u (geometric_offset fits these)
+  std::vector<std::string> unfit_uncertainties;  ///< and why the others are not fitted
+  std::size_t samples_in_contact = 0;
+  /// Per plate component, the sensor's quantisation step seen in the data (0: not quantised). A
+  /// constant offset cannot be known better than step/√12, whatever the number of samples.
+  Vec6 resolution = Vec6::Zero();
+};
+
+/// \param force_scale_n, moment_scale_nm the weights' scales (0: the largest measured component).
+/// \throws std::runtime_error if no sample brings the objects into contact.
+ContactData make_contact_data(const cid::Scene& scene, double v_tm, const std::vector<cid::Measurement>& m,
+                              double force_scale_n = 0.0, double moment_scale_nm = 0.0);
+
+/// The nominal contact model with a set of extensions.
+class ContactFamily : public Model {
+ public:
+  ContactFamily(const ContactData& d, std::set<std::string> extensions);
+  std::string name() const override;
+  std::vector<Param> linear() const override { return linear_; }
+  std::vector<Param> nonlinear() const override { return nonlinear_; }
+  std::vector<Eigen::VectorXd> starts() const override;
+  void design(const Eigen::VectorXd& phi, Eigen::MatrixXd& A) const override;
+  std::vector<Reported> report(const Fit& f) const override;
+  const std::set<std::string>& extensions() const { return ext_; }
+  /// The compliance directions (21 symmetric coordinates -> 6x6) kept for robot_compliance.
+  const std::vector<Mat6>& compliance_basis() const { return basis_; }
+
+ private:
+  bool has(const std::string& e) const { return ext_.count(e) > 0; }
+  void columns(const std::vector<cid::ContactPoint>& cs, const cid::Kinematics& k, double p, Eigen::Ref<Eigen::MatrixXd> out) const;
+  const ContactData& d_;
+  std::set<std::string> ext_;
+  std::vector<Param> linear_, nonlinear_;
+  std::vector<Mat6> basis_;
+  int gain_ref_ = 2;
+  // offsets into φ
+  int i_geo_ = -1, i_cmp_ = -1, i_exp_ = -1, i_tau_ = -1, i_gain_ = -1;
+  int j_visc_ = -1, j_damp_ = -1, j_bias_ = -1;
+  std::vector<Mat6> all_basis() const;
+  /// The measured kinematics interpolated at time t (slerp; held at the ends).
+  cid::Kinematics kinematics_at(double t) const;
+};
+
+/// The wrench on the plate (fp frame, about the fp origin) of a force f (world) applied to object 1
+/// at the point p (world): the plate feels -f at p.
+Vec6 plate_wrench_of(const Eigen::Isometry3d& T_world_fp, const Eigen::Vector3d& f_world, const Eigen::Vector3d& p_world);
+
+// ---------------------------------------------------------------------------------------------
+// The hidden-effect generator.
+
+/// Effects injected into a simulation (zero / one = absent). Same parameterisations as above.
+struct Effects {
+  std::map<std::string, double> geometric;   ///< x_u true values by name (others at design)
+  Mat6 compliance = Mat6::Zero();            ///< robot compliance C (ee frame; m/N, rad/N, rad/(N m))
+  double time_offset_s = 0.0;
+  Vec6 sensor_bias = Vec6::Zero();
+  Vec6 sensor_gain = Vec6::Zero();           ///< γ per component
+  double viscous_n_s_per_m = 0.0;
+  double damping_n_s_per_m = 0.0;
+  double stiffness_exponent = 1.0;
+  double delta_ref_m = 1e-4;
+  std::vector<std::string> names() const;    ///< the effects present
+};
+
+/// Draws an effect of the named kind with a seeded random magnitude, sized to stand well above the
+/// sensor's resolution on the scene (the test knows the truth, the diagnosis does not).
+/// \throws std::invalid_argument on an unknown name.
+void draw_effect(const std::string& name, unsigned seed, const cid::Scene& scene, Effects& e);
+
+/// Forward simulation with effects: for each true (commanded) kinematics, the plate wrench of the
+/// extended model; the measured kinematics are the commanded ones (the pose the robot reports).
+/// `t_s` gives the times (for time_offset); the sensor model quantises and adds noise.
+std::vector<cid::SimulatedSample> simulate_with_effects(const cid::Scene& s, const cid::ContactModel& m,
+                                                        const Effects& e, const std::vector<double>& t_s,
+                                                        const std::vector<cid::Kinematics>& truth,
+                                                        const cid::SensorModel& sensor);
+
+}  // namespace hil::diagnose

@@ -1,0 +1,107 @@
+#pragma once
+/// \file Naming the cause: every candidate extension is fitted and scored on held-out data
+/// (blocked cross-validation over time), by an information criterion (BIC) and by practical
+/// identifiability (parameter-to-noise ratio >= 5, the stiffness paper's G1+). The named cause is
+/// the best-supported extension; greedy forward selection then names a second cause when one
+/// remains; `none` when no extension beats the nominal model beyond the noise.
+#include <functional>
+#include <map>
+#include <memory>
+#include <optional>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "hil/diagnose/engine.hpp"
+
+namespace hil::diagnose {
+
+/// Where and how the nominal model's residuals concentrate.
+struct ResidualAnalysis {
+  Eigen::Matrix<double, 6, 1> rms = Eigen::Matrix<double, 6, 1>::Zero();           ///< physical units
+  Eigen::Matrix<double, 6, 1> relative_rms = Eigen::Matrix<double, 6, 1>::Zero();  ///< weighted
+  int worst_component = 0;
+  /// Share of the squared (weighted) residual in each of 10 equal time windows.
+  std::vector<double> window_start_s, window_share;
+  /// Per state label (e.g. "2 contacts, sliding"): samples and relative error.
+  struct State {
+    std::string label;
+    int samples = 0;
+    double relative_error = 0.0;
+    double share = 0.0;  ///< of the squared residual
+  };
+  std::vector<State> states;
+  /// Ljung-Box test on the worst component's residual (20 lags): white when Q < its 99 % bound.
+  double ljung_box_q = 0.0, ljung_box_bound = 0.0;
+  bool white = true;
+  std::vector<double> autocorrelation;  ///< lags 0..20 of the worst component
+  /// Cross-correlation of each component's residual with each candidate signal (max over ±10 lags).
+  struct Correlation {
+    std::string signal, component;
+    double correlation = 0.0;
+    int lag = 0;  ///< samples; positive: the residual follows the signal
+  };
+  std::vector<Correlation> correlations;  ///< sorted by |correlation|, strongest first
+};
+
+/// Per-sample context for the analysis: state labels and candidate signals.
+struct Context {
+  std::vector<std::string> state;                       ///< per sample (may be empty)
+  std::map<std::string, std::vector<double>> signals;   ///< per sample
+};
+
+ResidualAnalysis analyse_residuals(const Observations& obs, const Eigen::MatrixXd& prediction, const Context& ctx);
+
+struct DiagnoseOptions {
+  CvOptions cv;
+  double min_gain = 0.02;     ///< relative held-out error reduction an extension must bring (2 %)
+  /// and its consistency: the paired, autocorrelation-robust z of the per-sample error reduction (a
+  /// gain carried by a few large residuals alone, e.g. an extension absorbing outliers, has z < 1)
+  double min_z = 1.0;
+  double min_pnr = 5.0;       ///< practical identifiability (G1+)
+  /// and its size: the held-out mean squared (weighted) error must fall by at least this fraction
+  /// of the measurement noise variance (estimated from the nominal residual's first differences),
+  /// so that effects far below the sensor's resolution are not named however precisely fitted.
+  double min_noise_fraction = 0.25;
+  int second_candidates = 8;  ///< greedy second step: the best single candidates tried with the cause
+};
+
+struct CandidateResult {
+  std::string name;
+  Score score;
+  double gain_percent = 0.0;  ///< held-out error reduction against the model it extends
+  double z = 0.0;             ///< significance of that reduction
+  double noise_fraction = 0.0;  ///< held-out MSE reduction over the noise variance
+  bool supported = false;
+  std::string verdict;        ///< why (not)
+};
+
+struct Diagnosis {
+  Score nominal;
+  double noise_relative = 0.0;  ///< the measurement noise (weighted rms) estimated from the residual's differences
+  std::vector<CandidateResult> candidates;  ///< ranked: supported first, then by held-out error
+  std::string cause = "none";
+  std::string second_cause;                 ///< empty: none
+  std::vector<CandidateResult> second_step;
+  std::optional<Score> extended;            ///< the nominal model with the cause (and second cause)
+  double gain_percent = 0.0;                ///< held-out: 100 (1 - extended / nominal)
+  ResidualAnalysis nominal_residuals, extended_residuals;
+  double seconds = 0.0;
+};
+
+using ModelFactory = std::function<std::unique_ptr<Model>(const std::set<std::string>&)>;
+/// Progress: (step, total, what).
+using Progress = std::function<void(int, int, const std::string&)>;
+
+Diagnosis diagnose(const ModelFactory& make, const std::vector<std::string>& candidates, const Observations& obs,
+                   const Context& ctx, const DiagnoseOptions& o = {}, const Progress& progress = {});
+
+/// Paired comparison of held-out predictions: the mean reduction of the per-sample squared weighted
+/// error over its autocorrelation-robust (Newey-West) standard error.
+/// The white-noise level of a residual (weighted rms): von Neumann's first-difference estimator,
+/// insensitive to slowly varying model error.
+double noise_level(const Observations& obs, const Eigen::MatrixXd& prediction);
+
+double paired_z(const Observations& obs, const Eigen::MatrixXd& reference, const Eigen::MatrixXd& candidate);
+
+}  // namespace hil::diagnose

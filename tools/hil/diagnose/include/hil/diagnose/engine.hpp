@@ -1,0 +1,123 @@
+#pragma once
+/// \file The model-selection engine of the diagnosis: separable model families, their fit by
+/// variable projection, blocked cross-validation, information criteria and practical
+/// identifiability (parameter-to-noise ratio, stiffness paper eq. 10).
+///
+/// A model family predicts 6 components per sample (a wrench or a deflection) as A(φ) θ: θ enters
+/// linearly (solved by least squares on QR/SVD for each φ), φ nonlinearly (Levenberg-Marquardt on
+/// the projected residual, forward-difference Jacobian). Rows are weighted per component (1/scale),
+/// so residuals are relative errors. Pure numerics: no I/O.
+#include <Eigen/Core>
+#include <cmath>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace hil::diagnose {
+
+/// The measured outputs: 6 components per sample.
+struct Observations {
+  std::vector<double> t_s;                         ///< sample times, s (increasing)
+  Eigen::MatrixXd y;                               ///< N x 6, physical units
+  Eigen::Matrix<double, 6, 1> weight = Eigen::Matrix<double, 6, 1>::Ones();  ///< 1 / scale per component
+  std::vector<std::string> component{"fx", "fy", "fz", "mx", "my", "mz"};
+  std::vector<std::string> unit{"N", "N", "N", "N m", "N m", "N m"};
+  std::size_t size() const { return t_s.size(); }
+};
+
+/// One parameter of a family.
+struct Param {
+  std::string name;
+  std::string unit;
+  double scale = 1.0;       ///< typical magnitude: finite-difference steps, LM scaling
+  bool extension = false;   ///< belongs to the extension (PNR-checked), not to the nominal model
+  double lower = -1e300, upper = 1e300;  ///< bounds (nonlinear parameters only)
+};
+
+/// A reported (possibly derived) parameter with its standard deviation.
+struct Reported {
+  std::string name, unit;
+  double value = 0.0, std = 0.0;
+  bool extension = false;
+  double nominal = 0.0;  ///< the value under the nominal model (the PNR measures the distance from it)
+  /// Parameter-to-noise ratio |value - nominal| / std (stiffness paper eq. 10).
+  double pnr() const {
+    const double d = std::abs(value - nominal);
+    return std > 0 ? d / std : (d != 0 ? 1e300 : 0.0);
+  }
+};
+
+struct Fit;
+
+/// A separable model family: prediction = A(φ) θ, 6 rows per sample (row 6k + c).
+class Model {
+ public:
+  virtual ~Model() = default;
+  virtual std::string name() const = 0;
+  virtual std::vector<Param> linear() const = 0;
+  virtual std::vector<Param> nonlinear() const { return {}; }
+  /// Starting points for φ (the best by projected cost starts LM). Default: φ = 0.
+  virtual std::vector<Eigen::VectorXd> starts() const;
+  /// A(φ) in physical units, 6N x linear().size(). Must be deterministic.
+  virtual void design(const Eigen::VectorXd& phi, Eigen::MatrixXd& A) const = 0;
+  /// The parameters people read (e.g. K and μ from θ = (K, μK)); default: θ and φ as they are.
+  virtual std::vector<Reported> report(const Fit& f) const;
+  /// Physical validity of fitted parameters (e.g. a compliance must be positive semi-definite):
+  /// empty when valid, else why not. Default: valid.
+  virtual std::string check(const Fit&) const { return ""; }
+};
+
+struct Fit {
+  Eigen::VectorXd theta, phi;
+  Eigen::MatrixXd cov;          ///< of (θ, φ): σ² (JᵀJ)⁺ at the optimum, times variance_inflation
+  double variance_inflation = 1.0;  ///< long-run variance factor of the autocorrelated residuals (>= 1)
+  int rank = 0;                 ///< numerical rank of J (θ and φ columns)
+  int parameters = 0;           ///< θ + φ
+  double rss = 0.0;             ///< weighted residual sum of squares over the fitted rows
+  double sigma2 = 0.0;          ///< rss / (rows - rank)
+  long rows = 0;
+  int evaluations = 0;          ///< designs computed
+  bool converged = true;
+  std::vector<Reported> reported;
+  std::string invalid;          ///< why the fitted parameters are not physical (empty: they are)
+};
+
+struct FitOptions {
+  int max_iterations = 40;
+  double tolerance = 1e-6;      ///< relative cost decrease that ends LM
+};
+
+/// Fits `m` on the samples `train` (indices into obs). \throws std::runtime_error if the design is zero.
+Fit fit(const Model& m, const Observations& obs, const std::vector<int>& train, const FitOptions& o = {});
+/// N x 6 prediction of the fitted model on every sample.
+Eigen::MatrixXd predict(const Model& m, const Fit& f, std::size_t samples);
+
+/// sqrt(mean((w (y - ŷ))²)) over the rows of `samples`: the contact paper's mean relative error.
+double relative_error(const Observations& obs, const Eigen::MatrixXd& prediction, const std::vector<int>& samples);
+
+struct CvOptions {
+  int folds = 5;                ///< contiguous time blocks
+  int gap_samples = 5;          ///< samples either side of a test block left out of training
+  FitOptions fit;
+};
+
+/// The score of one model.
+struct Score {
+  std::string model;
+  Fit full;                     ///< fitted on every sample (parameters, intervals)
+  Eigen::MatrixXd cv_prediction;  ///< N x 6, each block predicted by the fit on the others
+  double cv_error = 0.0;        ///< held-out relative error (blocked CV)
+  double train_error = 0.0;     ///< relative error of the full fit on all samples
+  double bic = 0.0, aic = 0.0;  ///< n ln(rss/n) + k ln(n) | + 2k, n weighted rows, k = rank
+  double min_extension_pnr = 0.0;   ///< smallest PNR over the identifiable extension parameters
+  double max_extension_pnr = 0.0;
+  bool identifiable = false;    ///< some extension parameter has PNR >= 5 (G1+)
+  double seconds = 0.0;
+};
+
+Score score(const Model& m, const Observations& obs, const CvOptions& o = {});
+
+/// The sample indices of the blocked cross-validation folds (contiguous blocks).
+std::vector<std::vector<int>> time_blocks(std::size_t samples, int folds);
+
+}  // namespace hil::diagnose

@@ -1,0 +1,39 @@
+#pragma once
+/// \file `hil diagnose` on a run: the model family from the rig (contact scene -> contact family;
+/// no contact model -> deflection family), the diagnosis, and its outputs (text, JSON, HTML).
+#include <nlohmann/json.hpp>
+#include <memory>
+#include <ostream>
+#include <string>
+
+#include "hil/diagnose/contact_family.hpp"
+#include "hil/diagnose/deflection_family.hpp"
+#include "hil/diagnose/diagnose.hpp"
+#include "hil/format/run.hpp"
+
+namespace hil::cli::diagnose {
+
+struct Options {
+  std::vector<std::string> candidates;  ///< empty: all that apply
+  int folds = 5;
+  hil::diagnose::Progress progress;
+};
+
+struct RunDiagnosis {
+  std::string run_name, mode;  ///< mode: "contact" or "deflection"
+  std::unique_ptr<hil::diagnose::ContactData> contact;
+  std::unique_ptr<hil::diagnose::DeflectionData> deflection;
+  hil::diagnose::Context context;
+  hil::diagnose::Diagnosis result;
+  std::vector<std::string> notes;
+  const hil::diagnose::Observations& obs() const { return contact ? contact->obs : deflection->obs; }
+};
+
+/// \throws format::FormatError / std::runtime_error naming the run on bad input.
+RunDiagnosis diagnose_run(const format::Run& run, const Options& o);
+
+void print_summary(std::ostream& out, const RunDiagnosis& r);
+nlohmann::json to_json(const RunDiagnosis& r);
+void write_report(const std::string& dir, const RunDiagnosis& r);
+
+}  // namespace hil::cli::diagnose

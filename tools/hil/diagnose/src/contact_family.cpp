@@ -1,0 +1,535 @@
+#include "hil/diagnose/contact_family.hpp"
+
+#include <Eigen/SVD>
+#include <algorithm>
+#include <cmath>
+#include <random>
+#include <stdexcept>
+
+namespace hil::diagnose {
+
+namespace {
+
+using Vec3 = Eigen::Vector3d;
+
+// Typical sizes of the compliance entries: 1 µm/N translational, 10 µrad/N coupling, 0.1 mrad/(N m)
+// rotational; the identifiable directions are chosen in these units.
+double compliance_scale(int i, int j) {
+  const bool ti = i < 3, tj = j < 3;
+  if (ti && tj) return 1e-6;
+  if (!ti && !tj) return 1e-4;
+  return 1e-5;
+}
+
+Eigen::Isometry3d deflect(const Eigen::Isometry3d& T, const Vec6& d) {
+  Eigen::Isometry3d D = Eigen::Isometry3d::Identity();
+  const double a = d.tail<3>().norm();
+  if (a > 0) D.linear() = Eigen::AngleAxisd(a, d.tail<3>() / a).toRotationMatrix();
+  D.translation() = d.head<3>();
+  return T * D;
+}
+
+double quantise(double v, double step) { return step > 0 ? step * std::round(v / step) : v; }
+
+/// Linear interpolation of the rows of a per-sample signal at time t (clamped at the ends).
+template <class Get>
+void interpolate(const std::vector<double>& t, double tq, Get&& get) {
+  const auto it = std::upper_bound(t.begin(), t.end(), tq);
+  if (it == t.begin()) return get(0, 0, 0.0);
+  if (it == t.end()) return get(t.size() - 1, t.size() - 1, 0.0);
+  const std::size_t j1 = static_cast<std::size_t>(it - t.begin()), j0 = j1 - 1;
+  const double a = (tq - t[j0]) / (t[j1] - t[j0]);
+  get(j0, j1, a);
+}
+
+}  // namespace
+
+const std::vector<std::string>& contact_extensions() {
+  static const std::vector<std::string> names{"geometric_offset", "robot_compliance", "time_offset",
+                                              "sensor_bias",      "sensor_gain",      "viscous_friction",
+                                              "contact_damping",  "nonlinear_stiffness"};
+  return names;
+}
+
+std::string describe_extension(const std::string& n) {
+  if (n == "geometric_offset") return "the contact features are shifted or turned from their design (x_u)";
+  if (n == "robot_compliance") return "the end effector deflects under the contact load (6x6 Cartesian compliance)";
+  if (n == "time_offset") return "the wrench stream is delayed against the pose stream";
+  if (n == "sensor_bias") return "the force plate has a constant offset per component";
+  if (n == "sensor_gain") return "the force plate's scale differs between components";
+  if (n == "viscous_friction") return "the friction force grows with the sliding speed";
+  if (n == "contact_damping") return "the normal force grows with the penetration rate";
+  if (n == "nonlinear_stiffness") return "the normal force is a power of the interference (Hertz-like)";
+  if (n == "none") return "no extension predicts held-out data better than the nominal model beyond the noise";
+  return "";
+}
+
+Vec6 plate_wrench_of(const Eigen::Isometry3d& T_world_fp, const Vec3& f, const Vec3& p) {
+  // The plate feels -f applied at p; moment about the plate origin, both in the plate frame.
+  const Vec3 o = T_world_fp.translation();
+  Vec6 w;
+  w.head<3>() = T_world_fp.linear().transpose() * (-f);
+  w.tail<3>() = T_world_fp.linear().transpose() * (p - o).cross(-f);
+  return w;
+}
+
+ContactData make_contact_data(const cid::Scene& scene, double v_tm, const std::vector<cid::Measurement>& m,
+                              double force_scale_n, double moment_scale_nm) {
+  ContactData d;
+  d.scene = scene;
+  d.v_tm = v_tm;
+  const std::size_t n = m.size();
+  if (n < 10) throw std::runtime_error("the run has " + std::to_string(n) + " samples: too few to diagnose");
+  d.obs.t_s.resize(n);
+  d.obs.y.resize(static_cast<Eigen::Index>(n), 6);
+  d.kin.resize(n);
+  d.contacts.resize(n);
+  const Eigen::VectorXd xd = scene.design();
+  cid::MindistWorkspace ws;
+  std::vector<double> deltas;
+  double fmax = 0.0, mmax = 0.0;
+  for (std::size_t k = 0; k < n; ++k) {
+    if (!m[k].w_fp.allFinite() || !m[k].kin.T_world_ee.matrix().allFinite() || !std::isfinite(m[k].t_s))
+      throw std::runtime_error("sample " + std::to_string(k) + " (t = " + std::to_string(m[k].t_s) + " s): non-finite value");
+    if (k > 0 && !(m[k].t_s > m[k - 1].t_s))
+      throw std::runtime_error("sample " + std::to_string(k) + ": time does not increase");
+    d.obs.t_s[k] = m[k].t_s;
+    d.obs.y.row(static_cast<Eigen::Index>(k)) = m[k].w_fp.transpose();
+    d.kin[k] = m[k].kin;
+    cid::mindist(scene, m[k].kin, xd, v_tm, d.contacts[k], ws);
+    if (!d.contacts[k].empty()) ++d.samples_in_contact;
+    for (const auto& c : d.contacts[k]) deltas.push_back(c.delta);
+    fmax = std::max(fmax, m[k].w_fp.head<3>().cwiseAbs().maxCoeff());
+    mmax = std::max(mmax, m[k].w_fp.tail<3>().cwiseAbs().maxCoeff());
+  }
+  if (d.samples_in_contact == 0)
+    throw std::runtime_error("no sample brings the objects into contact under the nominal geometry: nothing to diagnose");
+  for (int c = 0; c < 6; ++c) {
+    std::vector<double> v(d.obs.y.col(c).data(), d.obs.y.col(c).data() + n);
+    std::sort(v.begin(), v.end());
+    v.erase(std::unique(v.begin(), v.end()), v.end());
+    double step = 0.0;
+    for (std::size_t i = 1; i < v.size(); ++i) {
+      const double g = v[i] - v[i - 1];
+      if (g > 1e-12 * std::max(1.0, std::abs(v[i])) && (step == 0.0 || g < step)) step = g;
+    }
+    // Quantised: few distinct values, all on a grid of that step.
+    if (v.size() < n / 2) d.resolution(c) = step;
+  }
+  std::nth_element(deltas.begin(), deltas.begin() + static_cast<long>(deltas.size() / 2), deltas.end());
+  d.delta_ref_m = deltas[deltas.size() / 2];
+  const double fs = force_scale_n > 0 ? force_scale_n : (fmax > 0 ? fmax : 1.0);
+  const double ms = moment_scale_nm > 0 ? moment_scale_nm : (mmax > 0 ? mmax : 1.0);
+  d.obs.weight << 1 / fs, 1 / fs, 1 / fs, 1 / ms, 1 / ms, 1 / ms;
+
+  // Which feature uncertainties the data can inform (contact paper sec. 7.2.1).
+  if (!scene.uncertainties.empty()) {
+    try {
+      cid::ContactProblem p(scene, m);
+      const auto obs = cid::analyse_observability(p, xd);
+      for (int j = 0; j < p.uncertainties(); ++j) {
+        const auto& name = scene.uncertainties[static_cast<std::size_t>(j)].name;
+        const bool unobs = std::find(obs.unobservable.begin(), obs.unobservable.end(), name) != obs.unobservable.end();
+        const bool weak = std::find(obs.weak.begin(), obs.weak.end(), name) != obs.weak.end();
+        if (unobs || weak)
+          d.unfit_uncertainties.push_back(name + (unobs ? " (unobservable)" : " (weakly observable)"));
+        else
+          d.fit_uncertainties.push_back(j);
+      }
+    } catch (const std::exception& e) {
+      d.unfit_uncertainties.push_back(std::string("all (") + e.what() + ")");
+    }
+  }
+  return d;
+}
+
+std::vector<Mat6> ContactFamily::all_basis() const {
+  std::vector<Mat6> b;
+  for (int i = 0; i < 6; ++i)
+    for (int j = i; j < 6; ++j) {
+      Mat6 E = Mat6::Zero();
+      E(i, j) = E(j, i) = compliance_scale(i, j);
+      b.push_back(E);
+    }
+  return b;
+}
+
+ContactFamily::ContactFamily(const ContactData& d, std::set<std::string> extensions) : d_(d), ext_(std::move(extensions)) {
+  for (const auto& e : ext_)
+    if (std::find(contact_extensions().begin(), contact_extensions().end(), e) == contact_extensions().end())
+      throw std::invalid_argument("unknown extension '" + e + "'");
+  linear_.push_back({"K", "N/m", 1e5, false});
+  linear_.push_back({"muK", "N/m", 1e4, false});
+  if (has("viscous_friction")) {
+    j_visc_ = static_cast<int>(linear_.size());
+    linear_.push_back({"viscous_n_s_per_m", "N s/m", 100, true});
+  }
+  if (has("contact_damping")) {
+    j_damp_ = static_cast<int>(linear_.size());
+    linear_.push_back({"damping_n_s_per_m", "N s/m", 100, true});
+  }
+  if (has("sensor_bias")) {
+    j_bias_ = static_cast<int>(linear_.size());
+    for (int c = 0; c < 6; ++c)
+      linear_.push_back({"bias_" + d.obs.component[static_cast<std::size_t>(c)], d.obs.unit[static_cast<std::size_t>(c)], 1, true});
+  }
+  const double dt = (d.obs.t_s.back() - d.obs.t_s.front()) / static_cast<double>(d.obs.size() - 1);
+  if (has("geometric_offset")) {
+    if (d.fit_uncertainties.empty())
+      throw std::runtime_error("geometric_offset: the rig declares no observable feature uncertainty");
+    i_geo_ = static_cast<int>(nonlinear_.size());
+    for (int j : d.fit_uncertainties) {
+      const auto& u = d.scene.uncertainties[static_cast<std::size_t>(j)];
+      const bool rot = u.kind == cid::Uncertainty::Kind::rotation;
+      const double s = u.prior_std > 0 ? u.prior_std : (rot ? 1e-3 : 1e-4);
+      nonlinear_.push_back({u.name, rot ? "rad" : "m", s, true, -50 * s, 50 * s});
+    }
+  }
+  if (has("robot_compliance")) {
+    i_cmp_ = static_cast<int>(nonlinear_.size());
+    // Reduce the 21 symmetric coordinates to the directions the data can see: the SVD of the
+    // Jacobian of the projected residual at C = 0 (θ projected out, so what K absorbs is dropped).
+    basis_ = all_basis();
+    std::vector<int> all(d.obs.size());
+    for (std::size_t k = 0; k < all.size(); ++k) all[k] = static_cast<int>(k);
+    auto projected = [&](const Eigen::VectorXd& c) {
+      Eigen::MatrixXd A;
+      ContactFamily tmp(d, {});
+      tmp.basis_ = basis_;
+      tmp.i_cmp_ = 0;
+      tmp.ext_ = {"robot_compliance"};
+      tmp.design(c, A);
+      Eigen::VectorXd b(A.rows());
+      Eigen::MatrixXd Aw = A;
+      for (Eigen::Index r = 0; r < A.rows(); ++r) {
+        const double w = d.obs.weight(r % 6);
+        b(r) = w * d.obs.y(r / 6, r % 6);
+        Aw.row(r) *= w;
+      }
+      Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> cod(Aw);
+      return Eigen::VectorXd(b - Aw * cod.solve(b));
+    };
+    const Eigen::VectorXd c0 = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(basis_.size()));
+    const Eigen::VectorXd r0 = projected(c0);
+    Eigen::MatrixXd J(r0.size(), c0.size());
+    for (Eigen::Index j = 0; j < c0.size(); ++j) {
+      Eigen::VectorXd c = c0;
+      c(j) = 1e-2;
+      J.col(j) = (projected(c) - r0) / 1e-2;
+    }
+    Eigen::JacobiSVD<Eigen::MatrixXd> svd(J, Eigen::ComputeThinV);
+    const auto full = basis_;
+    basis_.clear();
+    const Eigen::VectorXd sv = svd.singularValues();
+    for (Eigen::Index i = 0; i < sv.size() && i < 6; ++i) {
+      if (!(sv(i) > 0.05 * sv(0))) break;
+      Mat6 B = Mat6::Zero();
+      for (Eigen::Index j = 0; j < c0.size(); ++j) B += svd.matrixV()(j, i) * full[static_cast<std::size_t>(j)];
+      basis_.push_back(B);
+    }
+    for (std::size_t i = 0; i < basis_.size(); ++i)
+      nonlinear_.push_back({"compliance_c" + std::to_string(i + 1), "", 1.0, true, -100, 100});
+  }
+  if (has("nonlinear_stiffness")) {
+    i_exp_ = static_cast<int>(nonlinear_.size());
+    nonlinear_.push_back({"stiffness_exponent_minus_1", "", 0.1, true, -0.7, 2.0});
+  }
+  if (has("time_offset")) {
+    i_tau_ = static_cast<int>(nonlinear_.size());
+    const double lim = std::max(20 * dt, 0.1);
+    nonlinear_.push_back({"time_offset_s", "s", dt, true, -lim, lim});
+  }
+  if (has("sensor_gain")) {
+    i_gain_ = static_cast<int>(nonlinear_.size());
+    // The reference is the component with the largest measured signal: its gain is absorbed by K.
+    Eigen::Index ref = 0;
+    (d.obs.y * d.obs.weight.asDiagonal()).cwiseAbs2().colwise().sum().maxCoeff(&ref);
+    gain_ref_ = static_cast<int>(ref);
+    for (int c = 0; c < 6; ++c)
+      if (c != gain_ref_) nonlinear_.push_back({"gain_" + d.obs.component[static_cast<std::size_t>(c)], "", 0.01, true, -0.5, 0.5});
+  }
+}
+
+std::string ContactFamily::name() const {
+  if (ext_.empty()) return "nominal";
+  std::string s;
+  for (const auto& e : contact_extensions())
+    if (has(e)) s += (s.empty() ? "" : "+") + e;
+  return s;
+}
+
+std::vector<Eigen::VectorXd> ContactFamily::starts() const {
+  const Eigen::Index q = static_cast<Eigen::Index>(nonlinear_.size());
+  std::vector<Eigen::VectorXd> out{Eigen::VectorXd::Zero(q)};
+  if (i_tau_ >= 0) {
+    // A delay has many local minima at multiples of the excitation's period: scan a grid first.
+    const auto& p = nonlinear_[static_cast<std::size_t>(i_tau_)];
+    for (int i = -20; i <= 20; ++i) {
+      if (i == 0) continue;
+      Eigen::VectorXd s = Eigen::VectorXd::Zero(q);
+      s(i_tau_) = p.upper * i / 20.0;
+      out.push_back(s);
+    }
+  }
+  if (i_exp_ >= 0)
+    for (double e : {-0.3, 0.5}) {
+      Eigen::VectorXd s = Eigen::VectorXd::Zero(q);
+      s(i_exp_) = e;
+      out.push_back(s);
+    }
+  return out;
+}
+
+void ContactFamily::columns(const std::vector<cid::ContactPoint>& cs, const cid::Kinematics& k, double p,
+                            Eigen::Ref<Eigen::MatrixXd> out) const {
+  const auto& T = d_.scene.T_world_fp;
+  for (const auto& c : cs) {
+    const double de = p == 1.0 ? c.delta : d_.delta_ref_m * std::pow(c.delta / d_.delta_ref_m, p);
+    out.col(0) += plate_wrench_of(T, de * c.normal, c.point);
+    out.col(1) += plate_wrench_of(T, de * c.tangent, c.point);
+    if (j_visc_ >= 0) out.col(j_visc_) += plate_wrench_of(T, c.slip_speed * c.tangent, c.point);
+    if (j_damp_ >= 0) {
+      const double rate = -cid::relative_velocity(d_.scene, k, c.point).dot(c.normal);
+      out.col(j_damp_) += plate_wrench_of(T, rate * c.normal, c.point);
+    }
+  }
+}
+
+cid::Kinematics ContactFamily::kinematics_at(double t) const {
+  cid::Kinematics out;
+  interpolate(d_.obs.t_s, t, [&](std::size_t j0, std::size_t j1, double a) {
+    const auto& k0 = d_.kin[j0];
+    const auto& k1 = d_.kin[j1];
+    out = k0;
+    if (j0 == j1) return;
+    const Eigen::Quaterniond q0(k0.T_world_ee.linear()), q1(k1.T_world_ee.linear());
+    out.T_world_ee.linear() = q0.slerp(a, q1).toRotationMatrix();
+    out.T_world_ee.translation() = (1 - a) * k0.T_world_ee.translation() + a * k1.T_world_ee.translation();
+    out.v_world_ee = (1 - a) * k0.v_world_ee + a * k1.v_world_ee;
+    out.w_world_ee = (1 - a) * k0.w_world_ee + a * k1.w_world_ee;
+  });
+  return out;
+}
+
+void ContactFamily::design(const Eigen::VectorXd& phi, Eigen::MatrixXd& A) const {
+  const std::size_t n = d_.obs.size();
+  const Eigen::Index p = static_cast<Eigen::Index>(linear_.size());
+  A.setZero(static_cast<Eigen::Index>(6 * n), p);
+  const double expo = i_exp_ >= 0 ? 1.0 + phi(i_exp_) : 1.0;
+  const double tau = i_tau_ >= 0 ? phi(i_tau_) : 0.0;
+  const bool recompute = i_geo_ >= 0 || i_cmp_ >= 0 || tau != 0.0;
+  Eigen::VectorXd x = d_.scene.design();
+  if (i_geo_ >= 0)
+    for (std::size_t j = 0; j < d_.fit_uncertainties.size(); ++j)
+      x(d_.fit_uncertainties[j]) += phi(i_geo_ + static_cast<Eigen::Index>(j));
+  Mat6 C = Mat6::Zero();
+  if (i_cmp_ >= 0)
+    for (std::size_t i = 0; i < basis_.size(); ++i) C += phi(i_cmp_ + static_cast<Eigen::Index>(i)) * basis_[i];
+  cid::MindistWorkspace ws;
+  std::vector<cid::ContactPoint> cs;
+  for (std::size_t k = 0; k < n; ++k) {
+    auto block = A.block(static_cast<Eigen::Index>(6 * k), 0, 6, p);
+    if (!recompute) {
+      columns(d_.contacts[k], d_.kin[k], expo, block);
+      continue;
+    }
+    // A delayed wrench stream: the wrench at t_k is the one of the pose at t_k - τ.
+    cid::Kinematics kin = tau != 0.0 ? kinematics_at(d_.obs.t_s[k] - tau) : d_.kin[k];
+    if (i_cmp_ >= 0) {
+      // The measured contact wrench on the held object, about the ee origin, in ee.
+      const Vec6 w_ee = cid::plate_to_object1(d_.obs.y.row(static_cast<Eigen::Index>(k)).transpose(), d_.scene.T_world_fp,
+                                             kin.T_world_ee);
+      kin.T_world_ee = deflect(kin.T_world_ee, C * w_ee);
+    }
+    cid::mindist(d_.scene, kin, x, d_.v_tm, cs, ws);
+    columns(cs, kin, expo, block);
+  }
+  if (i_gain_ >= 0) {
+    Eigen::Index g = i_gain_;
+    for (int c = 0; c < 6; ++c) {
+      if (c == gain_ref_) continue;
+      const double s = 1.0 + phi(g++);
+      for (std::size_t k = 0; k < n; ++k) A.row(static_cast<Eigen::Index>(6 * k) + c) *= s;
+    }
+  }
+  if (j_bias_ >= 0)
+    for (std::size_t k = 0; k < n; ++k)
+      for (int c = 0; c < 6; ++c) A(static_cast<Eigen::Index>(6 * k) + c, j_bias_ + c) = 1.0;
+}
+
+std::vector<Reported> ContactFamily::report(const Fit& f) const {
+  std::vector<Reported> out;
+  const double K = f.theta(0), muK = f.theta(1);
+  out.push_back({"K", "N/m", K, std::sqrt(std::max(0.0, f.cov(0, 0))), false});
+  const double mu = K != 0 ? muK / K : 0.0;
+  const double vmu = (f.cov(1, 1) - 2 * mu * f.cov(0, 1) + mu * mu * f.cov(0, 0)) / (K * K);
+  out.push_back({"mu", "", mu, std::sqrt(std::max(0.0, vmu)), false});
+  const Eigen::Index p = static_cast<Eigen::Index>(linear_.size());
+  for (Eigen::Index j = 2; j < p; ++j) {
+    const auto& q = linear_[static_cast<std::size_t>(j)];
+    double var = std::max(0.0, f.cov(j, j));
+    if (j_bias_ >= 0 && j >= j_bias_ && j < j_bias_ + 6) var += d_.resolution(j - j_bias_) * d_.resolution(j - j_bias_) / 12.0;
+    out.push_back({q.name, q.unit, f.theta(j), std::sqrt(var), true});
+  }
+  for (Eigen::Index j = 0; j < static_cast<Eigen::Index>(nonlinear_.size()); ++j) {
+    const auto& q = nonlinear_[static_cast<std::size_t>(j)];
+    Reported r{q.name, q.unit, f.phi(j), std::sqrt(std::max(0.0, f.cov(p + j, p + j))), true};
+    if (j == i_exp_) {
+      r.name = "stiffness_exponent";
+      r.value += 1.0;
+      r.nominal = 1.0;
+    }
+    if (i_geo_ >= 0 && j >= i_geo_ && j < i_geo_ + static_cast<Eigen::Index>(d_.fit_uncertainties.size())) {
+      const auto& u = d_.scene.uncertainties[static_cast<std::size_t>(d_.fit_uncertainties[static_cast<std::size_t>(j - i_geo_)])];
+      r.value += u.design_value;
+      r.nominal = u.design_value;
+    }
+    out.push_back(r);
+  }
+  if (i_cmp_ >= 0) {
+    // The compliance entries the fitted directions give (informative, not PNR-checked).
+    const char* ax[6] = {"x", "y", "z", "rx", "ry", "rz"};
+    const Eigen::Index q0 = p + i_cmp_;
+    const Eigen::Index r = static_cast<Eigen::Index>(basis_.size());
+    for (int i = 0; i < 6; ++i)
+      for (int j = i; j < 6; ++j) {
+        Eigen::VectorXd b(r);
+        for (Eigen::Index m = 0; m < r; ++m) b(m) = basis_[static_cast<std::size_t>(m)](i, j);
+        if (b.norm() < 1e-3 * compliance_scale(i, j)) continue;
+        const double v = b.dot(f.phi.segment(i_cmp_, r));
+        const double s = std::sqrt(std::max(0.0, b.dot(f.cov.block(q0, q0, r, r) * b)));
+        const std::string unit = (i < 3 && j < 3) ? "m/N" : (i >= 3 && j >= 3) ? "rad/(N m)" : "m/(N m)";
+        out.push_back({std::string("C_") + ax[i] + "_" + ax[j], unit, v, s, false});
+      }
+  }
+  return out;
+}
+
+// ---------------------------------------------------------------------------------------------
+
+std::vector<std::string> Effects::names() const {
+  std::vector<std::string> n;
+  if (!geometric.empty()) n.push_back("geometric_offset");
+  if (!compliance.isZero()) n.push_back("robot_compliance");
+  if (time_offset_s != 0) n.push_back("time_offset");
+  if (!sensor_bias.isZero()) n.push_back("sensor_bias");
+  if (!sensor_gain.isZero()) n.push_back("sensor_gain");
+  if (viscous_n_s_per_m != 0) n.push_back("viscous_friction");
+  if (damping_n_s_per_m != 0) n.push_back("contact_damping");
+  if (stiffness_exponent != 1.0) n.push_back("nonlinear_stiffness");
+  return n;
+}
+
+void draw_effect(const std::string& name, unsigned seed, const cid::Scene& scene, Effects& e) {
+  std::mt19937_64 rng(seed * 7919ULL + std::hash<std::string>{}(name));
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  auto sign = [&] { return u(rng) < 0.5 ? -1.0 : 1.0; };
+  auto mag = [&](double lo, double hi) { return sign() * (lo + (hi - lo) * u(rng)); };
+  if (name == "geometric_offset") {
+    // Like the contact paper's hidden truth: shifts of 1-2 prior std, rotations of 1-2e-4 rad.
+    for (const auto& q : scene.uncertainties) {
+      const bool rot = q.kind == cid::Uncertainty::Kind::rotation;
+      const double s = rot ? 1e-4 : (q.prior_std > 0 ? q.prior_std : 1e-4);
+      e.geometric[q.name] = q.design_value + mag(1.0, 2.0) * s;
+    }
+    if (scene.uncertainties.empty()) throw std::invalid_argument("geometric_offset: the rig declares no uncertainties");
+  } else if (name == "robot_compliance") {
+    // A lateral compliance of the wrist: 0.5-1 µm/N in x and y of the ee frame (a tenth to a fifth
+    // of the contact's own compliance 1/K).
+    e.compliance(0, 0) = std::abs(mag(0.5e-6, 1e-6));
+    e.compliance(1, 1) = std::abs(mag(0.5e-6, 1e-6));
+  } else if (name == "time_offset") {
+    e.time_offset_s = mag(0.015, 0.04);
+  } else if (name == "sensor_bias") {
+    for (int c = 0; c < 6; ++c) e.sensor_bias(c) = c < 3 ? mag(3.0, 8.0) : mag(0.3, 0.8);
+  } else if (name == "sensor_gain") {
+    // The tangential forces and the tilting moments; the dominant normal component's gain is
+    // indistinguishable from K, so it stays the reference.
+    for (int c : {0, 1, 3, 4}) e.sensor_gain(c) = mag(0.08, 0.15);
+  } else if (name == "viscous_friction") {
+    e.viscous_n_s_per_m = std::abs(mag(4000, 8000));
+  } else if (name == "contact_damping") {
+    e.damping_n_s_per_m = std::abs(mag(3000, 6000));
+  } else if (name == "nonlinear_stiffness") {
+    e.stiffness_exponent = 1.0 + std::abs(mag(0.25, 0.5));
+  } else {
+    throw std::invalid_argument("unknown effect '" + name + "' (expected one of the diagnosis' candidates)");
+  }
+}
+
+std::vector<cid::SimulatedSample> simulate_with_effects(const cid::Scene& s, const cid::ContactModel& m, const Effects& e,
+                                                        const std::vector<double>& t_s,
+                                                        const std::vector<cid::Kinematics>& truth,
+                                                        const cid::SensorModel& sensor) {
+  m.check();
+  if (t_s.size() != truth.size()) throw std::invalid_argument("simulate_with_effects: times and kinematics differ in length");
+  Eigen::VectorXd x = s.design();
+  for (const auto& [name, v] : e.geometric) {
+    bool found = false;
+    for (std::size_t j = 0; j < s.uncertainties.size(); ++j)
+      if (s.uncertainties[j].name == name) {
+        x(static_cast<Eigen::Index>(j)) = v;
+        found = true;
+      }
+    if (!found) throw std::invalid_argument("unknown geometric uncertainty '" + name + "'");
+  }
+  cid::MindistWorkspace ws;
+  std::vector<cid::ContactPoint> cs;
+  const std::size_t n = truth.size();
+  std::vector<Vec6> w(n);
+  std::vector<int> count(n);
+  auto wrench = [&](const cid::Kinematics& k) {
+    cid::mindist(s, k, x, m.v_tm, cs, ws);
+    Vec6 out = Vec6::Zero();
+    for (const auto& c : cs) {
+      const double de = e.stiffness_exponent == 1.0 ? c.delta
+                                                    : e.delta_ref_m * std::pow(c.delta / e.delta_ref_m, e.stiffness_exponent);
+      const double rate = -cid::relative_velocity(s, k, c.point).dot(c.normal);
+      const Vec3 f = (m.K * de + e.damping_n_s_per_m * rate) * c.normal + (m.mu * m.K * de + e.viscous_n_s_per_m * c.slip_speed) * c.tangent;
+      out += plate_wrench_of(s.T_world_fp, f, c.point);
+    }
+    return out;
+  };
+  for (std::size_t k = 0; k < n; ++k) {
+    cid::Kinematics kin = truth[k];
+    w[k] = wrench(kin);
+    if (!e.compliance.isZero()) {
+      // The deflected pose and its load agree: fixed point T = T_cmd Exp(C w_ee(T)).
+      for (int it = 0; it < 50; ++it) {
+        const Vec6 w_ee = cid::plate_to_object1(w[k], s.T_world_fp, kin.T_world_ee);
+        const Eigen::Isometry3d T = deflect(truth[k].T_world_ee, e.compliance * w_ee);
+        const double change = (T.matrix() - kin.T_world_ee.matrix()).norm();
+        kin.T_world_ee = T;
+        w[k] = wrench(kin);
+        if (change < 1e-13) break;
+      }
+    }
+    count[k] = static_cast<int>(cs.size());
+  }
+  std::mt19937_64 rng(sensor.seed);
+  std::normal_distribution<double> g(0.0, 1.0);
+  std::vector<cid::SimulatedSample> out(n);
+  for (std::size_t k = 0; k < n; ++k) {
+    auto& smp = out[k];
+    smp.contacts = count[k];
+    Vec6 wt = w[k];
+    if (e.time_offset_s != 0)
+      interpolate(t_s, t_s[k] - e.time_offset_s, [&](std::size_t j0, std::size_t j1, double a) { wt = (1 - a) * w[j0] + a * w[j1]; });
+    wt = wt.cwiseProduct(Vec6::Ones() + e.sensor_gain) + e.sensor_bias;
+    smp.w_fp_true = wt;
+    smp.kin = truth[k];
+    for (int i = 0; i < 3; ++i) {
+      smp.kin.T_world_ee.translation()[i] = quantise(truth[k].T_world_ee.translation()[i], sensor.position_resolution_m);
+      smp.kin.v_world_ee[i] = quantise(truth[k].v_world_ee[i], sensor.velocity_resolution_m_per_s);
+    }
+    for (int i = 0; i < 6; ++i) {
+      const bool force = i < 3;
+      const double noise = force ? sensor.force_noise_n : sensor.moment_noise_nm;
+      const double step = force ? sensor.force_resolution_n : sensor.moment_resolution_nm;
+      smp.w_fp[i] = quantise(wt[i] + noise * g(rng), step);
+    }
+  }
+  return out;
+}
+
+}  // namespace hil::diagnose

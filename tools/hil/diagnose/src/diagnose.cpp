@@ -1,0 +1,226 @@
+#include "hil/diagnose/diagnose.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <sstream>
+
+#include <fmt/format.h>
+
+namespace hil::diagnose {
+
+namespace {
+
+Eigen::VectorXd per_sample_sq(const Observations& obs, const Eigen::MatrixXd& pred) {
+  Eigen::VectorXd e(static_cast<Eigen::Index>(obs.size()));
+  for (Eigen::Index k = 0; k < e.size(); ++k)
+    e(k) = ((obs.y.row(k) - pred.row(k)).transpose().cwiseProduct(obs.weight)).squaredNorm();
+  return e;
+}
+
+double corr(const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
+  const Eigen::VectorXd x = a.array() - a.mean(), y = b.array() - b.mean();
+  const double d = std::sqrt(x.squaredNorm() * y.squaredNorm());
+  return d > 0 ? x.dot(y) / d : 0.0;
+}
+
+}  // namespace
+
+double noise_level(const Observations& obs, const Eigen::MatrixXd& prediction) {
+  const Eigen::Index n = static_cast<Eigen::Index>(obs.size());
+  if (n < 3) return 0.0;
+  const Eigen::MatrixXd r = (obs.y - prediction) * obs.weight.asDiagonal();
+  const Eigen::MatrixXd d = r.bottomRows(n - 1) - r.topRows(n - 1);
+  return std::sqrt(d.squaredNorm() / (2.0 * 6.0 * static_cast<double>(n - 1)));
+}
+
+double paired_z(const Observations& obs, const Eigen::MatrixXd& reference, const Eigen::MatrixXd& candidate) {
+  // Loss: the per-sample weighted error norm (not its square), so that a few large residuals
+  // (e.g. a sliding sample measured as sticking) do not decide the comparison alone.
+  const Eigen::VectorXd d = per_sample_sq(obs, reference).cwiseSqrt() - per_sample_sq(obs, candidate).cwiseSqrt();
+  const Eigen::Index n = d.size();
+  if (n < 3) return 0.0;
+  const double mean = d.mean();
+  const Eigen::VectorXd c = d.array() - mean;
+  const int L = static_cast<int>(std::ceil(4.0 * std::pow(static_cast<double>(n) / 100.0, 2.0 / 9.0)));
+  double lrv = c.squaredNorm() / static_cast<double>(n);
+  for (int l = 1; l <= L && l < n; ++l) {
+    const double g = c.head(n - l).dot(c.tail(n - l)) / static_cast<double>(n);
+    lrv += 2.0 * (1.0 - l / (L + 1.0)) * g;
+  }
+  if (!(lrv > 0)) return mean > 0 ? 1e300 : 0.0;
+  return mean / std::sqrt(lrv / static_cast<double>(n));
+}
+
+ResidualAnalysis analyse_residuals(const Observations& obs, const Eigen::MatrixXd& pred, const Context& ctx) {
+  ResidualAnalysis a;
+  const Eigen::Index n = static_cast<Eigen::Index>(obs.size());
+  const Eigen::MatrixXd r = obs.y - pred;
+  for (int c = 0; c < 6; ++c) {
+    a.rms(c) = std::sqrt(r.col(c).squaredNorm() / static_cast<double>(n));
+    a.relative_rms(c) = obs.weight(c) * a.rms(c);
+  }
+  a.relative_rms.maxCoeff(&a.worst_component);
+  const Eigen::VectorXd e = per_sample_sq(obs, pred);
+  const double total = std::max(e.sum(), 1e-300);
+  const double t0 = obs.t_s.front(), t1 = obs.t_s.back();
+  a.window_start_s.resize(10);
+  a.window_share.assign(10, 0.0);
+  for (int w = 0; w < 10; ++w) a.window_start_s[static_cast<std::size_t>(w)] = t0 + (t1 - t0) * w / 10.0;
+  for (Eigen::Index k = 0; k < n; ++k) {
+    const int w = std::min(9, static_cast<int>(10.0 * (obs.t_s[static_cast<std::size_t>(k)] - t0) / std::max(t1 - t0, 1e-300)));
+    a.window_share[static_cast<std::size_t>(w)] += e(k) / total;
+  }
+  if (ctx.state.size() == obs.size()) {
+    std::map<std::string, std::pair<int, double>> st;
+    for (Eigen::Index k = 0; k < n; ++k) {
+      auto& s = st[ctx.state[static_cast<std::size_t>(k)]];
+      ++s.first;
+      s.second += e(k);
+    }
+    for (const auto& [label, v] : st)
+      a.states.push_back({label, v.first, std::sqrt(v.second / (6.0 * v.first)), v.second / total});
+    std::sort(a.states.begin(), a.states.end(), [](const auto& x, const auto& y) { return x.share > y.share; });
+  }
+  // Whiteness of the worst component (weighted residual).
+  const Eigen::VectorXd rw = r.col(a.worst_component).array() - r.col(a.worst_component).mean();
+  const double v0 = rw.squaredNorm();
+  const int H = static_cast<int>(std::min<Eigen::Index>(20, n / 4));
+  a.autocorrelation.push_back(1.0);
+  double q = 0.0;
+  for (int h = 1; h <= H; ++h) {
+    const double rho = v0 > 0 ? rw.head(n - h).dot(rw.tail(n - h)) / v0 : 0.0;
+    a.autocorrelation.push_back(rho);
+    q += rho * rho / static_cast<double>(n - h);
+  }
+  a.ljung_box_q = static_cast<double>(n) * (static_cast<double>(n) + 2.0) * q;
+  // 99 % quantile of chi-square with H dof (Wilson-Hilferty).
+  const double z = 2.326, hh = std::max(1, H);
+  a.ljung_box_bound = hh * std::pow(1.0 - 2.0 / (9.0 * hh) + z * std::sqrt(2.0 / (9.0 * hh)), 3.0);
+  a.white = a.ljung_box_q < a.ljung_box_bound;
+  // Cross-correlation with the candidate signals and with the other stream's components.
+  for (const auto& [name, s] : ctx.signals) {
+    if (s.size() != obs.size()) continue;
+    const Eigen::Map<const Eigen::VectorXd> sig(s.data(), n);
+    if (!sig.allFinite()) continue;
+    for (int c = 0; c < 6; ++c) {
+      ResidualAnalysis::Correlation best{name, obs.component[static_cast<std::size_t>(c)], 0.0, 0};
+      for (int lag = -10; lag <= 10; ++lag) {
+        const Eigen::Index m = n - std::abs(lag);
+        if (m < 10) continue;
+        const Eigen::VectorXd rs = lag >= 0 ? r.col(c).tail(m) : r.col(c).head(m);
+        const Eigen::VectorXd ss = lag >= 0 ? sig.head(m) : sig.tail(m);
+        const double cc = corr(rs, ss);
+        if (std::abs(cc) > std::abs(best.correlation)) {
+          best.correlation = cc;
+          best.lag = lag;
+        }
+      }
+      a.correlations.push_back(best);
+    }
+  }
+  std::sort(a.correlations.begin(), a.correlations.end(),
+            [](const auto& x, const auto& y) { return std::abs(x.correlation) > std::abs(y.correlation); });
+  return a;
+}
+
+namespace {
+
+void judge(CandidateResult& c, const Score& ref, double noise, const Observations& obs, const DiagnoseOptions& o) {
+  c.gain_percent = ref.cv_error > 0 ? 100.0 * (1.0 - c.score.cv_error / ref.cv_error) : 0.0;
+  c.noise_fraction = noise > 0 ? (ref.cv_error * ref.cv_error - c.score.cv_error * c.score.cv_error) / (noise * noise) : 1e300;
+  const bool size = c.noise_fraction >= o.min_noise_fraction;
+  c.z = paired_z(obs, ref.cv_prediction, c.score.cv_prediction);
+  const bool gain = c.gain_percent >= 100.0 * o.min_gain;
+  const bool signif = c.z >= o.min_z;
+  const bool bic = c.score.bic < ref.bic;
+  const bool pnr = c.score.max_extension_pnr >= o.min_pnr;
+  const bool physical = c.score.full.invalid.empty();
+  c.supported = gain && signif && bic && pnr && size && physical;
+  std::vector<std::string> why;
+  if (!gain) why.push_back(fmt::format("held-out gain {:.2f} % < {:.0f} %", c.gain_percent, 100 * o.min_gain));
+  if (!signif) why.push_back(fmt::format("not consistent (z = {:.1f} < {:.0f})", c.z, o.min_z));
+  if (!bic) why.push_back("BIC not lower");
+  if (!physical) why.push_back("not physical: " + c.score.full.invalid);
+  if (!size) why.push_back(fmt::format("below the noise (explains {:.2f} of the noise variance < {:.2f})", c.noise_fraction, o.min_noise_fraction));
+  if (!pnr) why.push_back(fmt::format("parameters not practically identifiable (PNR {:.1f} < {:.0f})", c.score.max_extension_pnr, o.min_pnr));
+  c.verdict = c.supported ? fmt::format("supported: held-out gain {:.1f} %, z = {:.1f}, PNR {:.1f}, {:.2f} noise variances",
+                                        c.gain_percent, c.z, c.score.max_extension_pnr, c.noise_fraction)
+                          : fmt::format("{}", fmt::join(why, "; "));
+}
+
+void rank(std::vector<CandidateResult>& v) {
+  std::stable_sort(v.begin(), v.end(), [](const auto& a, const auto& b) {
+    if (a.supported != b.supported) return a.supported;
+    return a.score.cv_error < b.score.cv_error;
+  });
+}
+
+}  // namespace
+
+Diagnosis diagnose(const ModelFactory& make, const std::vector<std::string>& candidates, const Observations& obs,
+                   const Context& ctx, const DiagnoseOptions& o, const Progress& progress) {
+  const auto t0 = std::chrono::steady_clock::now();
+  Diagnosis d;
+  const int total = 1 + static_cast<int>(candidates.size()) + o.second_candidates;
+  int step = 0;
+  auto tell = [&](const std::string& what) {
+    if (progress) progress(++step, total, what);
+  };
+  tell("nominal");
+  d.nominal = score(*make({}), obs, o.cv);
+  d.nominal_residuals = analyse_residuals(obs, d.nominal.cv_prediction, ctx);
+  d.noise_relative = noise_level(obs, d.nominal.cv_prediction);
+  for (const auto& c : candidates) {
+    tell(c);
+    CandidateResult r;
+    r.name = c;
+    try {
+      r.score = score(*make({c}), obs, o.cv);
+      judge(r, d.nominal, d.noise_relative, obs, o);
+    } catch (const std::exception& e) {
+      r.score.model = c;
+      r.score.cv_error = std::numeric_limits<double>::infinity();
+      r.verdict = std::string("not applicable: ") + e.what();
+    }
+    d.candidates.push_back(std::move(r));
+  }
+  rank(d.candidates);
+  if (!d.candidates.empty() && d.candidates.front().supported) {
+    const auto& first = d.candidates.front();
+    d.cause = first.name;
+    d.extended = first.score;
+    // Greedy forward selection: the best remaining single candidates, each added to the cause.
+    int tried = 0;
+    for (const auto& c : d.candidates) {
+      // Every other candidate, not only those that helped alone: an extension may only matter
+      // together with the cause (a delay of a compliance's load, say).
+      if (c.name == d.cause || !std::isfinite(c.score.cv_error) || tried >= o.second_candidates) continue;
+      ++tried;
+      tell(d.cause + " + " + c.name);
+      CandidateResult r;
+      r.name = c.name;
+      try {
+        r.score = score(*make({d.cause, c.name}), obs, o.cv);
+        judge(r, first.score, d.noise_relative, obs, o);
+      } catch (const std::exception& e) {
+        r.score.cv_error = std::numeric_limits<double>::infinity();
+        r.verdict = std::string("not applicable: ") + e.what();
+      }
+      d.second_step.push_back(std::move(r));
+    }
+    rank(d.second_step);
+    if (!d.second_step.empty() && d.second_step.front().supported) {
+      d.second_cause = d.second_step.front().name;
+      d.extended = d.second_step.front().score;
+    }
+  }
+  if (progress && step < total) progress(total, total, "done");
+  const auto& ext = d.extended ? *d.extended : d.nominal;
+  d.gain_percent = d.nominal.cv_error > 0 ? 100.0 * (1.0 - ext.cv_error / d.nominal.cv_error) : 0.0;
+  d.extended_residuals = analyse_residuals(obs, ext.cv_prediction, ctx);
+  d.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return d;
+}
+
+}  // namespace hil::diagnose

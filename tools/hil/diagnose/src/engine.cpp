@@ -1,0 +1,302 @@
+#include "hil/diagnose/engine.hpp"
+
+#include <Eigen/SVD>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+namespace hil::diagnose {
+
+std::vector<Eigen::VectorXd> Model::starts() const {
+  return {Eigen::VectorXd::Zero(static_cast<Eigen::Index>(nonlinear().size()))};
+}
+
+std::vector<Reported> Model::report(const Fit& f) const {
+  std::vector<Reported> out;
+  const auto lin = linear();
+  const auto nl = nonlinear();
+  const Eigen::Index p = static_cast<Eigen::Index>(lin.size());
+  for (Eigen::Index i = 0; i < p; ++i) {
+    const auto& q = lin[static_cast<std::size_t>(i)];
+    out.push_back({q.name, q.unit, f.theta(i), std::sqrt(std::max(0.0, f.cov(i, i))), q.extension});
+  }
+  for (Eigen::Index i = 0; i < static_cast<Eigen::Index>(nl.size()); ++i) {
+    const auto& q = nl[static_cast<std::size_t>(i)];
+    out.push_back({q.name, q.unit, f.phi(i), std::sqrt(std::max(0.0, f.cov(p + i, p + i))), q.extension});
+  }
+  return out;
+}
+
+namespace {
+
+/// The weighted rows of the samples `s` of a 6N-row matrix or vector.
+Eigen::MatrixXd rows_of(const Eigen::MatrixXd& A, const std::vector<int>& s, const Eigen::Matrix<double, 6, 1>& w) {
+  Eigen::MatrixXd out(static_cast<Eigen::Index>(6 * s.size()), A.cols());
+  for (std::size_t a = 0; a < s.size(); ++a)
+    for (int c = 0; c < 6; ++c) out.row(static_cast<Eigen::Index>(6 * a) + c) = w(c) * A.row(6 * s[a] + c);
+  return out;
+}
+
+/// Least squares with scaled columns by complete orthogonal decomposition (minimum-norm when
+/// rank deficient): never the normal equations.
+Eigen::VectorXd solve_ls(const Eigen::MatrixXd& A, const Eigen::VectorXd& b) {
+  Eigen::VectorXd scale = A.colwise().norm().transpose();
+  for (Eigen::Index j = 0; j < scale.size(); ++j)
+    if (!(scale(j) > 0)) scale(j) = 1.0;
+  const Eigen::MatrixXd As = A * scale.cwiseInverse().asDiagonal();
+  Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> cod(As);
+  cod.setThreshold(1e-10);
+  return cod.solve(b).cwiseQuotient(scale);
+}
+
+struct Projected {
+  Eigen::VectorXd theta, r;
+  double cost = 0.0;
+};
+
+class Evaluator {
+ public:
+  Evaluator(const Model& m, const Observations& obs, const std::vector<int>& train)
+      : m_(m), obs_(obs), train_(train) {
+    b_.resize(static_cast<Eigen::Index>(6 * train.size()));
+    for (std::size_t a = 0; a < train.size(); ++a)
+      for (int c = 0; c < 6; ++c) b_(static_cast<Eigen::Index>(6 * a) + c) = obs.weight(c) * obs.y(train[a], c);
+  }
+  Eigen::MatrixXd weighted_design(const Eigen::VectorXd& phi) {
+    ++evaluations;
+    m_.design(phi, full_);
+    if (full_.rows() != static_cast<Eigen::Index>(6 * obs_.size()))
+      throw std::logic_error(m_.name() + ": design has the wrong number of rows");
+    return rows_of(full_, train_, obs_.weight);
+  }
+  Projected project(const Eigen::VectorXd& phi) {
+    const Eigen::MatrixXd A = weighted_design(phi);
+    Projected p;
+    p.theta = solve_ls(A, b_);
+    p.r = b_ - A * p.theta;
+    p.cost = p.r.squaredNorm();
+    return p;
+  }
+  const Eigen::VectorXd& b() const { return b_; }
+  int evaluations = 0;
+
+ private:
+  const Model& m_;
+  const Observations& obs_;
+  const std::vector<int>& train_;
+  Eigen::VectorXd b_;
+  Eigen::MatrixXd full_;
+};
+
+Eigen::VectorXd clamp(const Eigen::VectorXd& phi, const std::vector<Param>& nl) {
+  Eigen::VectorXd out = phi;
+  for (Eigen::Index j = 0; j < out.size(); ++j)
+    out(j) = std::clamp(out(j), nl[static_cast<std::size_t>(j)].lower, nl[static_cast<std::size_t>(j)].upper);
+  return out;
+}
+
+double fd_step(const Param& q, double value) {
+  double h = 1e-4 * q.scale;
+  if (value + h > q.upper) h = -h;  // stay inside the bounds
+  return h;
+}
+
+}  // namespace
+
+Fit fit(const Model& m, const Observations& obs, const std::vector<int>& train, const FitOptions& o) {
+  if (train.empty()) throw std::runtime_error(m.name() + ": no samples to fit");
+  const auto lin = m.linear();
+  const auto nl = m.nonlinear();
+  const Eigen::Index p = static_cast<Eigen::Index>(lin.size());
+  const Eigen::Index q = static_cast<Eigen::Index>(nl.size());
+  Evaluator ev(m, obs, train);
+  Fit f;
+
+  Eigen::VectorXd phi = Eigen::VectorXd::Zero(q);
+  Projected cur;
+  bool first = true;
+  for (const auto& s0 : m.starts()) {
+    const Eigen::VectorXd s = clamp(s0, nl);
+    Projected pr = ev.project(s);
+    if (first || pr.cost < cur.cost) {
+      cur = pr;
+      phi = s;
+      first = false;
+    }
+  }
+  if (!cur.theta.allFinite()) throw std::runtime_error(m.name() + ": the fit is not finite");
+
+  if (q > 0) {
+    // Levenberg-Marquardt on the projected residual in scaled units u = φ / scale.
+    Eigen::VectorXd scale(q);
+    for (Eigen::Index j = 0; j < q; ++j) scale(j) = nl[static_cast<std::size_t>(j)].scale;
+    double mu = -1.0;
+    f.converged = false;
+    for (int it = 0; it < o.max_iterations; ++it) {
+      Eigen::MatrixXd J(cur.r.size(), q);
+      for (Eigen::Index j = 0; j < q; ++j) {
+        Eigen::VectorXd ph = phi;
+        const double h = fd_step(nl[static_cast<std::size_t>(j)], phi(j));
+        ph(j) += h;
+        J.col(j) = (ev.project(ph).r - cur.r) / (h / scale(j));
+      }
+      Eigen::JacobiSVD<Eigen::MatrixXd> svd(J, Eigen::ComputeThinU | Eigen::ComputeThinV);
+      const Eigen::VectorXd sv = svd.singularValues();
+      const Eigen::VectorXd g = svd.matrixU().transpose() * cur.r;
+      if (mu < 0) mu = 1e-3 * (sv.size() > 0 ? sv(0) * sv(0) : 1.0);
+      bool accepted = false;
+      double decrease = 0.0, step_norm = 0.0;
+      for (int tries = 0; tries < 12 && !accepted; ++tries) {
+        Eigen::VectorXd d = Eigen::VectorXd::Zero(q);
+        for (Eigen::Index i = 0; i < sv.size(); ++i)
+          if (sv(i) > 1e-9 * sv(0)) d -= (sv(i) * g(i) / (sv(i) * sv(i) + mu)) * svd.matrixV().col(i);
+        const Eigen::VectorXd trial = clamp(phi + d.cwiseProduct(scale), nl);
+        Projected pr = ev.project(trial);
+        if (pr.cost < cur.cost) {
+          decrease = (cur.cost - pr.cost) / std::max(cur.cost, 1e-300);
+          step_norm = d.norm();
+          cur = pr;
+          phi = trial;
+          mu = std::max(mu / 3.0, 1e-12);
+          accepted = true;
+        } else {
+          mu *= 4.0;
+        }
+      }
+      if (!accepted || decrease < o.tolerance || step_norm < 1e-8) {
+        f.converged = true;
+        break;
+      }
+    }
+  }
+
+  // Statistics from the Jacobian of the unprojected residual in (θ, φ) at the optimum.
+  const Eigen::MatrixXd A = ev.weighted_design(phi);
+  Eigen::MatrixXd J(A.rows(), p + q);
+  J.leftCols(p) = A;
+  for (Eigen::Index j = 0; j < q; ++j) {
+    Eigen::VectorXd ph = phi;
+    const double h = fd_step(nl[static_cast<std::size_t>(j)], phi(j));
+    ph(j) += h;
+    J.col(p + j) = (ev.weighted_design(ph) * cur.theta - A * cur.theta) / h;
+  }
+  Eigen::VectorXd cs = J.colwise().norm().transpose();
+  for (Eigen::Index j = 0; j < cs.size(); ++j)
+    if (!(cs(j) > 0)) cs(j) = 1.0;
+  Eigen::JacobiSVD<Eigen::MatrixXd> svd(J * cs.cwiseInverse().asDiagonal(), Eigen::ComputeThinV);
+  const Eigen::VectorXd sv = svd.singularValues();
+  const double tol = 1e-9 * (sv.size() ? sv(0) : 0.0);
+  f.rank = 0;
+  Eigen::MatrixXd inv = Eigen::MatrixXd::Zero(p + q, p + q);
+  for (Eigen::Index i = 0; i < sv.size(); ++i)
+    if (sv(i) > tol) {
+      ++f.rank;
+      inv += svd.matrixV().col(i) * svd.matrixV().col(i).transpose() / (sv(i) * sv(i));
+    }
+  f.theta = cur.theta;
+  f.phi = phi;
+  f.parameters = static_cast<int>(p + q);
+  f.rows = static_cast<long>(A.rows());
+  f.rss = cur.cost;
+  f.sigma2 = f.rows > f.rank ? f.rss / static_cast<double>(f.rows - f.rank) : 0.0;
+  f.cov = f.sigma2 * (cs.cwiseInverse().asDiagonal() * inv * cs.cwiseInverse().asDiagonal());
+  // Residuals of neighbouring samples are correlated (unmodelled structure, filtering): inflate the
+  // covariance by the long-run variance factor 1 + 2 Σ w_l ρ_l (Bartlett weights, per component,
+  // averaged by residual variance) so that intervals do not claim the precision of white noise.
+  {
+    const Eigen::Index ns = static_cast<Eigen::Index>(train.size());
+    const int L = static_cast<int>(std::min<Eigen::Index>(20, ns / 4));
+    double num = 0.0, den = 0.0;
+    for (int c = 0; c < 6; ++c) {
+      Eigen::VectorXd rc(ns);
+      for (Eigen::Index a = 0; a < ns; ++a) rc(a) = cur.r(6 * a + c);
+      rc.array() -= rc.mean();
+      const double v0 = rc.squaredNorm();
+      if (!(v0 > 0)) continue;
+      double factor = 1.0;
+      for (int l = 1; l <= L; ++l) factor += 2.0 * (1.0 - l / (L + 1.0)) * rc.head(ns - l).dot(rc.tail(ns - l)) / v0;
+      num += v0 * std::max(1.0, factor);
+      den += v0;
+    }
+    f.variance_inflation = den > 0 ? num / den : 1.0;
+    f.cov *= f.variance_inflation;
+  }
+  f.evaluations = ev.evaluations;
+  f.reported = m.report(f);
+  f.invalid = m.check(f);
+  return f;
+}
+
+Eigen::MatrixXd predict(const Model& m, const Fit& f, std::size_t samples) {
+  Eigen::MatrixXd A;
+  m.design(f.phi, A);
+  const Eigen::VectorXd y = A * f.theta;
+  Eigen::MatrixXd out(static_cast<Eigen::Index>(samples), 6);
+  for (Eigen::Index k = 0; k < out.rows(); ++k)
+    for (int c = 0; c < 6; ++c) out(k, c) = y(6 * k + c);
+  return out;
+}
+
+double relative_error(const Observations& obs, const Eigen::MatrixXd& prediction, const std::vector<int>& samples) {
+  double s = 0.0;
+  for (int k : samples)
+    for (int c = 0; c < 6; ++c) {
+      const double r = obs.weight(c) * (obs.y(k, c) - prediction(k, c));
+      s += r * r;
+    }
+  return samples.empty() ? 0.0 : std::sqrt(s / (6.0 * static_cast<double>(samples.size())));
+}
+
+std::vector<std::vector<int>> time_blocks(std::size_t samples, int folds) {
+  folds = std::max(1, std::min<int>(folds, static_cast<int>(samples)));
+  std::vector<std::vector<int>> out(static_cast<std::size_t>(folds));
+  for (std::size_t k = 0; k < samples; ++k)
+    out[std::min<std::size_t>(k * static_cast<std::size_t>(folds) / samples, static_cast<std::size_t>(folds) - 1)].push_back(
+        static_cast<int>(k));
+  return out;
+}
+
+Score score(const Model& m, const Observations& obs, const CvOptions& o) {
+  const auto t0 = std::chrono::steady_clock::now();
+  Score s;
+  s.model = m.name();
+  const std::size_t n = obs.size();
+  std::vector<int> all(n);
+  for (std::size_t k = 0; k < n; ++k) all[k] = static_cast<int>(k);
+  s.full = fit(m, obs, all, o.fit);
+  s.train_error = relative_error(obs, predict(m, s.full, n), all);
+  s.cv_prediction = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(n), 6);
+  for (const auto& block : time_blocks(n, o.folds)) {
+    if (block.empty()) continue;
+    std::vector<int> train;
+    for (int k : all)
+      if (k < block.front() - o.gap_samples || k > block.back() + o.gap_samples) train.push_back(k);
+    if (train.empty()) continue;
+    const Fit f = fit(m, obs, train, o.fit);
+    const Eigen::MatrixXd pr = predict(m, f, n);
+    for (int k : block) s.cv_prediction.row(k) = pr.row(k);
+  }
+  s.cv_error = relative_error(obs, s.cv_prediction, all);
+  const double rows = static_cast<double>(s.full.rows);
+  const double k = static_cast<double>(s.full.rank);
+  const double ll = rows * std::log(std::max(s.full.rss, 1e-300) / rows);
+  s.bic = ll + k * std::log(rows);
+  s.aic = ll + 2.0 * k;
+  s.min_extension_pnr = std::numeric_limits<double>::infinity();
+  s.max_extension_pnr = 0.0;
+  bool any = false;
+  for (const auto& r : s.full.reported)
+    if (r.extension) {
+      any = true;
+      s.min_extension_pnr = std::min(s.min_extension_pnr, r.pnr());
+      s.max_extension_pnr = std::max(s.max_extension_pnr, r.pnr());
+    }
+  if (!any) s.min_extension_pnr = 0.0;
+  s.identifiable = s.max_extension_pnr >= 5.0;
+  s.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return s;
+}
+
+}  // namespace hil::diagnose
