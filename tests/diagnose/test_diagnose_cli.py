@@ -45,7 +45,8 @@ class Diagnose(unittest.TestCase):
 
     def test_hidden_sensor_bias_is_named_with_its_magnitude(self):
         run = self.simulate("bias", "sensor_bias")
-        truth = json.load(open(run + ".truth.json"))
+        with open(run + ".truth.json") as f:
+            truth = json.load(f)
         self.assertEqual(truth["effects"], ["sensor_bias"])
         with open(os.path.join(run, "run.yaml")) as f:
             self.assertNotIn("sensor_bias", f.read())  # the run does not give the answer away
@@ -54,7 +55,8 @@ class Diagnose(unittest.TestCase):
         self.assertEqual(r.returncode, 0, r.stderr)
         self.assertIn("cause:           sensor_bias", r.stdout)
         self.assertIn("[diagnose ", r.stderr)  # progress lines
-        d = json.load(open(js))
+        with open(js) as f:
+            d = json.load(f)
         self.assertEqual(d["cause"]["name"], "sensor_bias")
         self.assertIsNone(d["second_cause"])
         self.assertGreater(d["gain_percent"], 50)
@@ -68,7 +70,8 @@ class Diagnose(unittest.TestCase):
         for c in d["candidates"]:
             for key in ("relative_error", "gain_percent", "bic", "max_pnr", "supported", "verdict"):
                 self.assertIn(key, c)
-        html = open(os.path.join(rep, "index.html")).read()
+        with open(os.path.join(rep, "index.html")) as f:
+            html = f.read()
         self.assertIn("Candidate ranking", html)
         self.assertIn("<svg", html)
 
@@ -77,7 +80,8 @@ class Diagnose(unittest.TestCase):
         js = os.path.join(self.dir, "d.json")
         r = hil("diagnose", run, "--json", js, "--quiet")
         self.assertEqual(r.returncode, 0, r.stderr)
-        d = json.load(open(js))
+        with open(js) as f:
+            d = json.load(f)
         self.assertEqual(d["cause"]["name"], "none")
         self.assertEqual(d["gain_percent"], 0.0)
         self.assertEqual(r.stderr, "")
@@ -121,15 +125,19 @@ class Diagnose(unittest.TestCase):
         r = hil("diagnose", run, "--rig", os.path.join(SRC, "examples", "import", "tiago_suspension_rig.yaml"), "--json", js,
                 "--quiet")
         self.assertEqual(r.returncode, 0, r.stderr)
-        d = json.load(open(js))
+        with open(js) as f:
+            d = json.load(f)
         self.assertEqual(d["mode"], "deflection")
         self.assertGreater(d["nominal"]["relative_error"], 0.05)  # the base moves: the rigid model is wrong
-        comp = [c for c in d["candidates"] if c["name"] == "robot_compliance"][0]
-        self.assertGreater(comp["gain_percent"], 5)
-        # ... but the compliance that fits best is not positive semi-definite (the yaw slips).
-        self.assertIn("not physical", comp["verdict"])
-        self.assertEqual(d["cause"]["name"], "none")
-
+        # The base tilts elastically under the swinging arm's moment: a compliance is named, with a
+        # positive pitch compliance; the yaw slips stay unexplained (docs/case-study-tiago.md).
+        self.assertEqual(d["cause"]["name"], "robot_compliance")
+        self.assertGreater(d["gain_percent"], 5)
+        self.assertLess(d["extended"]["relative_error"], d["nominal"]["relative_error"])
+        c = d["cause"]["parameters"]["C_ry_ry"]
+        self.assertGreater(c["value"], 0)
+        self.assertGreaterEqual(c["pnr"], 5)
+        self.assertIn("follows load_my", r.stdout)
 
 if __name__ == "__main__":
     unittest.main(argv=[sys.argv[0]], verbosity=2)

@@ -20,12 +20,15 @@ struct Case {
   unsigned seed;
 };
 
-std::string case_name(const ::testing::TestParamInfo<Case>& i) {
-  std::string n = i.param.scene;
-  for (const auto& e : i.param.effects) n += "_" + e;
-  if (i.param.effects.empty()) n += "_clean";
-  return n + "_" + std::to_string(i.param.seed);
+std::string label(const Case& c) {
+  std::string n = c.scene;
+  for (const auto& e : c.effects) n += "_" + e;
+  if (c.effects.empty()) n += "_clean";
+  return n + "_" + std::to_string(c.seed);
 }
+std::string case_name(const ::testing::TestParamInfo<Case>& i) { return label(i.param); }
+// Readable test names in ctest (instead of the parameter's bytes).
+void PrintTo(const Case& c, std::ostream* os) { *os << label(c); }
 
 /// The true value of a reported parameter, if the test knows it.
 std::optional<double> truth_of(const std::string& name, const Effects& e, const cid::Scene& s) {
