@@ -70,10 +70,14 @@ class Cli(unittest.TestCase):
     def test_demo_runs_the_chain(self):
         out = tempfile.mkdtemp()
         try:
-            r = hil("demo", "--out", os.path.join(out, "run"), "--speed", "2")
+            r = hil("demo", "--out", os.path.join(out, "run"), "--speed", "2", "--seed", "4")
             self.assertEqual(r.returncode, 0, r.stdout + r.stderr)
-            self.assertIn("[5/5] done", r.stdout)
-            self.assertRegex(r.stdout, r"K = 1\.[6-9]\d*e\+05")
+            self.assertRegex(r.stdout, r"\d+ ContactEstimate messages received")
+            self.assertNotIn(" 0 ContactEstimate", r.stdout)
+            self.assertIn("cause:           sensor_bias", r.stdout)
+            self.assertIn("[6/6] the hidden effect was sensor_bias", r.stdout)
+            self.assertIn("named by the diagnosis", r.stdout)
+            self.assertTrue(os.path.exists(os.path.join(out, "run-diagnosis", "index.html")))
             self.assertEqual(hil("validate", os.path.join(out, "run")).returncode, 0)
         finally:
             shutil.rmtree(out)

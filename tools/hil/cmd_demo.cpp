@@ -1,7 +1,9 @@
-// `hil demo`: the README's main job on shipped data, no hardware needed. The fake rig plays the
-// example run (ATI plate on an in-process CAN bus, a Modbus robot controller on 127.0.0.1), the
-// rig service acquires, records and publishes it on DDS, a subscriber watches the bus, and the
-// recorded run is checked against what was played. Identification and diagnosis join as they land.
+// `hil demo`: the README's main job on shipped data, no hardware needed. A run of the press bench
+// is simulated with a hidden effect chosen by seed; the fake rig plays it (ATI plate on an
+// in-process CAN bus, a Modbus robot controller on 127.0.0.1); the rig service acquires, records
+// and publishes it on DDS while the online contact worker publishes estimates and a monitor
+// watches the bus; the recording is checked against what was played, contact stiffness and
+// friction are identified, and the diagnosis names what the nominal model gets wrong.
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
@@ -10,9 +12,13 @@
 #include <filesystem>
 #include <iostream>
 #include <mutex>
+#include <sstream>
 
 #include "acquire/acquire.hpp"
 #include "contact/identify.hpp"
+#include "contact/simulate.hpp"
+#include "contact/worker.hpp"
+#include "run_diagnosis.hpp"
 #include "commands.hpp"
 #include "hil/acquisition/recorder.hpp"
 #include "hil/dds/bus.hpp"
@@ -23,11 +29,16 @@
 namespace hil::cli {
 namespace {
 struct DemoOptions {
-  std::string example = std::string(HIL_SOURCE_DIR) + "/examples/runs/press_slide";
+  std::string trajectory = std::string(HIL_SOURCE_DIR) + "/examples/trajectories/press_slide.csv";
   std::string rig = std::string(HIL_SOURCE_DIR) + "/examples/rigs/press_bench.yaml";
   std::string out;
   double speed = 1.0;
+  unsigned seed = 1;
+  std::string effect;  ///< empty: chosen by the seed
 };
+// The effects the press bench's trajectory can tell apart (a single sliding speed makes viscous
+// friction indistinguishable from μ, for instance: docs/diagnosis.md).
+const std::vector<std::string> kDemoEffects{"sensor_bias", "sensor_gain", "nonlinear_stiffness", "geometric_offset"};
 }  // namespace
 
 int demo(const DemoOptions& o) {
@@ -35,32 +46,47 @@ int demo(const DemoOptions& o) {
   const std::string out = o.out.empty() ? (fs::temp_directory_path() / "hil-demo" /
                                            fmt::format("run-{}", acquisition::realtime_ns() / 1'000'000)).string()
                                         : o.out;
-  const auto played = format::load_run(o.example);
-  std::cout << "hil demo: the fake rig plays an example run; hil acquires, records and publishes it, then\n"
-               "  identifies the contact stiffness and friction from the recording.\n"
-               "  (the diagnosis of what the simulation gets wrong joins this demo when it is built: issue 6)\n\n";
-  std::cout << fmt::format("[1/5] example run {}: {} samples, {:.1f} s; rig {}\n", o.example, played.samples.size(),
-                           played.samples.samples.back().t_s, o.rig);
+  const std::string effect = o.effect.empty() ? kDemoEffects[o.seed % kDemoEffects.size()] : o.effect;
+  std::cout << "hil demo: a press-and-slide run with a hidden effect goes through the fake rig, acquisition and DDS;\n"
+               "  the contact worker estimates online, the recording is identified, and the diagnosis names\n"
+               "  what the nominal contact model gets wrong.\n\n";
+
+  // 1. The played run: the rig's contact scene along the trajectory, with the hidden effect.
+  const std::string played_dir = out + "-played", truth_file = out + "-hidden-truth.json";
+  std::cout << fmt::format("[1/6] simulating {} on {} with a hidden effect (seed {})\n      ", o.trajectory, o.rig, o.seed);
+  SimulateArgs sa;
+  sa.rig = o.rig;
+  sa.trajectory = o.trajectory;
+  sa.out = played_dir;
+  sa.force_resolution = 0.05;
+  sa.force_noise = 0.1;
+  sa.moment_resolution = 0.002;
+  sa.moment_noise = 0.005;
+  sa.seed = static_cast<int>(o.seed);
+  sa.inject = {effect};
+  sa.effect_seed = o.seed;
+  sa.truth_out = truth_file;
+  fs::create_directories(fs::path(out).parent_path());
+  simulate_run(sa);
+  const auto played = format::load_run(played_dir);
 
   auto& g = globals();
   dds::Participant participant({g.dds_domain >= 0 ? g.dds_domain : dds::domain_from_env(), g.dds_profile, g.dds_profile_name,
                                 "hil-demo-monitor"});
-  std::atomic<std::uint64_t> bus_samples{0}, bus_status{0};
-  std::mutex m;
-  std::string last_status;
+  std::atomic<std::uint64_t> bus_samples{0}, bus_status{0}, bus_estimates{0};
   dds::Reader<hil_msgs::msg::PoseWrenchSample> samples(participant, dds::topics::kPoseWrenchSample,
                                                        [&](const auto&, const auto&) { ++bus_samples; });
-  dds::Reader<hil_msgs::msg::DeviceStatus> status(participant, dds::topics::kDeviceStatus, [&](const auto& s, const auto&) {
-    ++bus_status;
-    std::lock_guard<std::mutex> lock(m);
-    last_status = s.device() + (s.connected() ? " connected" : " disconnected");
-  }, dds::StreamQos{true, 0, 10});
+  dds::Reader<hil_msgs::msg::DeviceStatus> status(participant, dds::topics::kDeviceStatus,
+                                                  [&](const auto&, const auto&) { ++bus_status; }, dds::StreamQos{true, 0, 10});
+  dds::Reader<hil_msgs::msg::ContactEstimate> estimates(participant, dds::topics::kContactEstimate,
+                                                        [&](const auto&, const auto&) { ++bus_estimates; });
+  ContactWorker worker(participant, *played.rig);
 
-  std::cout << fmt::format("[2/5] acquiring from the fake rig (in-process CAN bus, Modbus on 127.0.0.1) into {}\n", out);
+  std::cout << fmt::format("[2/6] acquiring from the fake rig (in-process CAN bus, Modbus on 127.0.0.1) into {}\n", out);
   AcquireOptions ao;
   ao.rig = o.rig;
   ao.out = out;
-  ao.play = o.example;
+  ao.play = played_dir;
   ao.play_speed = o.speed;
   ao.output_rate_hz = played.info.output_rate_hz;
   ao.progress = false;
@@ -72,15 +98,20 @@ int demo(const DemoOptions& o) {
     const auto i = ++n;
     if (i % 25 == 0) {
       const double el = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-      std::cout << fmt::format("\r      {:5.1f} / {:.1f} s, {} samples, {} seen on the bus", el, total_s, i, bus_samples.load())
+      std::cout << fmt::format("\r      {:5.1f} / {:.1f} s, {} samples, {} seen on the bus, {} contact estimates", el, total_s, i,
+                               bus_samples.load(), bus_estimates.load())
                 << std::flush;
     }
   });
   std::this_thread::sleep_for(std::chrono::milliseconds(300));
-  std::cout << "\n" << fmt::format("      {}\n      bus: {} PoseWrenchSample, {} DeviceStatus messages received\n", result.summary,
-                                   bus_samples.load(), bus_status.load());
+  worker.flush();
+  const auto online = worker.global();
+  std::cout << "\n" << fmt::format("      {}\n      bus: {} PoseWrenchSample, {} DeviceStatus, {} ContactEstimate messages received\n"
+                                   "      online worker: {} samples, running K = {:.4g} N/m, mu = {:.3f}\n",
+                                   result.summary, bus_samples.load(), bus_status.load(), bus_estimates.load(), worker.processed(),
+                                   online.K, online.mu);
 
-  std::cout << fmt::format("[3/5] checking the recorded run {}\n", out);
+  std::cout << fmt::format("[3/6] checking the recorded run {}\n", out);
   const auto rec = format::load_run(out);
   print_samples_summary(std::cout, rec.samples);
   double fz_rec = 0, fz_played = 0;
@@ -88,30 +119,49 @@ int demo(const DemoOptions& o) {
   for (const auto& s : played.samples.samples) fz_played = std::min(fz_played, s.f_fp_n.z());
   std::cout << fmt::format("      peak fz played {:.2f} N, recorded {:.2f} N\n", fz_played, fz_rec);
 
-  std::cout << "[4/5] contact identification on the recorded run (K, mu by least squares, paper 2)\n";
+  std::cout << "[4/6] contact identification on the recorded run (K, mu by least squares, paper 2)\n";
   const auto problem = contact::problem_from_run(rec);
   contact::IdentifyOptions io;
   const auto ident = contact::identify(problem, io);
-  const auto report_dir = (fs::path(out).parent_path() / (fs::path(out).filename().string() + "-report")).string();
-  contact::write_report(report_dir, fs::path(out).filename().string(), problem, ident);
+  const auto base = (fs::path(out).parent_path() / fs::path(out).filename()).string();
+  contact::write_report(base + "-contact-report", fs::path(out).filename().string(), problem, ident);
   const auto& rig_contact = *rec.rig->model.contact;
   std::cout << fmt::format("      K = {:.4g} +- {:.2g} N/m (rig: {:.4g}), mu = {:.3f} +- {:.2g} (rig: {:.3f}), mean relative force error {:.1f} %\n",
                            ident.nominal.K, ident.nominal.K_std, rig_contact.stiffness_n_per_m, ident.nominal.mu, ident.nominal.mu_std,
                            rig_contact.friction_coefficient, 100.0 * ident.nominal.relative_force_error);
-  std::cout << "      report: " << (fs::path(report_dir) / "index.html").string() << "\n";
+  std::cout << "      report: " << (fs::path(base + "-contact-report") / "index.html").string() << "\n";
 
-  std::cout << "[5/5] done. Look at it live with `hil echo pose_wrench`, replay it with `hil replay " << out << "`.\n";
+  std::cout << "[5/6] diagnosis of the recorded run (blind: it does not read the hidden truth)\n";
+  diagnose::Options dopt;
+  dopt.progress = [](int step, int total, const std::string& what) {
+    std::cout << fmt::format("\r      [{}/{}] {:<60}", step, total, what) << std::flush;
+  };
+  const auto diag = diagnose::diagnose_run(rec, dopt);
+  std::cout << "\r" << std::string(80, ' ') << "\r";
+  std::ostringstream summary;
+  diagnose::print_summary(summary, diag);
+  std::istringstream lines(summary.str());
+  for (std::string line; std::getline(lines, line);) std::cout << "      " << line << "\n";
+  diagnose::write_report(base + "-diagnosis", diag);
+  std::cout << "      report: " << (fs::path(base + "-diagnosis") / "index.html").string() << "\n";
+
+  const bool named = diag.result.cause == effect;
+  std::cout << fmt::format("[6/6] the hidden effect was {} ({}): {}\n", effect, truth_file,
+                           named ? "named by the diagnosis" : "NOT named by the diagnosis (" + diag.result.cause + ")");
+  std::cout << "      Look at it live with `hil echo pose_wrench`, replay it with `hil replay " << out << "`.\n";
   const bool ok = rec.samples.size() > 0 && bus_samples == rec.samples.size() && std::abs(fz_rec - fz_played) < 5.0 &&
-                  std::abs(ident.nominal.K / rig_contact.stiffness_n_per_m - 1.0) < 0.2;
-  if (!ok) std::cout << "demo: the bus, the recording and the played run disagree (see above)\n";
+                  worker.processed() > 0 && named;
+  if (!ok) std::cout << "demo: the bus, the recording, the played run or the diagnosis disagree (see above)\n";
   return ok ? 0 : 1;
 }
 
 void add_demo(CLI::App& app) {
   auto* cmd = app.add_subcommand("demo", "Run the main job on the shipped example data (no hardware needed)");
   static DemoOptions o;
-  cmd->add_option("--run", o.example, "run for the fake rig to play")->capture_default_str();
-  cmd->add_option("--rig", o.rig, "rig file")->capture_default_str();
+  cmd->add_option("--trajectory", o.trajectory, "ee trajectory to simulate the run from")->capture_default_str();
+  cmd->add_option("--rig", o.rig, "rig file (with a contact model)")->capture_default_str();
+  cmd->add_option("--seed", o.seed, "chooses the hidden effect and its magnitude")->capture_default_str();
+  cmd->add_option("--effect", o.effect, "hide this effect instead (a diagnosis candidate)");
   cmd->add_option("--out", o.out, "where to record (default: a new folder under the temp directory)");
   cmd->add_option("--speed", o.speed, "playback speed")->capture_default_str();
   cmd->callback([] { set_action([] { return demo(o); }); });

@@ -17,6 +17,7 @@
 #include "hil/diagnose/contact_family.hpp"
 #include "identify.hpp"
 #include "rig_adapter.hpp"
+#include "simulate.hpp"
 #include "worker.hpp"
 
 namespace hil::cli {
@@ -25,17 +26,6 @@ namespace cid = hil::contact_id;
 namespace fs = std::filesystem;
 
 namespace {
-
-struct SimulateArgs {
-  std::string rig, trajectory, truth, out;
-  int decimate = 1;
-  double force_resolution = -1, moment_resolution = -1, position_resolution = -1, velocity_resolution = -1;
-  double force_noise = -1, moment_noise = -1;
-  int seed = -1;
-  std::vector<std::string> inject;  ///< hidden effects (diagnosis candidates) drawn with effect_seed
-  unsigned effect_seed = 1;
-  std::string truth_out;
-};
 
 /// The hidden truth of an injected simulation, for the test that checks the diagnosis.
 nlohmann::json effects_json(const hil::diagnose::Effects& e, const cid::ContactModel& m, unsigned seed) {
@@ -60,7 +50,9 @@ nlohmann::json effects_json(const hil::diagnose::Effects& e, const cid::ContactM
   return j;
 }
 
-int simulate(const SimulateArgs& a) {
+}  // namespace
+
+int simulate_run(const SimulateArgs& a) {
   const auto rig = format::load_rig(a.rig);
   const auto scene = contact::scene_from_rig(rig);
   contact::Truth truth;
@@ -133,6 +125,8 @@ int simulate(const SimulateArgs& a) {
   return 0;
 }
 
+namespace {
+
 struct IdentifyArgs {
   std::string run, rig, json, report;
   bool geometric = false;
@@ -193,7 +187,7 @@ void add_contact(CLI::App& app) {
       ->delimiter(',');
   sim->add_option("--effect-seed", sa.effect_seed, "seed of the injected effects' random magnitudes")->capture_default_str();
   sim->add_option("--truth-out", sa.truth_out, "write the injected effects (the hidden truth) as JSON");
-  sim->callback([] { set_action([] { return simulate(sa); }); });
+  sim->callback([] { set_action([] { return simulate_run(sa); }); });
 
   static IdentifyArgs ia;
   auto* id = contact->add_subcommand("identify", "Identify K and mu (and optionally the geometric uncertainties) from a run");

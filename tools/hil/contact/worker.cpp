@@ -35,19 +35,33 @@ struct WorkerArgs {
 
 int worker(const WorkerArgs& a) {
   const auto rig = format::load_rig(a.rig);
+  auto& g = globals();
+  dds::Participant participant({g.dds_domain >= 0 ? g.dds_domain : dds::domain_from_env(), g.dds_profile,
+                                g.dds_profile_name, "hil-contact-worker"});
+  ContactWorker w(participant, rig);
+  std::signal(SIGINT, on_signal);
+  std::signal(SIGTERM, on_signal);
+  const auto t0 = std::chrono::steady_clock::now();
+  while (!g_stop && (a.count <= 0 || w.processed() < a.count) &&
+         (a.duration <= 0 || std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() < a.duration))
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  w.flush();
+  const auto e = w.global();
+  std::cout << fmt::format("contact worker: {} samples, running global K = {:.5g} ± {:.3g} N/m, mu = {:.4g} ± {:.3g}\n",
+                           w.processed(), e.K, e.K_std, e.mu, e.mu_std);
+  return 0;
+}
+}  // namespace
+
+ContactWorker::ContactWorker(dds::Participant& participant, const format::RigSpec& rig) {
   const auto scene = contact::scene_from_rig(rig);
   const auto model = contact::model_from_rig(rig);
   const double F = rig.model.contact->force_scale_n > 0 ? rig.model.contact->force_scale_n : 50.0;
   const double M = rig.model.contact->moment_scale_nm > 0 ? rig.model.contact->moment_scale_nm : 5.0;
-  cid::OnlineEstimator est(scene, model.v_tm, F, M);
-  auto& g = globals();
-  dds::Participant participant({g.dds_domain >= 0 ? g.dds_domain : dds::domain_from_env(), g.dds_profile,
-                                g.dds_profile_name, "hil-contact-worker"});
-  dds::Writer<hil_msgs::msg::ContactEstimate> writer(participant, dds::topics::kContactEstimate);
-  std::atomic<long> processed{0};
-  std::mutex mu;
-  dds::Reader<hil_msgs::msg::PoseWrenchSample> reader(
-      participant, dds::topics::kPoseWrenchSample, [&](const hil_msgs::msg::PoseWrenchSample& m, const auto&) {
+  est_ = std::make_unique<cid::OnlineEstimator>(scene, model.v_tm, F, M);
+  writer_ = std::make_unique<dds::Writer<hil_msgs::msg::ContactEstimate>>(participant, dds::topics::kContactEstimate);
+  reader_ = std::make_unique<dds::Reader<hil_msgs::msg::PoseWrenchSample>>(
+      participant, dds::topics::kPoseWrenchSample, [this](const hil_msgs::msg::PoseWrenchSample& m, const auto&) {
         const auto s = acquisition::from_message(m);
         cid::Measurement meas;
         meas.t_s = s.t_s;
@@ -56,25 +70,19 @@ int worker(const WorkerArgs& a) {
         meas.kin.v_world_ee = s.v_world_ee_m_per_s;
         meas.kin.w_world_ee = s.w_world_ee_rad_per_s;
         meas.w_fp << s.f_fp_n, s.m_fp_nm;
-        std::lock_guard<std::mutex> lock(mu);
-        writer.write(to_message(est.update(meas)));
-        ++processed;
+        std::lock_guard<std::mutex> lock(mu_);
+        writer_->write(to_message(est_->update(meas)));
+        ++processed_;
       });
-  std::signal(SIGINT, on_signal);
-  std::signal(SIGTERM, on_signal);
   spdlog::info("contact worker: {} -> {} (rig {})", dds::topics::kPoseWrenchSample, dds::topics::kContactEstimate, rig.name);
-  const auto t0 = std::chrono::steady_clock::now();
-  while (!g_stop && (a.count <= 0 || processed < a.count) &&
-         (a.duration <= 0 || std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() < a.duration))
-    std::this_thread::sleep_for(std::chrono::milliseconds(20));
-  writer.wait_for_acknowledgments(std::chrono::seconds(2));
-  std::lock_guard<std::mutex> lock(mu);
-  const auto& e = est.global();
-  std::cout << fmt::format("contact worker: {} samples, running global K = {:.5g} ± {:.3g} N/m, mu = {:.4g} ± {:.3g}\n",
-                           processed.load(), e.K, e.K_std, e.mu, e.mu_std);
-  return 0;
 }
-}  // namespace
+
+contact_id::LinearEstimate ContactWorker::global() const {
+  std::lock_guard<std::mutex> lock(mu_);
+  return est_->global();
+}
+
+void ContactWorker::flush() { writer_->wait_for_acknowledgments(std::chrono::seconds(2)); }
 
 hil_msgs::msg::ContactEstimate to_message(const cid::OnlineEstimate& e) {
   hil_msgs::msg::ContactEstimate m;

@@ -1,5 +1,6 @@
 #include "hil/diagnose/contact_family.hpp"
 
+#include <Eigen/Eigenvalues>
 #include <Eigen/SVD>
 #include <algorithm>
 #include <cmath>
@@ -403,6 +404,33 @@ std::vector<Reported> ContactFamily::report(const Fit& f) const {
       }
   }
   return out;
+}
+
+std::string ContactFamily::check(const Fit& f) const {
+  for (const auto& q : f.reported) {
+    const bool nonneg = q.name == "mu" || q.name == "viscous_n_s_per_m" || q.name == "damping_n_s_per_m";
+    if (q.name == "K" && !(q.value > 0)) return "K = " + std::to_string(q.value) + " N/m is not positive";
+    if (nonneg && q.value < -2.0 * q.std) return q.name + " = " + std::to_string(q.value) + " is negative";
+    if (q.name == "stiffness_exponent" && !(q.value > 0)) return "the stiffness exponent is not positive";
+  }
+  if (i_cmp_ >= 0 && !basis_.empty()) {
+    // C in balanced units (µm/N, 0.1 mrad/(N m)): positive semi-definiteness is invariant under it.
+    Vec6 s;
+    s << 1e3, 1e3, 1e3, 1e2, 1e2, 1e2;
+    const Eigen::Index p = static_cast<Eigen::Index>(linear_.size()), r = static_cast<Eigen::Index>(basis_.size());
+    Mat6 C = Mat6::Zero(), V = Mat6::Zero();
+    for (Eigen::Index m = 0; m < r; ++m) C += f.phi(i_cmp_ + m) * basis_[static_cast<std::size_t>(m)];
+    for (int i = 0; i < 6; ++i)
+      for (int j = 0; j < 6; ++j) {
+        Eigen::VectorXd b(r);
+        for (Eigen::Index m = 0; m < r; ++m) b(m) = basis_[static_cast<std::size_t>(m)](i, j);
+        V(i, j) = std::sqrt(std::max(0.0, b.dot(f.cov.block(p + i_cmp_, p + i_cmp_, r, r) * b)));
+      }
+    const Mat6 Cs = s.asDiagonal() * C * s.asDiagonal(), Vs = s.asDiagonal() * V * s.asDiagonal();
+    const double lo = Eigen::SelfAdjointEigenSolver<Mat6>(Cs).eigenvalues()(0);
+    if (lo < -2.0 * Vs.norm()) return "the compliance is not positive semi-definite";
+  }
+  return "";
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -70,6 +70,9 @@ class ContactFamily : public Model {
   std::vector<Eigen::VectorXd> starts() const override;
   void design(const Eigen::VectorXd& phi, Eigen::MatrixXd& A) const override;
   std::vector<Reported> report(const Fit& f) const override;
+  /// K > 0, μ >= 0, c_v >= 0, D >= 0 (each within two standard deviations), p > 0, and a positive
+  /// semi-definite compliance.
+  std::string check(const Fit& f) const override;
   const std::set<std::string>& extensions() const { return ext_; }
   /// The compliance directions (21 symmetric coordinates -> 6x6) kept for robot_compliance.
   const std::vector<Mat6>& compliance_basis() const { return basis_; }
