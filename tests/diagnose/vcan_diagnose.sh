@@ -1,0 +1,51 @@
+#!/bin/sh
+# The whole rig with a hidden effect (issue 6): a press-and-slide run simulated with a sensor bias
+# drawn by seed is played by `hil fake-rig` on vcan0 (the ATI plate on a real CAN_RAW socket, the
+# Modbus controller on 127.0.0.1), `hil acquire` records it, and `hil diagnose` must name the bias
+# blind, with the drawn values inside its intervals.
+# usage: vcan_diagnose.sh HIL SOURCE_DIR WORK_DIR
+set -eu
+HIL=$1 SRC=$2 WORK=$3
+rm -rf "$WORK"; mkdir -p "$WORK"
+# The guest emulates the CPU (TCG): poll the plate at 200 Hz (as vcan_acquire.sh does).
+sed 's/^    rate_hz: 1000$/    rate_hz: 200/' "$SRC/examples/rigs/press_bench.yaml" > "$WORK/rig.yaml"
+grep -q "rate_hz: 200" "$WORK/rig.yaml" || { echo "could not set the plate rate"; exit 1; }
+"$HIL" contact simulate --rig "$WORK/rig.yaml" --trajectory "$SRC/examples/trajectories/press_slide.csv" \
+  --out "$WORK/played" --force-resolution 0.05 --force-noise 0.1 --moment-resolution 0.002 --moment-noise 0.005 \
+  --seed 4 --inject sensor_bias --effect-seed 4 --truth-out "$WORK/truth.json" > "$WORK/simulate.log"
+PORT=${HIL_FAKE_PORT:-15021}
+"$HIL" fake-rig --rig "$WORK/rig.yaml" --run "$WORK/played" --loop --can vcan0 --port $PORT > "$WORK/fake-rig.log" 2>&1 &
+FR=$!
+i=0
+until grep -q "robot controller Modbus" "$WORK/fake-rig.log" 2>/dev/null; do
+  i=$((i + 1)); [ $i -le 300 ] || { echo "fake-rig did not start"; cat "$WORK/fake-rig.log"; exit 1; }
+  sleep 0.1
+done
+sleep 0.5
+HIL_DDS_DOMAIN=${HIL_DDS_DOMAIN:-172} "$HIL" acquire --rig "$WORK/rig.yaml" --out "$WORK/run" \
+  --can-interface vcan0 --robot-port $PORT --duration 6.5 > "$WORK/acquire.log" 2>&1 ||
+  { echo "hil acquire failed:"; cat "$WORK/acquire.log"; echo "fake-rig:"; cat "$WORK/fake-rig.log"; exit 1; }
+kill $FR; wait $FR 2>/dev/null || true
+"$HIL" diagnose "$WORK/run" --json "$WORK/diagnosis.json" --quiet > "$WORK/diagnosis.txt" ||
+  { echo "hil diagnose failed"; cat "$WORK/diagnosis.txt"; exit 1; }
+/usr/bin/python3 - "$WORK" <<'PY'
+import json, sys
+work = sys.argv[1]
+with open(work + "/truth.json") as f:
+    truth = json.load(f)
+with open(work + "/diagnosis.json") as f:
+    d = json.load(f)
+summary = open(work + "/diagnosis.txt").read()
+assert d["cause"]["name"] == "sensor_bias", "named %s, not sensor_bias:\n%s" % (d["cause"]["name"], summary)
+assert d["gain_percent"] > 0, summary
+# The truth inside the reported interval (3 std) for the components off the sliding direction. The
+# run slides along x: there the acquisition chain (anti-aliasing filter at the contact transitions,
+# twist from filtered differences) distorts the friction signal (mu ~0.17 against 0.20 on a clean
+# run, docs/diagnosis.md), which leaks into the fx and my offsets: those within 30 %.
+for i, c in enumerate(["fx", "fy", "fz", "mx", "my", "mz"]):
+    p = d["cause"]["parameters"]["bias_" + c]
+    t = truth["sensor_bias"][i]
+    tol = 0.3 * abs(t) if c in ("fx", "my") else 3 * p["std"]
+    assert abs(p["value"] - t) <= tol, (c, p, t, summary)
+print("vcan diagnose: %d samples, cause %s, gain %.1f %%" % (d["samples"], d["cause"]["name"], d["gain_percent"]))
+PY
