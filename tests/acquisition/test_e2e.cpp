@@ -195,12 +195,16 @@ TEST(EndToEnd, InjectedFaultsAreReportedAndRecoveredFrom) {
     return std::int64_t{0};
   };
   const std::int64_t period_ns = 1'000'000;  // 1 kHz plate
+  // The 3-period rule itself is tested on exact time stamps (test_monitor.cpp); here, in wall-clock
+  // time with the fakes and the acquisition sharing two cores with other tests, allow 5 ms of
+  // scheduling slack (a run under CI load was 0.18 ms over a 1 ms slack).
+  const std::int64_t slack_ns = 5'000'000;
   // Silence: reported within 3 periods of the last reading, and cleared after.
   const auto silent_from = last_before_hole(plate_t.front());
   ASSERT_NE(silent_from, 0) << "the silent window left no hole in the raw stream";
   const auto* bad = log.first_bad("force_plate", silent_from);
   ASSERT_NE(bad, nullptr) << "silence never reported";
-  EXPECT_LE(bad->t_ns - silent_from, 3 * period_ns + 1'000'000) << "reported " << (bad->t_ns - silent_from) / 1e6 << " ms late";
+  EXPECT_LE(bad->t_ns - silent_from, 3 * period_ns + slack_ns) << "reported " << (bad->t_ns - silent_from) / 1e6 << " ms late";
   EXPECT_TRUE(bad->error.find("silent") != std::string::npos || bad->error.find("lost") != std::string::npos) << bad->error;
   EXPECT_NE(log.first_ok("force_plate", bad->t_ns), nullptr) << "never recovered from the silence";
   // Bus-off: the second hole in the raw stream; reported as a fault naming bus-off.
@@ -208,7 +212,7 @@ TEST(EndToEnd, InjectedFaultsAreReportedAndRecoveredFrom) {
   ASSERT_NE(busoff_from, 0);
   const auto* fault = log.first_bad("force_plate", busoff_from);
   ASSERT_NE(fault, nullptr);
-  EXPECT_LE(fault->t_ns - busoff_from, 3 * period_ns + 1'000'000) << "reported " << (fault->t_ns - busoff_from) / 1e6 << " ms late";
+  EXPECT_LE(fault->t_ns - busoff_from, 3 * period_ns + slack_ns) << "reported " << (fault->t_ns - busoff_from) / 1e6 << " ms late";
   bool named_bus_off = false;
   for (const auto& e : log.entries)
     if (e.device == "force_plate" && e.t_ns >= busoff_from && e.t_ns < busoff_from + 400'000'000)
