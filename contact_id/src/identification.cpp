@@ -97,6 +97,9 @@ ContactProblem::ContactProblem(Scene scene, std::vector<Measurement> data, const
       }
     reach_[u] *= 1.0 + 1e-9;
   }
+  for (int j = 0; j < static_cast<int>(M); ++j)
+    if (scene_.uncertainties[static_cast<std::size_t>(j)].kind == Uncertainty::Kind::rotation)
+      max_turn_rad_ = std::max(max_turn_rad_, fd_step(j) * (1.0 + 1e-6));  // room for rounding
   for (int b = 0; b < 2; ++b)
     if (fixed_body_[static_cast<std::size_t>(b)]) pose_body(b, scene_.bodies[static_cast<std::size_t>(b)].T_attach, posed_[static_cast<std::size_t>(b)]);
 
@@ -240,13 +243,17 @@ bool ContactProblem::out_of_reach(const VarPair& vp, double d1, double d2) const
   return vp.gap > (d1 + d2) * (1.0 + 1e-9) + 1e-12;
 }
 
+Regressor ContactProblem::pair_rows(const VarPair& vp, const PairContact& pc) const {
+  ContactPoint c{pc.delta, pc.point, pc.normal, Vec3::Zero(), 0.0, vp.p1, vp.p2};
+  tangent(scene_, data_[static_cast<std::size_t>(used_[static_cast<std::size_t>(vp.a)])].kin, opt_.v_tm, c);
+  return regressor_row(c, T_o1_[static_cast<std::size_t>(vp.a)]);
+}
+
 Regressor ContactProblem::pair_contact(const VarPair& vp, const PosedPolyhedron& A, const PosedPolyhedron& B, int* in_contact) const {
   PairContact pc;
   if (!near(A, B) || !penetration(A, B, pc, clip_)) return Regressor::Zero();
   if (in_contact) ++*in_contact;
-  ContactPoint c{pc.delta, pc.point, pc.normal, Vec3::Zero(), 0.0, vp.p1, vp.p2};
-  tangent(scene_, data_[static_cast<std::size_t>(used_[static_cast<std::size_t>(vp.a)])].kin, opt_.v_tm, c);
-  return regressor_row(c, T_o1_[static_cast<std::size_t>(vp.a)]);
+  return pair_rows(vp, pc);
 }
 
 void ContactProblem::regressor(const Eigen::VectorXd& x, Eigen::MatrixX2d& A, std::vector<int>* contacts) const {
@@ -260,14 +267,24 @@ void ContactProblem::regressor(const Eigen::VectorXd& x, Eigen::MatrixX2d& A, st
   for (Eigen::Index a = 0; a < L; ++a) A.block<6, 2>(6 * a, 0) = fixed_[static_cast<std::size_t>(a)];
   if (contacts) contacts->assign(fixed_contacts_.begin(), fixed_contacts_.end());
   prepare(x);
-  for (const auto& vp : var_) {
-    if (out_of_reach(vp, disp_[0][static_cast<std::size_t>(vp.f1)], disp_[1][static_cast<std::size_t>(vp.f2)])) continue;
+  base_x_.resize(0);  // invalid while being filled
+  base_sat_.resize(var_.size());
+  for (std::size_t i = 0; i < var_.size(); ++i) {
+    const auto& vp = var_[i];
+    base_sat_[i] = SatRecord{};
+    const double d1 = disp_[0][static_cast<std::size_t>(vp.f1)], d2 = disp_[1][static_cast<std::size_t>(vp.f2)];
+    if (out_of_reach(vp, d1, d2)) {
+      base_sat_[i].gap = vp.gap - (d1 + d2) * (1.0 + 1e-9) - 1e-12;  // > 0: a lower bound on their distance at x
+      continue;
+    }
     const auto& P1 = fixed_body_[0] ? posed_[0][static_cast<std::size_t>(vp.p1)] : posed(0, vp.p1, vp.a, Tf_[0][static_cast<std::size_t>(vp.f1)], pa_);
     const auto& P2 = fixed_body_[1] ? posed_[1][static_cast<std::size_t>(vp.p2)] : posed(1, vp.p2, vp.a, Tf_[1][static_cast<std::size_t>(vp.f2)], pb_);
-    int n = 0;
-    A.block<6, 2>(6 * vp.a, 0) += pair_contact(vp, P1, P2, &n);
-    if (contacts) (*contacts)[static_cast<std::size_t>(vp.a)] += n;
+    PairContact pc;
+    if (!penetration_recorded(P1, P2, max_turn_rad_, pc, base_sat_[i], clip_)) continue;
+    A.block<6, 2>(6 * vp.a, 0) += pair_rows(vp, pc);
+    if (contacts) ++(*contacts)[static_cast<std::size_t>(vp.a)];
   }
+  base_x_ = x;
   A.array().colwise() *= w_.array();
 }
 
@@ -276,6 +293,9 @@ void ContactProblem::sensitivity(const Eigen::VectorXd& x, int j, double h, Eige
   dA.setZero(6 * L, 2);
   const auto& U = scene_.uncertainties[static_cast<std::size_t>(j)];
   const auto mb = static_cast<std::size_t>(U.body), ob = 1 - mb;  // moved body, other body
+  // If the last regressor() call was at x (as in a solver's Jacobian after its residual), its
+  // separating-axis records spare the axis search at x ± h.
+  const bool cached = base_x_.size() == x.size() && base_x_ == x;
   Eigen::VectorXd xp = x, xm = x;
   xp[j] += h;
   xm[j] -= h;
@@ -296,18 +316,38 @@ void ContactProblem::sensitivity(const Eigen::VectorXd& x, int j, double h, Eige
         minus_[q].pose(feat.polyhedra[static_cast<std::size_t>(index[q].second)], Tb * Tm);
       }
   }
-  for (const auto& vp : var_) {
+  // How far x ± h moves the feature from x: the largest vertex displacement and the turn.
+  const auto& Tx = Tf_[mb][static_cast<std::size_t>(U.feature)];
+  auto motion = [&](const Eigen::Isometry3d& T, double& moved_m, double& turn_rad) {
+    moved_m = 0.0;
+    for (const auto& poly : scene_.bodies[mb].features[static_cast<std::size_t>(U.feature)].polyhedra)
+      for (const auto& v : poly.vertices()) moved_m = std::max(moved_m, (T * v - Tx * v).norm());
+    moved_m = moved_m * (1.0 + 1e-9) + 1e-15;  // rounding
+    // (exactly 0 for a translation: acos near 1 would turn rounding into ~1e-8 rad)
+    turn_rad = T.linear() == Tx.linear() ? 0.0 : Eigen::AngleAxisd(T.linear() * Tx.linear().transpose()).angle() * (1.0 + 1e-9);
+  };
+  double moved_p, turn_p, moved_m, turn_m;
+  motion(Tp, moved_p, turn_p);
+  motion(Tm, moved_m, turn_m);
+  for (std::size_t i = 0; i < var_.size(); ++i) {
+    const auto& vp = var_[i];
     const int f_moved = mb == 0 ? vp.f1 : vp.f2, f_other = mb == 0 ? vp.f2 : vp.f1;
     if (f_moved != U.feature) continue;
     if (out_of_reach(vp, dmoved, disp_[ob][static_cast<std::size_t>(f_other)])) continue;
     const int q_moved = mb == 0 ? vp.p1 : vp.p2, q_other = mb == 0 ? vp.p2 : vp.p1;
     const auto& O = fixed_body_[ob] ? posed_[ob][static_cast<std::size_t>(q_other)]
                                     : posed(static_cast<int>(ob), q_other, vp.a, Tf_[ob][static_cast<std::size_t>(f_other)], pb_);
-    const auto& Pp = fixed_body_[mb] ? plus_[static_cast<std::size_t>(q_moved)] : posed(static_cast<int>(mb), q_moved, vp.a, Tp, pa_);
-    const Regressor rp = mb == 0 ? pair_contact(vp, Pp, O, nullptr) : pair_contact(vp, O, Pp, nullptr);
-    const auto& Pm = fixed_body_[mb] ? minus_[static_cast<std::size_t>(q_moved)] : posed(static_cast<int>(mb), q_moved, vp.a, Tm, pa_);
-    const Regressor rm = mb == 0 ? pair_contact(vp, Pm, O, nullptr) : pair_contact(vp, O, Pm, nullptr);
-    dA.block<6, 2>(6 * vp.a, 0) += (rp - rm) / (2.0 * h);
+    const auto at = [&](const std::vector<PosedPolyhedron>& fixed_posed, const Eigen::Isometry3d& T, double moved,
+                        double turn) -> Regressor {
+      const auto& P = fixed_body_[mb] ? fixed_posed[static_cast<std::size_t>(q_moved)] : posed(static_cast<int>(mb), q_moved, vp.a, T, pa_);
+      const auto& A1 = mb == 0 ? P : O;
+      const auto& A2 = mb == 0 ? O : P;
+      if (!cached) return pair_contact(vp, A1, A2, nullptr);
+      PairContact pc;
+      if (!penetration_after_motion(A1, A2, base_sat_[i], moved, turn, pc, clip_)) return Regressor::Zero();
+      return pair_rows(vp, pc);
+    };
+    dA.block<6, 2>(6 * vp.a, 0) += (at(plus_, Tp, moved_p, turn_p) - at(minus_, Tm, moved_m, turn_m)) / (2.0 * h);
   }
   dA.array().colwise() *= w_.array();
 }
@@ -659,11 +699,16 @@ GeometricEstimate identify_geometry(const ContactProblem& p, const GeometricOpti
     const double alpha = 1.0, beta = 1.0 + 2.0 / n, gamma = 0.75 - 1.0 / (2.0 * n), delta = 1.0 - 1.0 / n;
     std::vector<Eigen::VectorXd> S(static_cast<std::size_t>(m + 1), z);
     std::vector<double> F(static_cast<std::size_t>(m + 1));
-    F[0] = f;
-    for (int i = 0; i < m; ++i) {
-      S[static_cast<std::size_t>(i + 1)][i] += 1.0;
-      F[static_cast<std::size_t>(i + 1)] = vp.residual(S[static_cast<std::size_t>(i + 1)], R, th);
-    }
+    // A simplex of unit steps (one prior std) about z0, whose value is f0.
+    auto start = [&](const Eigen::VectorXd& z0, double f0) {
+      for (auto& v : S) v = z0;
+      F[0] = f0;
+      for (int i = 0; i < m; ++i) {
+        S[static_cast<std::size_t>(i + 1)][i] += 1.0;
+        F[static_cast<std::size_t>(i + 1)] = vp.residual(S[static_cast<std::size_t>(i + 1)], R, th);
+      }
+    };
+    start(z, f);
     std::vector<int> ord(static_cast<std::size_t>(m + 1));
     auto eval = [&](const Eigen::VectorXd& v) { return vp.residual(v, R, th); };
     for (g.iterations = 0; g.iterations < o.max_iterations * 50 && vp.evaluations < o.max_evaluations; ++g.iterations) {
@@ -673,8 +718,18 @@ GeometricEstimate identify_geometry(const ContactProblem& p, const GeometricOpti
                  second = static_cast<std::size_t>(ord[ord.size() - 2]);
       double diam = 0.0;
       for (const auto& v : S) diam = std::max(diam, (v - S[best]).lpNorm<Eigen::Infinity>());
-      if (F[best] <= o.stop_at_objective ||
-          (F[worst] - F[best] <= o.tolerance * std::abs(F[best]) + 1e-300 && diam <= o.x_tolerance * 10.0)) {
+      if (F[best] <= o.stop_at_objective) {
+        g.converged = true;
+        break;
+      }
+      if (F[worst] - F[best] <= o.tolerance * std::abs(F[best]) + 1e-300 && diam <= o.x_tolerance * 10.0) {
+        // Collapsed. A restart from a full-size simplex about the best vertex can leave a kink
+        // the collapsed simplex could not (the usual remedy for Nelder-Mead's stalls).
+        if (g.restarts < o.nelder_mead_restarts) {
+          ++g.restarts;
+          start(Eigen::VectorXd(S[best]), F[best]);
+          continue;
+        }
         g.converged = true;
         break;
       }

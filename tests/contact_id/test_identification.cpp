@@ -251,6 +251,28 @@ TEST(Geometric, SensitivityMatchesFiniteDifferenceOfTheRegressor) {
   }
 }
 
+// Right after regressor(x) the sensitivities replay its separating-axis passes: they must equal
+// the ones computed from scratch.
+TEST(Geometric, SensitivityAfterTheRegressorEqualsTheOneFromScratch) {
+  auto s = cube_on_block_with_uncertainties();
+  const auto sim = simulate(s, ContactModel{}, s.design(), press_slide(), {});
+  ContactProblem p(s, measure(sim), {});
+  Eigen::VectorXd x = s.design();
+  x[0] = 3e-5;
+  x[1] = 2e-4;
+  Eigen::VectorXd other = x;
+  other[0] += 1e-5;
+  for (int j = 0; j < 2; ++j) {
+    Eigen::MatrixX2d A, replayed, scratch;
+    p.regressor(x, A);
+    p.sensitivity(x, j, p.fd_step(j), replayed);
+    p.regressor(other, A);  // the records are now for another x
+    p.sensitivity(x, j, p.fd_step(j), scratch);
+    EXPECT_GT(scratch.norm(), 0.0);
+    EXPECT_EQ((replayed - scratch).cwiseAbs().maxCoeff(), 0.0) << "x_" << j;
+  }
+}
+
 TEST(Geometric, RecoversHiddenShiftAndBothSolversAgree) {
   auto s = cube_on_block_with_uncertainties();
   ContactModel m{1.8e5, 0.2, 1e-3};

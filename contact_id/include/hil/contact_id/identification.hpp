@@ -61,7 +61,8 @@ class ContactProblem {
 
   /// W^{-1/2} Φ^T stacked over the used samples at x. `contacts` (optional): contact points per used sample.
   void regressor(const Eigen::VectorXd& x, Eigen::MatrixX2d& A, std::vector<int>* contacts = nullptr) const;
-  /// ∂(W^{-1/2} Φ^T)/∂x_j at x by central differences with step h (m or rad).
+  /// ∂(W^{-1/2} Φ^T)/∂x_j at x by central differences with step h (m or rad). Only the pairs of
+  /// the feature x_j moves are recomputed; right after regressor(x), without their axis searches.
   void sensitivity(const Eigen::VectorXd& x, int j, double h, Eigen::MatrixX2d& dA) const;
   /// Whether any candidate pair involves the feature of uncertainty j (else ∂Φ/∂x_j ≡ 0).
   bool touches(int j) const { return touched_[static_cast<std::size_t>(j)]; }
@@ -83,6 +84,8 @@ class ContactProblem {
   /// Whether a pair that was vp.gap apart under x_u^d stays apart when its polyhedra moved by d1, d2.
   bool out_of_reach(const VarPair& vp, double d1, double d2) const;
   Regressor pair_contact(const VarPair& vp, const PosedPolyhedron& A, const PosedPolyhedron& B, int* in_contact) const;
+  /// The regressor rows of a pair's contact (tangent from the sample's relative velocity).
+  Regressor pair_rows(const VarPair& vp, const PairContact& pc) const;
 
   Scene scene_;
   std::vector<Measurement> data_;
@@ -107,6 +110,9 @@ class ContactProblem {
   mutable std::vector<PosedPolyhedron> plus_, minus_;         ///< moved feature at x ± h (sensitivity)
   mutable PosedPolyhedron pa_, pb_;
   mutable ClipWorkspace clip_;
+  double max_turn_rad_ = 0.0;                  ///< largest finite-difference rotation step
+  mutable Eigen::VectorXd base_x_;             ///< x of the last regressor() evaluation (empty: none)
+  mutable std::vector<SatRecord> base_sat_;    ///< per var_ pair: its separating-axis pass at base_x_
 };
 
 /// The linear estimate of θ = (K, μK) with its statistics.
@@ -180,6 +186,8 @@ struct GeometricOptions {
   /// Nelder-Mead stops as soon as its best objective is <= this (to measure the effort needed to
   /// reach another solver's optimum); -inf: off.
   double stop_at_objective = -std::numeric_limits<double>::infinity();
+  /// Nelder-Mead: how many times a collapsed simplex is restarted (full size, about its best vertex).
+  int nelder_mead_restarts = 0;
 };
 
 struct GeometricEstimate {
@@ -192,6 +200,7 @@ struct GeometricEstimate {
   double objective = 0.0;
   int evaluations = 0;           ///< objective (full regressor) evaluations
   int jacobian_evaluations = 0;  ///< LM only
+  int restarts = 0;              ///< Nelder-Mead restarts used
   int iterations = 0;
   bool converged = false;
 };
