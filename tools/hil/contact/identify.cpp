@@ -355,6 +355,7 @@ void write_report(const std::string& dir, const std::string& run_name, const cid
     }
   }
   page.write((std::filesystem::path(dir) / "index.html").string());
+  page.write_figures((std::filesystem::path(dir) / "figures").string());
 }
 
 }  // namespace hil::cli::contact

@@ -1,8 +1,10 @@
 #include "hil/report/html.hpp"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <limits>
 #include <stdexcept>
@@ -45,6 +47,59 @@ std::vector<double> ticks(double lo, double hi, bool log) {
     }
   for (double v = std::ceil(lo / step) * step; v <= hi + 1e-9 * span; v += step) t.push_back(std::abs(v) < 1e-12 * span ? 0.0 : v);
   return t;
+}
+
+/// The points of a line series in pixels. A run of finite points within one 0.5-pixel column is
+/// drawn as its first, lowest, highest and last point, in their order: the same picture (the
+/// envelope and every excursion stay), a page that does not grow with the number of samples.
+/// NaN points are kept (they break the line).
+template <class FX, class FY>
+std::vector<std::pair<double, double>> pixel_path(const Series& sr, std::size_t n, const FX& X, const FY& Y) {
+  std::vector<std::pair<double, double>> out;
+  std::vector<std::size_t> col;  // indices of the current column's run
+  auto flush = [&] {
+    if (col.size() <= 4) {
+      for (auto i : col) out.emplace_back(X(sr.x[i]), Y(sr.y[i]));
+    } else {
+      std::size_t lo = col.front(), hi = col.front();
+      for (auto i : col) {
+        if (Y(sr.y[i]) > Y(sr.y[lo])) lo = i;  // (pixel y grows downwards)
+        if (Y(sr.y[i]) < Y(sr.y[hi])) hi = i;
+      }
+      std::vector<std::size_t> keep = {col.front(), lo, hi, col.back()};
+      std::sort(keep.begin(), keep.end());
+      keep.erase(std::unique(keep.begin(), keep.end()), keep.end());
+      for (auto i : keep) out.emplace_back(X(sr.x[i]), Y(sr.y[i]));
+    }
+    col.clear();
+  };
+  for (std::size_t i = 0; i < n; ++i) {
+    const double a = X(sr.x[i]), b = Y(sr.y[i]);
+    if (!std::isfinite(a) || !std::isfinite(b)) {
+      flush();
+      out.emplace_back(a, b);
+      continue;
+    }
+    if (!col.empty() && std::floor(2.0 * a) != std::floor(2.0 * X(sr.x[col.front()]))) flush();
+    col.push_back(i);
+  }
+  flush();
+  return out;
+}
+
+/// A file name from a plot title: lower case letters and digits, '-' between words.
+std::string slug(const std::string& title) {
+  std::string s;
+  for (char c : title) {
+    if (std::isalnum(static_cast<unsigned char>(c))) {
+      s += static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    } else if (!s.empty() && s.back() != '-') {
+      s += '-';
+    }
+    if (s.size() >= 60) break;
+  }
+  while (!s.empty() && s.back() == '-') s.pop_back();
+  return s.empty() ? "plot" : s;
 }
 
 }  // namespace
@@ -113,8 +168,7 @@ std::string svg_plot(const std::vector<Series>& series, const PlotOptions& o) {
     } else {
       std::string d;
       bool pen = false;
-      for (std::size_t i = 0; i < n; ++i) {
-        const double a = X(sr.x[i]), b = Y(sr.y[i]);
+      for (const auto& [a, b] : pixel_path(sr, n, X, Y)) {
         if (!std::isfinite(a) || !std::isfinite(b)) {
           pen = false;
           continue;
@@ -159,7 +213,11 @@ void Page::table(const std::vector<std::string>& header, const std::vector<std::
   body_ += "</table>\n";
 }
 void Page::plot(const std::vector<Series>& series, const PlotOptions& options) {
-  body_ += "<div class='plot'>" + svg_plot(series, options) + "</div>\n";
+  std::string svg = svg_plot(series, options);
+  body_ += "<div class='plot'>" + svg + "</div>\n";
+  char n[8];
+  std::snprintf(n, sizeof n, "%02zu-", figures_.size() + 1);
+  figures_.emplace_back(n + slug(options.title) + ".svg", std::move(svg));
 }
 
 std::string Page::html() const {
@@ -174,6 +232,21 @@ void Page::write(const std::string& path) const {
   std::ofstream f(path, std::ios::binary);
   f << html();
   if (!f) throw std::runtime_error(path + ": cannot write the report");
+}
+
+std::vector<std::string> Page::write_figures(const std::string& dir) const {
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec) throw std::runtime_error(dir + ": cannot create the figures folder: " + ec.message());
+  std::vector<std::string> written;
+  for (const auto& [name, svg] : figures_) {
+    const std::string path = (std::filesystem::path(dir) / name).string();
+    std::ofstream f(path, std::ios::binary);
+    f << "<?xml version='1.0' encoding='utf-8'?>\n" << svg;
+    if (!f) throw std::runtime_error(path + ": cannot write the figure");
+    written.push_back(path);
+  }
+  return written;
 }
 
 }  // namespace hil::report

@@ -56,10 +56,14 @@ class Page {
   std::string html() const;
   /// \throws std::runtime_error if the file cannot be written.
   void write(const std::string& path) const;
+  /// Each plot as a standalone SVG file in `dir` (created), named "NN-title.svg" in page order;
+  /// returns the paths. \throws std::runtime_error if a file cannot be written.
+  std::vector<std::string> write_figures(const std::string& dir) const;
 
  private:
   std::string title_;
   std::string body_;
+  std::vector<std::pair<std::string, std::string>> figures_;  ///< file name, SVG
 };
 
 }  // namespace hil::report
