@@ -303,15 +303,8 @@ double separation_lower_bound(const PosedPolyhedron& a, const PosedPolyhedron& b
 }
 
 bool penetration(const PosedPolyhedron& a, const PosedPolyhedron& b, PairContact& out, ClipWorkspace& ws) {
-  double best;
-  Vec3 axis;
-  if (sat(a, b, 0.0, true, best, axis) >= 0.0) return false;  // some axis separates (or touches)
-  Vec3 centroid;
-  intersection_centroid(a, b, centroid, ws);
-  out.delta = best;
-  out.normal = axis;
-  out.point = centroid;
-  return true;
+  double gap;
+  return penetration_or_gap(a, b, 0.0, out, gap, ws);  // stops at the first axis that separates (or touches)
 }
 
 bool penetration_or_gap(const PosedPolyhedron& a, const PosedPolyhedron& b, double stop_above, PairContact& out, double& gap,

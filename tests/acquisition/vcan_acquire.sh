@@ -7,27 +7,14 @@
 set -eu
 HIL=$1 SRC=$2 WORK=$3
 rm -rf "$WORK"; mkdir -p "$WORK"
-# The guest emulates the CPU (TCG, 10-15x slower): poll the plate at 200 Hz instead of the rig's
-# 1 kHz so that request/response keeps up; everything else is the shipped rig.
-sed 's/^    rate_hz: 1000$/    rate_hz: 200/' "$SRC/examples/rigs/press_bench.yaml" > "$WORK/rig.yaml"
-grep -q "rate_hz: 200" "$WORK/rig.yaml" || { echo "could not set the plate rate"; exit 1; }
+. "$SRC/tests/vm/fake-rig-session.sh"
+slow_press_bench_rig
 candump -L vcan0 > "$WORK/candump.log" &
 CD=$!
 sleep 0.3
 PORT=${HIL_FAKE_PORT:-15020}
-"$HIL" fake-rig --rig "$WORK/rig.yaml" --run "$SRC/examples/runs/press_slide" --loop \
-  --can vcan0 --port $PORT > "$WORK/fake-rig.log" 2>&1 &
-FR=$!
-# The guest is slow (TCG): wait until the fake rig says it is serving, at most 30 s.
-i=0
-until grep -q "robot controller Modbus" "$WORK/fake-rig.log" 2>/dev/null; do
-  i=$((i + 1)); [ $i -le 300 ] || { echo "fake-rig did not start"; cat "$WORK/fake-rig.log"; exit 1; }
-  sleep 0.1
-done
-sleep 0.5
-HIL_DDS_DOMAIN=${HIL_DDS_DOMAIN:-171} "$HIL" acquire --rig "$WORK/rig.yaml" --out "$WORK/run" \
-  --can-interface vcan0 --robot-port $PORT --duration 6.5 > "$WORK/acquire.log" 2>&1 ||
-  { echo "hil acquire failed:"; cat "$WORK/acquire.log"; echo "fake-rig:"; cat "$WORK/fake-rig.log"; exit 1; }
+start_fake_rig "$SRC/examples/runs/press_slide" $PORT
+acquire_from_fake_rig $PORT "${HIL_DDS_DOMAIN:-171}"
 kill $FR $CD; wait $FR 2>/dev/null || true; wait $CD 2>/dev/null || true
 "$HIL" validate "$WORK/run" > "$WORK/validate.txt"
 /usr/bin/python3 - "$WORK" "$SRC" <<'PY'

@@ -229,13 +229,19 @@ TEST(BadInput, NeverTouchedFeatureIsUnobservableAndNotFitted) {
   EXPECT_EQ(est.x[2], 0.0);
 }
 
-TEST(Geometric, SensitivityMatchesFiniteDifferenceOfTheRegressor) {
+/// The cube pressed and slid on the block with two uncertainties; `x` is set off their design.
+ContactProblem pressed_cube_problem(Eigen::VectorXd& x) {
   auto s = cube_on_block_with_uncertainties();
   const auto sim = simulate(s, ContactModel{}, s.design(), press_slide(), {});
-  ContactProblem p(s, measure(sim), {});
-  Eigen::VectorXd x = s.design();
+  x = s.design();
   x[0] = 3e-5;
   x[1] = 2e-4;
+  return ContactProblem(s, measure(sim), {});
+}
+
+TEST(Geometric, SensitivityMatchesFiniteDifferenceOfTheRegressor) {
+  Eigen::VectorXd x;
+  const ContactProblem p = pressed_cube_problem(x);
   for (int j = 0; j < 2; ++j) {
     Eigen::MatrixX2d dA, Ap, Am;
     const double h = p.fd_step(j) * 10;
@@ -254,12 +260,8 @@ TEST(Geometric, SensitivityMatchesFiniteDifferenceOfTheRegressor) {
 // Right after regressor(x) the sensitivities replay its separating-axis passes: they must equal
 // the ones computed from scratch.
 TEST(Geometric, SensitivityAfterTheRegressorEqualsTheOneFromScratch) {
-  auto s = cube_on_block_with_uncertainties();
-  const auto sim = simulate(s, ContactModel{}, s.design(), press_slide(), {});
-  ContactProblem p(s, measure(sim), {});
-  Eigen::VectorXd x = s.design();
-  x[0] = 3e-5;
-  x[1] = 2e-4;
+  Eigen::VectorXd x;
+  const ContactProblem p = pressed_cube_problem(x);
   Eigen::VectorXd other = x;
   other[0] += 1e-5;
   for (int j = 0; j < 2; ++j) {

@@ -7,24 +7,14 @@
 set -eu
 HIL=$1 SRC=$2 WORK=$3
 rm -rf "$WORK"; mkdir -p "$WORK"
-# The guest emulates the CPU (TCG): poll the plate at 200 Hz (as vcan_acquire.sh does).
-sed 's/^    rate_hz: 1000$/    rate_hz: 200/' "$SRC/examples/rigs/press_bench.yaml" > "$WORK/rig.yaml"
-grep -q "rate_hz: 200" "$WORK/rig.yaml" || { echo "could not set the plate rate"; exit 1; }
+. "$SRC/tests/vm/fake-rig-session.sh"
+slow_press_bench_rig
 "$HIL" contact simulate --rig "$WORK/rig.yaml" --trajectory "$SRC/examples/trajectories/press_slide.csv" \
   --out "$WORK/played" --force-resolution 0.05 --force-noise 0.1 --moment-resolution 0.002 --moment-noise 0.005 \
   --seed 4 --inject sensor_bias --effect-seed 4 --truth-out "$WORK/truth.json" > "$WORK/simulate.log"
 PORT=${HIL_FAKE_PORT:-15021}
-"$HIL" fake-rig --rig "$WORK/rig.yaml" --run "$WORK/played" --loop --can vcan0 --port $PORT > "$WORK/fake-rig.log" 2>&1 &
-FR=$!
-i=0
-until grep -q "robot controller Modbus" "$WORK/fake-rig.log" 2>/dev/null; do
-  i=$((i + 1)); [ $i -le 300 ] || { echo "fake-rig did not start"; cat "$WORK/fake-rig.log"; exit 1; }
-  sleep 0.1
-done
-sleep 0.5
-HIL_DDS_DOMAIN=${HIL_DDS_DOMAIN:-172} "$HIL" acquire --rig "$WORK/rig.yaml" --out "$WORK/run" \
-  --can-interface vcan0 --robot-port $PORT --duration 6.5 > "$WORK/acquire.log" 2>&1 ||
-  { echo "hil acquire failed:"; cat "$WORK/acquire.log"; echo "fake-rig:"; cat "$WORK/fake-rig.log"; exit 1; }
+start_fake_rig "$WORK/played" $PORT
+acquire_from_fake_rig $PORT "${HIL_DDS_DOMAIN:-172}"
 kill $FR; wait $FR 2>/dev/null || true
 "$HIL" diagnose "$WORK/run" --json "$WORK/diagnosis.json" --quiet > "$WORK/diagnosis.txt" ||
   { echo "hil diagnose failed"; cat "$WORK/diagnosis.txt"; exit 1; }

@@ -99,19 +99,21 @@ cid::ContactModel model_from_rig(const format::RigSpec& rig) {
   return m;
 }
 
+cid::Measurement measurement(const format::Sample& s) {
+  cid::Measurement m;
+  m.t_s = s.t_s;
+  m.kin.T_world_ee.linear() = s.q_world_ee.normalized().toRotationMatrix();
+  m.kin.T_world_ee.translation() = s.p_world_ee_m;
+  m.kin.v_world_ee = s.v_world_ee_m_per_s;
+  m.kin.w_world_ee = s.w_world_ee_rad_per_s;
+  m.w_fp << s.f_fp_n, s.m_fp_nm;
+  return m;
+}
+
 std::vector<cid::Measurement> measurements(const format::SampleTable& t) {
   std::vector<cid::Measurement> out;
   out.reserve(t.size());
-  for (const auto& s : t.samples) {
-    cid::Measurement m;
-    m.t_s = s.t_s;
-    m.kin.T_world_ee.linear() = s.q_world_ee.normalized().toRotationMatrix();
-    m.kin.T_world_ee.translation() = s.p_world_ee_m;
-    m.kin.v_world_ee = s.v_world_ee_m_per_s;
-    m.kin.w_world_ee = s.w_world_ee_rad_per_s;
-    m.w_fp << s.f_fp_n, s.m_fp_nm;
-    out.push_back(m);
-  }
+  for (const auto& s : t.samples) out.push_back(measurement(s));
   return out;
 }
 

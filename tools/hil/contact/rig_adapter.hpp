@@ -19,7 +19,9 @@ contact_id::Scene scene_from_rig(const format::RigSpec& rig);
 /// The rig's contact model (K, μ, v_t,m). \throws FormatError if missing or not physical.
 contact_id::ContactModel model_from_rig(const format::RigSpec& rig);
 
-/// Samples -> measurements (pose, twist, plate wrench).
+/// A sample -> a measurement (pose, twist, plate wrench).
+contact_id::Measurement measurement(const format::Sample& s);
+/// Samples -> measurements.
 std::vector<contact_id::Measurement> measurements(const format::SampleTable& t);
 
 /// A trajectory CSV (t, px, py, pz, qw, qx, qy, qz and optionally vx vy vz wx wy wz; velocities

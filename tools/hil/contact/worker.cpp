@@ -62,14 +62,7 @@ ContactWorker::ContactWorker(dds::Participant& participant, const format::RigSpe
   writer_ = std::make_unique<dds::Writer<hil_msgs::msg::ContactEstimate>>(participant, dds::topics::kContactEstimate);
   reader_ = std::make_unique<dds::Reader<hil_msgs::msg::PoseWrenchSample>>(
       participant, dds::topics::kPoseWrenchSample, [this](const hil_msgs::msg::PoseWrenchSample& m, const auto&) {
-        const auto s = acquisition::from_message(m);
-        cid::Measurement meas;
-        meas.t_s = s.t_s;
-        meas.kin.T_world_ee.linear() = s.q_world_ee.normalized().toRotationMatrix();
-        meas.kin.T_world_ee.translation() = s.p_world_ee_m;
-        meas.kin.v_world_ee = s.v_world_ee_m_per_s;
-        meas.kin.w_world_ee = s.w_world_ee_rad_per_s;
-        meas.w_fp << s.f_fp_n, s.m_fp_nm;
+        const auto meas = contact::measurement(acquisition::from_message(m));
         std::lock_guard<std::mutex> lock(mu_);
         writer_->write(to_message(est_->update(meas)));
         ++processed_;
