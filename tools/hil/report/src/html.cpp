@@ -49,7 +49,7 @@ std::vector<double> ticks(double lo, double hi, bool log) {
   return t;
 }
 
-/// The points of a line series in pixels. A run of finite points within one 0.5-pixel column is
+/// The points of a line series in pixels. A run of finite points within one pixel column is
 /// drawn as its first, lowest, highest and last point, in their order: the same picture (the
 /// envelope and every excursion stay), a page that does not grow with the number of samples.
 /// NaN points are kept (they break the line).
@@ -80,7 +80,7 @@ std::vector<std::pair<double, double>> pixel_path(const Series& sr, std::size_t 
       out.emplace_back(a, b);
       continue;
     }
-    if (!col.empty() && std::floor(2.0 * a) != std::floor(2.0 * X(sr.x[col.front()]))) flush();
+    if (!col.empty() && std::floor(a) != std::floor(X(sr.x[col.front()]))) flush();
     col.push_back(i);
   }
   flush();
