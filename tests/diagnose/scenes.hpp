@@ -19,8 +19,8 @@ struct SceneRun {
   cid::SensorModel sensor;
 };
 
-/// "acu_2a", "acu_1a" (1 kHz, decimated by 20 to 50 Hz) or "press_slide" (50 Hz).
-inline SceneRun scene_run(const std::string& name) {
+/// "acu_2a", "acu_1a" (1 kHz, decimated by `acu_step`: 20 gives the paper's 50 Hz) or "press_slide" (50 Hz).
+inline SceneRun scene_run(const std::string& name, std::size_t acu_step = 20) {
   namespace c = hil::cli::contact;
   const std::string src = HIL_SOURCE_DIR;
   SceneRun r;
@@ -32,7 +32,7 @@ inline SceneRun scene_run(const std::string& name) {
   r.moment_scale_nm = rig.model.contact->moment_scale_nm;
   const auto traj = c::read_trajectory(acu ? src + "/examples/acu/traj_" + name.substr(4) + ".csv"
                                            : src + "/examples/trajectories/press_slide.csv");
-  const std::size_t step = acu ? 20 : 1;
+  const std::size_t step = acu ? acu_step : 1;
   for (std::size_t i = 0; i < traj.kin.size(); i += step) {
     r.t.push_back(traj.t[i]);
     r.kin.push_back(traj.kin[i]);

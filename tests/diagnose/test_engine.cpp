@@ -1,6 +1,7 @@
 // The diagnosis' engine, contact family, generator and deflection family on small exact cases.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 
@@ -121,6 +122,63 @@ TEST(ContactFamily, NominalDesignTimesThetaIsTheForwardSimulation) {
     peak = std::max(peak, w.norm());
   }
   EXPECT_GT(peak, 10.0);  // the scene is in contact
+}
+
+TEST(ContactFamily, PrunedAndIncrementalContactsAreMindistsOnEveryPair) {
+  // The design skips pairs provably apart and copies the pairs of unmoved features from the last
+  // evaluation (docs/diagnosis.md, "Cost"): the result must be mindist's on every pair, bit for bit.
+  const auto r = test::scene_run("acu_2a");
+  Effects e;
+  draw_effect("geometric_offset", 19, r.scene, e);
+  const auto d = make_contact_data(r.scene, r.model.v_tm, test::measure(r, e, 19), r.force_scale_n, r.moment_scale_nm);
+  ContactFamily m(d, {"geometric_offset", "time_offset"});
+  const auto nl = m.nonlinear();
+  const Eigen::Index q = static_cast<Eigen::Index>(nl.size());
+  std::vector<Eigen::VectorXd> phis{Eigen::VectorXd::Zero(q)};
+  Eigen::VectorXd phi(q);
+  for (Eigen::Index j = 0; j < q; ++j) phi(j) = (j % 2 ? -2.0 : 3.0) * nl[static_cast<std::size_t>(j)].scale;
+  phis.push_back(phi);
+  for (Eigen::Index j = 0; j < q; ++j) {  // finite-difference steps: one feature (or the delay) at a time
+    phis.push_back(phi);
+    phis.back()(j) += 1e-4 * nl[static_cast<std::size_t>(j)].scale;
+  }
+  phis.push_back(Eigen::VectorXd::Zero(q));
+  phis.back()(q - 1) = 0.3;  // a delay of 0.3 s moves the ee by more than the pair table covers
+  cid::MindistWorkspace ws;
+  std::vector<cid::ContactPoint> cs;
+  for (const auto& ph : phis) {
+    Eigen::MatrixXd A;
+    m.design(ph, A);
+    Eigen::VectorXd x = r.scene.design();
+    for (std::size_t j = 0; j < d.fit_uncertainties.size(); ++j) x(d.fit_uncertainties[j]) += ph(static_cast<Eigen::Index>(j));
+    for (std::size_t k = 0; k < d.obs.size(); ++k) {
+      const double tau = ph(q - 1);
+      cid::Kinematics kin = d.kin[k];
+      if (tau != 0.0) {  // the pose at t - τ, as the family interpolates it (slerp)
+        const auto it = std::upper_bound(d.obs.t_s.begin(), d.obs.t_s.end(), d.obs.t_s[k] - tau);
+        const std::size_t j1 = std::clamp<std::size_t>(static_cast<std::size_t>(it - d.obs.t_s.begin()), 1, d.obs.size() - 1);
+        if (it == d.obs.t_s.begin() || it == d.obs.t_s.end()) {
+          kin = d.kin[it == d.obs.t_s.begin() ? 0 : d.obs.size() - 1];
+        } else {
+          const auto &k0 = d.kin[j1 - 1], &k1 = d.kin[j1];
+          const double a = (d.obs.t_s[k] - tau - d.obs.t_s[j1 - 1]) / (d.obs.t_s[j1] - d.obs.t_s[j1 - 1]);
+          kin = k0;
+          kin.T_world_ee.linear() = Eigen::Quaterniond(k0.T_world_ee.linear()).slerp(a, Eigen::Quaterniond(k1.T_world_ee.linear())).toRotationMatrix();
+          kin.T_world_ee.translation() = (1 - a) * k0.T_world_ee.translation() + a * k1.T_world_ee.translation();
+          kin.v_world_ee = (1 - a) * k0.v_world_ee + a * k1.v_world_ee;
+          kin.w_world_ee = (1 - a) * k0.w_world_ee + a * k1.w_world_ee;
+        }
+      }
+      cid::mindist(r.scene, kin, x, d.v_tm, cs, ws);
+      Eigen::Matrix<double, 6, 2> expected = Eigen::Matrix<double, 6, 2>::Zero();
+      for (const auto& c : cs) {
+        expected.col(0) += plate_wrench_of(r.scene.T_world_fp, c.delta * c.normal, c.point);
+        expected.col(1) += plate_wrench_of(r.scene.T_world_fp, c.delta * c.tangent, c.point);
+      }
+      ASSERT_EQ(Eigen::MatrixXd(A.block(static_cast<Eigen::Index>(6 * k), 0, 6, 2)), Eigen::MatrixXd(expected))
+          << "sample " << k << ", phi " << ph.transpose();
+    }
+  }
 }
 
 /// Noise-free recovery: the family with the injected extension fits the generator's data exactly.

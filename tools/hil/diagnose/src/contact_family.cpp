@@ -4,6 +4,7 @@
 #include <Eigen/SVD>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <random>
 #include <stdexcept>
 
@@ -61,6 +62,8 @@ std::string describe_extension(const std::string& n) {
   if (n == "viscous_friction") return "the friction force grows with the sliding speed";
   if (n == "contact_damping") return "the normal force grows with the penetration rate";
   if (n == "nonlinear_stiffness") return "the normal force is a power of the interference (Hertz-like)";
+  if (n == "link_compliance") return "the links bend too, not only the joints (link springs' identifiable directions)";
+  if (n == "load_offset") return "the robot carried a constant load the table does not list (a tool's weight, a cable)";
   if (n == "none") return "no extension predicts held-out data better than the nominal model beyond the noise";
   return "";
 }
@@ -186,6 +189,7 @@ ContactFamily::ContactFamily(const ContactData& d, std::set<std::string> extensi
       nonlinear_.push_back({u.name, rot ? "rad" : "m", s, true, -50 * s, 50 * s});
     }
   }
+  if (has("geometric_offset") || has("robot_compliance") || has("time_offset")) pairs_ = make_pairs(d);
   if (has("robot_compliance")) {
     i_cmp_ = static_cast<int>(nonlinear_.size());
     // Reduce the 21 symmetric coordinates to the directions the data can see: the SVD of the
@@ -197,6 +201,7 @@ ContactFamily::ContactFamily(const ContactData& d, std::set<std::string> extensi
       Eigen::MatrixXd A;
       ContactFamily tmp(d, {});
       tmp.basis_ = basis_;
+      tmp.pairs_ = pairs_;
       tmp.i_cmp_ = 0;
       tmp.ext_ = {"robot_compliance"};
       tmp.design(c, A);
@@ -312,6 +317,122 @@ cid::Kinematics ContactFamily::kinematics_at(double t) const {
   return out;
 }
 
+std::shared_ptr<const ContactFamily::PairTable> ContactFamily::make_pairs(const ContactData& d) {
+  auto t = std::make_shared<PairTable>();
+  const Eigen::VectorXd xd = d.scene.design();
+  for (int b = 0; b < 2; ++b) {
+    const auto& body = d.scene.bodies[static_cast<std::size_t>(b)];
+    auto& index = t->index[static_cast<std::size_t>(b)];
+    index = d.scene.polyhedron_index(b);
+    for (const auto& [f, q] : index) {
+      const Eigen::Isometry3d T = cid::feature_transform(d.scene.uncertainties, xd, b, f);
+      double r = 0.0;
+      for (const auto& v : body.features[static_cast<std::size_t>(f)].polyhedra[static_cast<std::size_t>(q)].vertices())
+        r = std::max(r, (T * v).norm());
+      t->radius_m[static_cast<std::size_t>(b)].push_back(r);
+    }
+  }
+  cid::PosedScene ps;
+  t->near.resize(d.obs.size());
+  for (std::size_t k = 0; k < d.obs.size(); ++k) {
+    cid::pose_scene(d.scene, xd, d.kin[k].T_world_ee, ps);
+    const auto& A = ps.polys[0];
+    const auto& B = ps.polys[1];
+    for (std::size_t i = 0; i < A.size(); ++i)
+      for (std::size_t j = 0; j < B.size(); ++j) {
+        if (!cid::near(A[i], B[j], kReach_m)) continue;
+        const double gap = cid::separation_lower_bound(A[i], B[j], kReach_m);
+        if (gap > kReach_m) continue;
+        t->near[k].push_back({static_cast<int>(i), static_cast<int>(j), gap > 0 ? gap : -std::numeric_limits<double>::infinity()});
+      }
+  }
+  return t;
+}
+
+ContactFamily::Geometry ContactFamily::geometry_at(const Eigen::VectorXd& x) const {
+  Geometry g;
+  g.x = x;
+  const Eigen::VectorXd xd = d_.scene.design();
+  for (int b = 0; b < 2; ++b) {
+    const auto bi = static_cast<std::size_t>(b);
+    const auto& body = d_.scene.bodies[bi];
+    for (std::size_t f = 0; f < body.features.size(); ++f)
+      g.T_body_feature[bi].push_back(cid::feature_transform(d_.scene.uncertainties, x, b, static_cast<int>(f)));
+    for (const auto& [f, q] : pairs_->index[bi]) {
+      // A rigid motion moves a convex polyhedron's points farthest at a vertex.
+      const Eigen::Isometry3d Td = cid::feature_transform(d_.scene.uncertainties, xd, b, f);
+      double m = 0.0;
+      for (const auto& v : body.features[static_cast<std::size_t>(f)].polyhedra[static_cast<std::size_t>(q)].vertices())
+        m = std::max(m, (g.T_body_feature[bi][static_cast<std::size_t>(f)] * v - Td * v).norm());
+      g.moved_m[bi].push_back(m);
+    }
+    g.changed[bi].assign(body.features.size(), true);
+    if (base_.valid)
+      for (std::size_t f = 0; f < body.features.size(); ++f)
+        g.changed[bi][f] = !(g.T_body_feature[bi][f].matrix().array() == base_.T_body_feature[bi][f].matrix().array()).all();
+  }
+  return g;
+}
+
+bool ContactFamily::sample_contacts(std::size_t k, const cid::Kinematics& kin, const Geometry& g,
+                                    const std::vector<cid::ContactPoint>* base, std::vector<cid::ContactPoint>& out) const {
+  const auto& sc = d_.scene;
+  auto& w = scratch_;
+  // How far each body moved from its measured pose: translation of its origin and turn angle.
+  std::array<Eigen::Isometry3d, 2> T;
+  std::array<double, 2> shift_m{}, turn_rad{}, reach_m{};
+  // The most a point of polyhedron q of body b moved from the table's configuration.
+  auto moved = [&](std::size_t b, std::size_t q) { return g.moved_m[b][q] + shift_m[b] + turn_rad[b] * pairs_->radius_m[b][q]; };
+  for (std::size_t b = 0; b < 2; ++b) {
+    T[b] = cid::body_pose(sc.bodies[b], kin.T_world_ee);
+    if (sc.bodies[b].on_end_effector) {
+      const Eigen::Isometry3d T0 = cid::body_pose(sc.bodies[b], d_.kin[k].T_world_ee);
+      shift_m[b] = (T[b].translation() - T0.translation()).norm();
+      turn_rad[b] = Eigen::AngleAxisd(T[b].linear() * T0.linear().transpose()).angle();
+    }
+    w.done[b].assign(pairs_->index[b].size(), 0);
+    w.posed[b].resize(pairs_->index[b].size());
+    for (std::size_t q = 0; q < pairs_->index[b].size(); ++q)
+      reach_m[b] = std::max(reach_m[b], moved(b, q));
+  }
+  if (reach_m[0] + reach_m[1] >= 0.5 * kReach_m) {  // beyond the table: every pair
+    cid::mindist(sc, kin, g.x, d_.v_tm, out, w.ws);
+    return false;
+  }
+  auto posed = [&](std::size_t b, int q) -> const cid::PosedPolyhedron& {
+    const auto qi = static_cast<std::size_t>(q);
+    if (!w.done[b][qi]) {
+      const auto [f, p] = pairs_->index[b][qi];
+      const Eigen::Isometry3d Tf = T[b] * g.T_body_feature[b][static_cast<std::size_t>(f)];  // as pose_scene
+      w.posed[b][qi].pose(sc.bodies[b].features[static_cast<std::size_t>(f)].polyhedra[static_cast<std::size_t>(p)], Tf);
+      w.done[b][qi] = 1;
+    }
+    return w.posed[b][qi];
+  };
+  out.clear();
+  auto from_base = base ? base->begin() : std::vector<cid::ContactPoint>::const_iterator{};
+  for (const auto& np : pairs_->near[k]) {
+    const auto i = static_cast<std::size_t>(np.poly1), j = static_cast<std::size_t>(np.poly2);
+    if (base && !g.changed[0][static_cast<std::size_t>(pairs_->index[0][i].first)] &&
+        !g.changed[1][static_cast<std::size_t>(pairs_->index[1][j].first)]) {
+      // Both features and the ee pose as in the base: the base's contact (if any) is this pair's.
+      while (from_base != base->end() && std::make_pair(from_base->poly1, from_base->poly2) < std::make_pair(np.poly1, np.poly2))
+        ++from_base;
+      if (from_base != base->end() && from_base->poly1 == np.poly1 && from_base->poly2 == np.poly2) out.push_back(*from_base);
+      continue;
+    }
+    if (np.gap_m > (moved(0, i) + moved(1, j)) * (1.0 + 1e-9) + 1e-12) continue;  // still apart
+    const auto& A = posed(0, np.poly1);
+    const auto& B = posed(1, np.poly2);
+    cid::PairContact pc;
+    if (!cid::near(A, B) || !cid::penetration(A, B, pc, w.ws.clip)) continue;
+    cid::ContactPoint c{pc.delta, pc.point, pc.normal, Vec3::Zero(), 0.0, np.poly1, np.poly2};
+    cid::tangent(sc, kin, d_.v_tm, c);
+    out.push_back(c);
+  }
+  return true;
+}
+
 void ContactFamily::design(const Eigen::VectorXd& phi, Eigen::MatrixXd& A) const {
   const std::size_t n = d_.obs.size();
   const Eigen::Index p = static_cast<Eigen::Index>(linear_.size());
@@ -326,24 +447,43 @@ void ContactFamily::design(const Eigen::VectorXd& phi, Eigen::MatrixXd& A) const
   Mat6 C = Mat6::Zero();
   if (i_cmp_ >= 0)
     for (std::size_t i = 0; i < basis_.size(); ++i) C += phi(i_cmp_ + static_cast<Eigen::Index>(i)) * basis_[i];
-  cid::MindistWorkspace ws;
-  std::vector<cid::ContactPoint> cs;
-  for (std::size_t k = 0; k < n; ++k) {
-    auto block = A.block(static_cast<Eigen::Index>(6 * k), 0, 6, p);
-    if (!recompute) {
-      columns(d_.contacts[k], d_.kin[k], expo, block);
-      continue;
+  if (!recompute) {
+    for (std::size_t k = 0; k < n; ++k) columns(d_.contacts[k], d_.kin[k], expo, A.block(static_cast<Eigen::Index>(6 * k), 0, 6, p));
+  } else {
+    if (!base_.valid) {
+      // The first base: the contacts at the design geometry and the measured poses.
+      base_.contacts = d_.contacts;  // every interfering pair is in the table (gap -inf)
+      base_.full.assign(n, false);
+      base_.T_body_feature = geometry_at(d_.scene.design()).T_body_feature;
+      base_.valid = true;
     }
-    // A delayed wrench stream: the wrench at t_k is the one of the pose at t_k - τ.
-    cid::Kinematics kin = tau != 0.0 ? kinematics_at(d_.obs.t_s[k] - tau) : d_.kin[k];
-    if (i_cmp_ >= 0) {
-      // The measured contact wrench on the held object, about the ee origin, in ee.
-      const Vec6 w_ee = cid::plate_to_object1(d_.obs.y.row(static_cast<Eigen::Index>(k)).transpose(), d_.scene.T_world_fp,
-                                             kin.T_world_ee);
-      kin.T_world_ee = deflect(kin.T_world_ee, C * w_ee);
+    const Geometry g = geometry_at(x);
+    const bool same_poses = tau == base_.tau_s && C == base_.C;
+    int changed = 0;
+    for (const auto& b : g.changed) changed += static_cast<int>(std::count(b.begin(), b.end(), true));
+    std::vector<std::vector<cid::ContactPoint>> cs(n);
+    std::vector<bool> full(n);
+    for (std::size_t k = 0; k < n; ++k) {
+      // A delayed wrench stream: the wrench at t_k is the one of the pose at t_k - τ.
+      cid::Kinematics kin = tau != 0.0 ? kinematics_at(d_.obs.t_s[k] - tau) : d_.kin[k];
+      if (i_cmp_ >= 0) {
+        // The measured contact wrench on the held object, about the ee origin, in ee.
+        const Vec6 w_ee = cid::plate_to_object1(d_.obs.y.row(static_cast<Eigen::Index>(k)).transpose(), d_.scene.T_world_fp,
+                                               kin.T_world_ee);
+        kin.T_world_ee = deflect(kin.T_world_ee, C * w_ee);
+      }
+      const bool reuse = same_poses && !base_.full[k];
+      full[k] = !sample_contacts(k, kin, g, reuse ? &base_.contacts[k] : nullptr, cs[k]);
+      columns(cs[k], kin, expo, A.block(static_cast<Eigen::Index>(6 * k), 0, 6, p));
     }
-    cid::mindist(d_.scene, kin, x, d_.v_tm, cs, ws);
-    columns(cs, kin, expo, block);
+    // A finite-difference step moves one feature: the point it steps from stays the base.
+    if (!same_poses || changed > 1) {
+      base_.tau_s = tau;
+      base_.C = C;
+      base_.T_body_feature = g.T_body_feature;
+      base_.contacts = std::move(cs);
+      base_.full = std::move(full);
+    }
   }
   if (i_gain_ >= 0) {
     Eigen::Index g = i_gain_;

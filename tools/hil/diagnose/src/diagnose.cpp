@@ -201,7 +201,7 @@ Diagnosis diagnose(const ModelFactory& make, const std::vector<std::string>& can
       CandidateResult r;
       r.name = c.name;
       try {
-        r.score = score(*make({d.cause, c.name}), obs, o.cv);
+        r.score = score(*make({d.cause, c.name}), obs, o.cv, &first.score.full);
         judge(r, first.score, d.noise_relative, obs, o);
       } catch (const std::exception& e) {
         r.score.cv_error = std::numeric_limits<double>::infinity();

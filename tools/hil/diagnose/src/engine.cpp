@@ -5,6 +5,9 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <list>
+#include <map>
+#include <optional>
 #include <stdexcept>
 
 namespace hil::diagnose {
@@ -56,23 +59,61 @@ struct Projected {
   double cost = 0.0;
 };
 
+/// The designs A(φ) already computed, by φ. One cache serves a model's full fit, its folds and
+/// their predictions: the starts and the full fit's optimum with its finite-difference neighbours
+/// (the folds start there) are kept; any other design only while it is among the last few.
+/// A(φ) is deterministic, so a cached design is the one a new evaluation would give.
+class DesignCache {
+ public:
+  DesignCache(const Model& m, std::size_t samples) : m_(m), rows_(static_cast<Eigen::Index>(6 * samples)) {}
+  /// A(φ); `keep`: hold it for the rest of the cache's life.
+  const Eigen::MatrixXd& get(const Eigen::VectorXd& phi, bool keep = false) {
+    const Key key(phi.data(), phi.data() + phi.size());
+    if (const auto it = kept_.find(key); it != kept_.end()) return it->second;
+    for (auto it = recent_.begin(); it != recent_.end(); ++it)
+      if (it->first == key) {
+        if (keep) {
+          auto& A = kept_[key];
+          A.swap(it->second);
+          recent_.erase(it);
+          return A;
+        }
+        return it->second;
+      }
+    Eigen::MatrixXd A;
+    m_.design(phi, A);
+    ++computed;
+    if (A.rows() != rows_) throw std::logic_error(m_.name() + ": design has the wrong number of rows");
+    if (keep) return kept_[key] = std::move(A);
+    if (recent_.size() >= kRecent) recent_.pop_back();
+    recent_.emplace_front(key, std::move(A));
+    return recent_.front().second;
+  }
+  int computed = 0;  ///< designs evaluated (not served from the cache)
+
+ private:
+  using Key = std::vector<double>;
+  static constexpr std::size_t kRecent = 24;  // an LM iteration: q columns and up to 12 trials
+  const Model& m_;
+  Eigen::Index rows_;
+  std::map<Key, Eigen::MatrixXd> kept_;
+  std::list<std::pair<Key, Eigen::MatrixXd>> recent_;
+};
+
 class Evaluator {
  public:
-  Evaluator(const Model& m, const Observations& obs, const std::vector<int>& train)
-      : m_(m), obs_(obs), train_(train) {
+  Evaluator(DesignCache& cache, const Observations& obs, const std::vector<int>& train)
+      : cache_(cache), obs_(obs), train_(train) {
     b_.resize(static_cast<Eigen::Index>(6 * train.size()));
     for (std::size_t a = 0; a < train.size(); ++a)
       for (int c = 0; c < 6; ++c) b_(static_cast<Eigen::Index>(6 * a) + c) = obs.weight(c) * obs.y(train[a], c);
   }
-  Eigen::MatrixXd weighted_design(const Eigen::VectorXd& phi) {
+  Eigen::MatrixXd weighted_design(const Eigen::VectorXd& phi, bool keep = false) {
     ++evaluations;
-    m_.design(phi, full_);
-    if (full_.rows() != static_cast<Eigen::Index>(6 * obs_.size()))
-      throw std::logic_error(m_.name() + ": design has the wrong number of rows");
-    return rows_of(full_, train_, obs_.weight);
+    return rows_of(cache_.get(phi, keep), train_, obs_.weight);
   }
-  Projected project(const Eigen::VectorXd& phi) {
-    const Eigen::MatrixXd A = weighted_design(phi);
+  Projected project(const Eigen::VectorXd& phi, bool keep = false) {
+    const Eigen::MatrixXd A = weighted_design(phi, keep);
     Projected p;
     p.theta = solve_ls(A, b_);
     p.r = b_ - A * p.theta;
@@ -83,11 +124,10 @@ class Evaluator {
   int evaluations = 0;
 
  private:
-  const Model& m_;
+  DesignCache& cache_;
   const Observations& obs_;
   const std::vector<int>& train_;
   Eigen::VectorXd b_;
-  Eigen::MatrixXd full_;
 };
 
 Eigen::VectorXd clamp(const Eigen::VectorXd& phi, const std::vector<Param>& nl) {
@@ -103,23 +143,28 @@ double fd_step(const Param& q, double value) {
   return h;
 }
 
-}  // namespace
-
-Fit fit(const Model& m, const Observations& obs, const std::vector<int>& train, const FitOptions& o) {
+/// The fit of `m` on `train` with designs from `cache`. `warm`: one more start (a cross-validation
+/// fold starts also from the full fit's optimum, a second-step model from the cause's; the start
+/// with the lowest training cost wins, so the estimate is still its own training data's optimum). `statistics`: the covariance,
+/// rank, reported parameters and validity (a fold's prediction needs none of them).
+Fit fit_with(const Model& m, const Observations& obs, const std::vector<int>& train, const FitOptions& o, DesignCache& cache,
+             const Eigen::VectorXd* warm, bool statistics) {
   if (train.empty()) throw std::runtime_error(m.name() + ": no samples to fit");
   const auto lin = m.linear();
   const auto nl = m.nonlinear();
   const Eigen::Index p = static_cast<Eigen::Index>(lin.size());
   const Eigen::Index q = static_cast<Eigen::Index>(nl.size());
-  Evaluator ev(m, obs, train);
+  Evaluator ev(cache, obs, train);
   Fit f;
 
   Eigen::VectorXd phi = Eigen::VectorXd::Zero(q);
   Projected cur;
   bool first = true;
-  for (const auto& s0 : m.starts()) {
+  std::vector<Eigen::VectorXd> starts = m.starts();
+  if (warm) starts.push_back(*warm);
+  for (const auto& s0 : starts) {
     const Eigen::VectorXd s = clamp(s0, nl);
-    Projected pr = ev.project(s);
+    Projected pr = ev.project(s, true);  // every fold evaluates the same starts
     if (first || pr.cost < cur.cost) {
       cur = pr;
       phi = s;
@@ -172,15 +217,27 @@ Fit fit(const Model& m, const Observations& obs, const std::vector<int>& train, 
     }
   }
 
-  // Statistics from the Jacobian of the unprojected residual in (θ, φ) at the optimum.
-  const Eigen::MatrixXd A = ev.weighted_design(phi);
+  f.theta = cur.theta;
+  f.phi = phi;
+  for (const auto& q0 : nl) f.phi_names.push_back(q0.name);
+  f.parameters = static_cast<int>(p + q);
+  f.rows = static_cast<long>(cur.r.size());
+  f.rss = cur.cost;
+  if (!statistics) {
+    f.evaluations = ev.evaluations;
+    return f;
+  }
+
+  // Statistics from the Jacobian of the unprojected residual in (θ, φ) at the optimum. Its designs
+  // are kept: they are the first Levenberg-Marquardt Jacobian of the folds that start here.
+  const Eigen::MatrixXd A = ev.weighted_design(phi, true);
   Eigen::MatrixXd J(A.rows(), p + q);
   J.leftCols(p) = A;
   for (Eigen::Index j = 0; j < q; ++j) {
     Eigen::VectorXd ph = phi;
     const double h = fd_step(nl[static_cast<std::size_t>(j)], phi(j));
     ph(j) += h;
-    J.col(p + j) = (ev.weighted_design(ph) * cur.theta - A * cur.theta) / h;
+    J.col(p + j) = (ev.weighted_design(ph, true) * cur.theta - A * cur.theta) / h;
   }
   Eigen::VectorXd cs = J.colwise().norm().transpose();
   for (Eigen::Index j = 0; j < cs.size(); ++j)
@@ -195,11 +252,6 @@ Fit fit(const Model& m, const Observations& obs, const std::vector<int>& train, 
       ++f.rank;
       inv += svd.matrixV().col(i) * svd.matrixV().col(i).transpose() / (sv(i) * sv(i));
     }
-  f.theta = cur.theta;
-  f.phi = phi;
-  f.parameters = static_cast<int>(p + q);
-  f.rows = static_cast<long>(A.rows());
-  f.rss = cur.cost;
   f.sigma2 = f.rows > f.rank ? f.rss / static_cast<double>(f.rows - f.rank) : 0.0;
   f.cov = f.sigma2 * (cs.cwiseInverse().asDiagonal() * inv * cs.cwiseInverse().asDiagonal());
   // Residuals of neighbouring samples are correlated (unmodelled structure, filtering): inflate the
@@ -229,14 +281,25 @@ Fit fit(const Model& m, const Observations& obs, const std::vector<int>& train, 
   return f;
 }
 
-Eigen::MatrixXd predict(const Model& m, const Fit& f, std::size_t samples) {
-  Eigen::MatrixXd A;
-  m.design(f.phi, A);
+Eigen::MatrixXd predict_with(const Eigen::MatrixXd& A, const Fit& f, std::size_t samples) {
   const Eigen::VectorXd y = A * f.theta;
   Eigen::MatrixXd out(static_cast<Eigen::Index>(samples), 6);
   for (Eigen::Index k = 0; k < out.rows(); ++k)
     for (int c = 0; c < 6; ++c) out(k, c) = y(6 * k + c);
   return out;
+}
+
+}  // namespace
+
+Fit fit(const Model& m, const Observations& obs, const std::vector<int>& train, const FitOptions& o) {
+  DesignCache cache(m, obs.size());
+  return fit_with(m, obs, train, o, cache, nullptr, true);
+}
+
+Eigen::MatrixXd predict(const Model& m, const Fit& f, std::size_t samples) {
+  Eigen::MatrixXd A;
+  m.design(f.phi, A);
+  return predict_with(A, f, samples);
 }
 
 double relative_error(const Observations& obs, const Eigen::MatrixXd& prediction, const std::vector<int>& samples) {
@@ -258,15 +321,24 @@ std::vector<std::vector<int>> time_blocks(std::size_t samples, int folds) {
   return out;
 }
 
-Score score(const Model& m, const Observations& obs, const CvOptions& o) {
+Score score(const Model& m, const Observations& obs, const CvOptions& o, const Fit* extends) {
   const auto t0 = std::chrono::steady_clock::now();
   Score s;
   s.model = m.name();
   const std::size_t n = obs.size();
   std::vector<int> all(n);
   for (std::size_t k = 0; k < n; ++k) all[k] = static_cast<int>(k);
-  s.full = fit(m, obs, all, o.fit);
-  s.train_error = relative_error(obs, predict(m, s.full, n), all);
+  DesignCache cache(m, n);
+  std::optional<Eigen::VectorXd> from;
+  if (extends) {
+    const auto nl = m.nonlinear();
+    from = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(nl.size()));
+    for (std::size_t j = 0; j < nl.size(); ++j)
+      for (std::size_t i = 0; i < extends->phi_names.size(); ++i)
+        if (extends->phi_names[i] == nl[j].name) (*from)(static_cast<Eigen::Index>(j)) = extends->phi(static_cast<Eigen::Index>(i));
+  }
+  s.full = fit_with(m, obs, all, o.fit, cache, from ? &*from : nullptr, true);
+  s.train_error = relative_error(obs, predict_with(cache.get(s.full.phi), s.full, n), all);
   s.cv_prediction = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(n), 6);
   for (const auto& block : time_blocks(n, o.folds)) {
     if (block.empty()) continue;
@@ -274,8 +346,8 @@ Score score(const Model& m, const Observations& obs, const CvOptions& o) {
     for (int k : all)
       if (k < block.front() - o.gap_samples || k > block.back() + o.gap_samples) train.push_back(k);
     if (train.empty()) continue;
-    const Fit f = fit(m, obs, train, o.fit);
-    const Eigen::MatrixXd pr = predict(m, f, n);
+    const Fit f = fit_with(m, obs, train, o.fit, cache, &s.full.phi, false);
+    const Eigen::MatrixXd pr = predict_with(cache.get(f.phi), f, n);
     for (int k : block) s.cv_prediction.row(k) = pr.row(k);
   }
   s.cv_error = relative_error(obs, s.cv_prediction, all);

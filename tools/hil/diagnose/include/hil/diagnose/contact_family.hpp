@@ -18,7 +18,9 @@
 ///   nonlinear_stiffness φ: p - 1, normal force K δ_ref (δ/δ_ref)^p (friction scales with it)
 /// Pure numerics on hil::contact_id: no I/O.
 #include <Eigen/Geometry>
+#include <array>
 #include <map>
+#include <memory>
 #include <optional>
 #include <set>
 #include <string>
@@ -60,7 +62,9 @@ struct ContactData {
 ContactData make_contact_data(const cid::Scene& scene, double v_tm, const std::vector<cid::Measurement>& m,
                               double force_scale_n = 0.0, double moment_scale_nm = 0.0);
 
-/// The nominal contact model with a set of extensions.
+/// The nominal contact model with a set of extensions. Not thread-safe: when the contacts depend on
+/// φ (geometric_offset, robot_compliance, time_offset), design() keeps scratch and the last
+/// evaluation's contacts; use one object per thread.
 class ContactFamily : public Model {
  public:
   ContactFamily(const ContactData& d, std::set<std::string> extensions);
@@ -91,6 +95,54 @@ class ContactFamily : public Model {
   std::vector<Mat6> all_basis() const;
   /// The measured kinematics interpolated at time t (slerp; held at the ends).
   cid::Kinematics kinematics_at(double t) const;
+
+  // Contacts recomputed for φ (docs/diagnosis.md, "Cost"). mindist on every pair of every sample is
+  // what a design costs; most pairs are provably apart or unchanged, and are skipped:
+  //  * pruning: a pair that was gap_m apart under the design geometry and the measured pose stays
+  //    apart while its polyhedra move by less than that in total (the features by x_u - x_u^d, the
+  //    held body with the ee pose);
+  //  * finite differences: only the pairs of features whose transform differs from the last
+  //    evaluation with the same ee poses (the base) are recomputed, the others copied from it.
+  // Both give exactly mindist's contacts, in its order.
+  struct NearPair {
+    int poly1, poly2;  ///< flattened polyhedron indices in object 1 and 2
+    double gap_m;      ///< lower bound on their distance at the design geometry (-inf: interfering)
+  };
+  struct PairTable {
+    std::vector<std::vector<NearPair>> near;                 ///< per sample, pairs closer than kReach_m
+    std::array<std::vector<std::pair<int, int>>, 2> index;   ///< flattened polyhedron -> (feature, polyhedron)
+    std::array<std::vector<double>, 2> radius_m;             ///< farthest vertex from the body origin (design)
+  };
+  /// Feature transforms at x and how far each polyhedron moved from the design geometry.
+  struct Geometry {
+    Eigen::VectorXd x;
+    std::array<std::vector<Eigen::Isometry3d>, 2> T_body_feature;
+    std::array<std::vector<double>, 2> moved_m;                ///< per flattened polyhedron
+    std::array<std::vector<bool>, 2> changed;                  ///< per feature: differs from the base
+  };
+  struct Base {
+    bool valid = false;
+    double tau_s = 0.0;
+    Mat6 C = Mat6::Zero();
+    std::array<std::vector<Eigen::Isometry3d>, 2> T_body_feature;
+    std::vector<std::vector<cid::ContactPoint>> contacts;  ///< per sample
+    std::vector<bool> full;                                ///< per sample: by full mindist (not from the table)
+  };
+  struct Scratch {
+    cid::MindistWorkspace ws;
+    std::array<std::vector<cid::PosedPolyhedron>, 2> posed;
+    std::array<std::vector<char>, 2> done;
+  };
+  static constexpr double kReach_m = 5e-3;  ///< pairs farther apart are not tabled: beyond, full mindist
+  std::shared_ptr<const PairTable> pairs_;
+  mutable Base base_;
+  mutable Scratch scratch_;
+  static std::shared_ptr<const PairTable> make_pairs(const ContactData& d);
+  Geometry geometry_at(const Eigen::VectorXd& x) const;
+  /// mindist's contacts of sample k at the ee pose of `kin`; `base`: that sample's contacts in the
+  /// base (same ee pose), reused for the pairs of unchanged features. Returns false when it ran full mindist.
+  bool sample_contacts(std::size_t k, const cid::Kinematics& kin, const Geometry& g, const std::vector<cid::ContactPoint>* base,
+                       std::vector<cid::ContactPoint>& out) const;
 };
 
 /// The wrench on the plate (fp frame, about the fp origin) of a force f (world) applied to object 1

@@ -77,6 +77,7 @@ struct Fit {
   double sigma2 = 0.0;          ///< rss / (rows - rank)
   long rows = 0;
   int evaluations = 0;          ///< designs computed
+  std::vector<std::string> phi_names;  ///< the names of φ's entries (the model's nonlinear())
   bool converged = true;
   std::vector<Reported> reported;
   std::string invalid;          ///< why the fitted parameters are not physical (empty: they are)
@@ -115,7 +116,9 @@ struct Score {
   double seconds = 0.0;
 };
 
-Score score(const Model& m, const Observations& obs, const CvOptions& o = {});
+/// \param extends the fit of a model `m` extends (e.g. the cause, in the second step): its φ, by
+/// name, the others at 0, is one more start of the full fit.
+Score score(const Model& m, const Observations& obs, const CvOptions& o = {}, const Fit* extends = nullptr);
 
 /// The sample indices of the blocked cross-validation folds (contiguous blocks).
 std::vector<std::vector<int>> time_blocks(std::size_t samples, int folds);
