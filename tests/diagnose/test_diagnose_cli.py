@@ -116,6 +116,31 @@ class Diagnose(unittest.TestCase):
         self.assertIn("no sample brings the objects into contact", r.stderr)
         self.assertIn(run, r.stderr)
 
+    def test_stiffness_table(self):
+        # The shipped table was simulated with link springs (examples/stiffness/truth.json: L0, L2,
+        # L4) beside the joints: against the joint-only model the links must be named.
+        table = os.path.join(SRC, "examples", "stiffness", "table.csv")
+        rig = os.path.join(SRC, "examples", "stiffness", "kr270_like.yaml")
+        js = os.path.join(self.dir, "s.json")
+        rep = os.path.join(self.dir, "s_report")
+        r = hil("diagnose", table, "--rig", rig, "--json", js, "--report", rep, "--quiet")
+        self.assertEqual(r.returncode, 0, r.stderr)
+        self.assertIn("stiffness table", r.stdout)
+        with open(js) as f:
+            d = json.load(f)
+        self.assertEqual(d["mode"], "stiffness")
+        self.assertEqual(d["cause"]["name"], "link_compliance")
+        self.assertGreater(d["gain_percent"], 5)
+        self.assertTrue(os.path.exists(os.path.join(rep, "index.html")))
+        self.assertTrue(os.listdir(os.path.join(rep, "figures")))
+        # Without --rig, and with a candidate of the other families: clear errors.
+        r = hil("diagnose", table, "--quiet")
+        self.assertNotEqual(r.returncode, 0)
+        self.assertIn("--rig", r.stderr)
+        r = hil("diagnose", table, "--rig", rig, "--candidates", "time_offset", "--quiet")
+        self.assertNotEqual(r.returncode, 0)
+        self.assertIn("time_offset", r.stderr)
+
     @unittest.skipUnless(os.path.exists(TIAGO), "../shared/data/tiago-suspension is not beside this checkout")
     def test_tiago_deflection_mode(self):
         run = os.path.join(self.dir, "tiago")

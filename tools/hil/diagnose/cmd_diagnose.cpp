@@ -23,7 +23,6 @@ struct DiagnoseArgs {
 };
 
 int diagnose_cmd(const DiagnoseArgs& a) {
-  const auto run = format::load_run(a.run, a.rig);
   diagnose::Options o;
   o.candidates = a.candidates;
   o.folds = a.folds;
@@ -36,7 +35,9 @@ int diagnose_cmd(const DiagnoseArgs& a) {
       else
         std::cerr << fmt::format("[diagnose {}/{}] {}\n", step, total, what);
     };
-  const auto r = diagnose::diagnose_run(run, o);
+  // A file is a stiffness-experiment table; a folder a run.
+  const auto r = std::filesystem::is_regular_file(a.run) ? diagnose::diagnose_table(a.run, a.rig, o)
+                                                          : diagnose::diagnose_run(format::load_run(a.run, a.rig), o);
   if (!a.quiet && tty) std::cerr << "\r" << std::string(80, ' ') << "\r";
   diagnose::print_summary(std::cout, r);
   if (!a.json.empty()) {
@@ -57,7 +58,7 @@ void add_diagnose(CLI::App& app) {
   static DiagnoseArgs da;
   auto* d = app.add_subcommand("diagnose",
                                "What the nominal model gets wrong on a run, the named cause, the extended model and its held-out gain");
-  d->add_option("RUN", da.run, "run folder")->required();
+  d->add_option("RUN", da.run, "run folder, or a stiffness-experiment table (CSV, with --rig of its robot)")->required();
   d->add_option("--rig", da.rig, "rig file (default: the run's rig.yaml)");
   d->add_option("--json", da.json, "write the diagnosis as JSON");
   d->add_option("--report", da.report, "write an HTML report into this folder");

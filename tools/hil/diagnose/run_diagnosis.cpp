@@ -8,6 +8,7 @@
 #include "hil/format/error.hpp"
 #include "hil/report/html.hpp"
 #include "rig_adapter.hpp"
+#include "stiffness_io.hpp"
 
 namespace hil::cli::diagnose {
 
@@ -82,6 +83,49 @@ nlohmann::json params_json(const dg::Fit& f, bool extension_only) {
 
 }  // namespace
 
+/// The --candidates asked for (all that apply when none), each checked against those that apply.
+static std::vector<std::string> checked_candidates(const Options& o, const std::vector<std::string>& all) {
+  for (const auto& c : o.candidates)
+    if (std::find(all.begin(), all.end(), c) == all.end())
+      throw std::runtime_error(fmt::format("--candidates: '{}' is not a candidate here (expected one of {})", c, fmt::join(all, ", ")));
+  return o.candidates.empty() ? all : o.candidates;
+}
+
+RunDiagnosis diagnose_table(const std::string& table_path, const std::string& rig_path, const Options& o) {
+  if (rig_path.empty()) throw format::FormatError({table_path, 0, 0, ""}, "a stiffness table needs --rig (the robot's rig file)");
+  const calibration::VjmModel model(stiffness::load_robot(rig_path));
+  const auto table = stiffness::read_stiffness_table(table_path, model.dof(), true);
+  RunDiagnosis r;
+  r.run_name = fs::path(table_path).filename().string();
+  r.mode = "stiffness";
+  const auto candidates = checked_candidates(o, dg::stiffness_extensions());
+  dg::DiagnoseOptions dopt;
+  dopt.cv.folds = o.folds;
+  try {
+    r.stiffness = std::make_unique<dg::StiffnessData>(dg::make_stiffness_data(model, table.rows));
+    const auto& d = *r.stiffness;
+    static const char* wn[6] = {"fx", "fy", "fz", "mx", "my", "mz"};
+    for (int c = 0; c < 6; ++c) {
+      std::vector<double> v;
+      for (const auto& w : d.load) v.push_back(w(c));
+      r.context.signals[std::string("load_") + wn[c]] = v;
+    }
+    for (int j = 0; j < model.dof(); ++j) {
+      std::vector<double> v;
+      for (const auto& m : table.rows) v.push_back(m.q_rad(j));
+      r.context.signals["q" + std::to_string(j + 1)] = v;
+    }
+    r.notes.push_back("stiffness table: the rows stand for time (blocked folds hold out neighbouring rows, i.e. whole "
+                      "configurations); nominal model: joint compliances only, rigid links");
+    const dg::StiffnessData* dp = r.stiffness.get();
+    r.result = dg::diagnose([dp](const std::set<std::string>& e) { return std::make_unique<dg::StiffnessFamily>(*dp, e); },
+                            candidates, r.obs(), r.context, dopt, o.progress);
+  } catch (const std::exception& e) {
+    throw std::runtime_error(table_path + ": " + e.what());
+  }
+  return r;
+}
+
 RunDiagnosis diagnose_run(const format::Run& run, const Options& o) {
   if (!run.rig) throw format::FormatError({run.dir, 0, 0, ""}, "no rig: pass --rig or put rig.yaml in the run folder");
   const auto& rig = *run.rig;
@@ -91,13 +135,7 @@ RunDiagnosis diagnose_run(const format::Run& run, const Options& o) {
   dg::DiagnoseOptions dopt;
   dopt.cv.folds = o.folds;
   dg::ModelFactory make;
-  std::vector<std::string> candidates = o.candidates;
-  const auto& all = rig.model.contact ? dg::contact_extensions() : dg::deflection_extensions();
-  for (const auto& c : candidates)
-    if (std::find(all.begin(), all.end(), c) == all.end())
-      throw std::runtime_error(fmt::format("--candidates: '{}' is not a candidate for this rig (expected one of {})", c,
-                                           fmt::join(all, ", ")));
-  if (candidates.empty()) candidates = all;
+  const auto candidates = checked_candidates(o, rig.model.contact ? dg::contact_extensions() : dg::deflection_extensions());
   try {
     if (rig.model.contact) {
       r.mode = "contact";
@@ -141,8 +179,11 @@ void print_summary(std::ostream& out, const RunDiagnosis& r) {
   const auto& obs = r.obs();
   const auto& ext = extended_score(r);
   const std::string what = r.mode == "contact" ? "wrench" : "deflection";
-  out << fmt::format("Diagnosis of {} ({} samples, {:.1f} s, {} model)\n", r.run_name, obs.size(),
-                     obs.t_s.back() - obs.t_s.front(), r.mode);
+  if (r.mode == "stiffness")
+    out << fmt::format("Diagnosis of {} ({} loaded configurations, stiffness table)\n", r.run_name, obs.size());
+  else
+    out << fmt::format("Diagnosis of {} ({} samples, {:.1f} s, {} model)\n", r.run_name, obs.size(),
+                       obs.t_s.back() - obs.t_s.front(), r.mode);
   out << fmt::format("  nominal model:   held-out relative {} error {:.2f} %\n", what, 100 * d.nominal.cv_error);
   const auto& nr = d.nominal_residuals;
   out << fmt::format("  it gets wrong:   {} most (rms {:.3g} {}), ", obs.component[static_cast<std::size_t>(nr.worst_component)],
@@ -354,6 +395,7 @@ void write_report(const std::string& dir, const RunDiagnosis& r) {
   }
   for (const auto& n : r.notes) page.paragraph("Note: " + n);
   page.write((fs::path(dir) / "index.html").string());
+  page.write_figures((fs::path(dir) / "figures").string());
 }
 
 }  // namespace hil::cli::diagnose

@@ -8,6 +8,7 @@
 
 #include "hil/diagnose/contact_family.hpp"
 #include "hil/diagnose/deflection_family.hpp"
+#include "hil/diagnose/stiffness_family.hpp"
 #include "hil/diagnose/diagnose.hpp"
 #include "hil/format/run.hpp"
 
@@ -20,17 +21,23 @@ struct Options {
 };
 
 struct RunDiagnosis {
-  std::string run_name, mode;  ///< mode: "contact" or "deflection"
+  std::string run_name, mode;  ///< mode: "contact", "deflection" or "stiffness" (a stiffness table)
   std::unique_ptr<hil::diagnose::ContactData> contact;
   std::unique_ptr<hil::diagnose::DeflectionData> deflection;
+  std::unique_ptr<hil::diagnose::StiffnessData> stiffness;
   hil::diagnose::Context context;
   hil::diagnose::Diagnosis result;
   std::vector<std::string> notes;
-  const hil::diagnose::Observations& obs() const { return contact ? contact->obs : deflection->obs; }
+  const hil::diagnose::Observations& obs() const {
+    return contact ? contact->obs : deflection ? deflection->obs : stiffness->obs;
+  }
 };
 
 /// \throws format::FormatError / std::runtime_error naming the run on bad input.
 RunDiagnosis diagnose_run(const format::Run& run, const Options& o);
+/// A stiffness-experiment table (docs/calibration.md) of the robot in `rig_path`, against the
+/// joint-compliance model. \throws format::FormatError / std::runtime_error naming the file.
+RunDiagnosis diagnose_table(const std::string& table_path, const std::string& rig_path, const Options& o);
 
 void print_summary(std::ostream& out, const RunDiagnosis& r);
 nlohmann::json to_json(const RunDiagnosis& r);
