@@ -198,6 +198,7 @@ void print_summary(std::ostream& out, const RunDiagnosis& r) {
   if (!d.second_cause.empty())
     out << fmt::format("  second cause:    {} — {}\n", d.second_cause, dg::describe_extension(d.second_cause));
   if (d.extended) {
+    out << "    (value ± 95 % interval, i.e. 1.96 std; PNR = |value - nominal| / std)\n";
     for (const auto& q : ext.full.reported)
       if (q.extension)
         out << fmt::format("    {:<28} {}  (PNR {:.1f})\n", q.name, fmt_value(q.value, q.std, q.unit), q.pnr());
