@@ -140,6 +140,10 @@ class Diagnose(unittest.TestCase):
         r = hil("diagnose", table, "--rig", rig, "--candidates", "time_offset", "--quiet")
         self.assertNotEqual(r.returncode, 0)
         self.assertIn("time_offset", r.stderr)
+        # Cross-validation needs at least two folds.
+        r = hil("diagnose", table, "--rig", rig, "--folds", "1", "--quiet")
+        self.assertNotEqual(r.returncode, 0)
+        self.assertIn("--folds must be at least 2", r.stderr)
 
     @unittest.skipUnless(os.path.exists(TIAGO), "../shared/data/tiago-suspension is not beside this checkout")
     def test_tiago_deflection_mode(self):

@@ -113,6 +113,21 @@ TEST(StiffnessTable, BadInputNamesTheRow) {
   } catch (const std::runtime_error& e) {
     EXPECT_NE(std::string(e.what()).find("row 4"), std::string::npos) << e.what();
   }
+  // A table of 3-D point displacements: the diagnosis needs the 6-D tool displacement.
+  auto points = table(joints_only(), 17);
+  points[2].kind = hc::MeasurementKind::point3;
+  points[2].displacement.conservativeResize(3);
+  try {
+    make_stiffness_data(robot(), points);
+    FAIL() << "no error";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("row 3"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("6-D tool displacement"), std::string::npos) << e.what();
+  }
+  // Joint values of another robot.
+  auto q = table(joints_only(), 18);
+  q[0].q_rad.conservativeResize(5);
+  EXPECT_THROW(make_stiffness_data(robot(), q), std::runtime_error);
   rows.resize(5);
   EXPECT_THROW(make_stiffness_data(robot(), rows), std::runtime_error);
   const auto d = make_stiffness_data(robot(), table(joints_only(), 16));
