@@ -79,6 +79,29 @@ TEST(Engine, IntervalsCoverTheTruthAndCrossValidationScoresHeldOutData) {
   EXPECT_TRUE(s.identifiable);
 }
 
+TEST(Engine, AScreenAfterTheFullFitSkipsTheFolds) {
+  const auto o = sine_data(1.23, 2.5, 0.4, 0.05, 2);
+  SineFamily m(o);
+  CvOptions cv;
+  int calls = 0;
+  cv.screen = [&calls](const Score& s) {
+    ++calls;
+    return s.bic < 0 ? std::string("test screen") : std::string();
+  };
+  const Score s = score(m, o, cv);
+  EXPECT_EQ(calls, 1);
+  EXPECT_FALSE(s.held_out());
+  EXPECT_EQ(s.screened, "test screen");
+  EXPECT_TRUE(std::isnan(s.cv_error));
+  EXPECT_EQ(s.cv_prediction.size(), 0);
+  EXPECT_NEAR(s.full.phi(0), 1.23, 1e-2);  // the full fit and its statistics are still there
+  EXPECT_TRUE(s.identifiable);
+  cv.screen = [](const Score&) { return std::string(); };
+  const Score t = score(m, o, cv);
+  EXPECT_TRUE(t.held_out());
+  EXPECT_NEAR(t.cv_error, 0.05, 0.01);
+}
+
 TEST(Engine, TimeBlocksPartitionTheSamplesInOrder) {
   const auto b = time_blocks(103, 5);
   ASSERT_EQ(b.size(), 5u);
@@ -280,6 +303,36 @@ TEST(Generator, DrawsSeededEffectsAndRefusesUnknownOnes) {
   EXPECT_NE(a.viscous_n_s_per_m, c.viscous_n_s_per_m);
   EXPECT_EQ(a.names(), std::vector<std::string>{"viscous_friction"});
   EXPECT_THROW(draw_effect("magnetism", 1, r.scene, a), std::invalid_argument);
+}
+
+TEST(Diagnose, CandidatesFailingWithoutHeldOutDataAreScreenedAndSaySo) {
+  // A clean press run: most candidates' parameters are not practically identifiable or their BIC
+  // is not lower; their folds are skipped, the verdict says why, and nothing else changes.
+  const auto r = test::scene_run("press_slide");
+  const auto data = make_contact_data(r.scene, r.model.v_tm, test::measure(r, Effects{}, 31), r.force_scale_n, r.moment_scale_nm);
+  const ModelFactory make = [&data](const std::set<std::string>& x) { return std::make_unique<ContactFamily>(data, x); };
+  const Diagnosis d = diagnose(make, contact_extensions(), data.obs, {});
+  EXPECT_EQ(d.cause, "none");
+  int screened = 0;
+  for (const auto& c : d.candidates) {
+    if (c.score.held_out()) {
+      EXPECT_TRUE(std::isfinite(c.score.cv_error)) << c.name;
+      continue;
+    }
+    ++screened;
+    EXPECT_FALSE(c.supported);
+    EXPECT_TRUE(std::isnan(c.gain_percent));
+    EXPECT_NE(c.verdict.find("not scored on held-out data"), std::string::npos) << c.verdict;
+    const bool fails = !(c.score.bic < d.nominal.bic) || c.score.max_extension_pnr < 5.0 || !c.score.full.invalid.empty();
+    EXPECT_TRUE(fails) << c.name << ": " << c.verdict;
+  }
+  EXPECT_GE(screened, 1);
+  // Screened candidates rank after the scored ones.
+  bool seen_screened = false;
+  for (const auto& c : d.candidates) {
+    if (!c.score.held_out()) seen_screened = true;
+    else EXPECT_FALSE(seen_screened) << c.name << " ranked after a screened candidate";
+  }
 }
 
 // --- the deflection family ----------------------------------------------------------------------

@@ -66,6 +66,12 @@ dg::Context deflection_context(const dg::DeflectionData& d) {
   return ctx;
 }
 
+/// A fraction as a percentage with `pattern`, "-" when not computed (a candidate screened before
+/// its held-out scoring).
+std::string percent_cell(double fraction, const char* pattern) {
+  return std::isfinite(fraction) ? fmt::format(fmt::runtime(pattern), 100 * fraction) : std::string("-");
+}
+
 std::string fmt_value(double v, double s, const std::string& unit) {
   return fmt::format("{:.4g} ± {:.2g}{}{}", v, 1.96 * s, unit.empty() ? "" : " ", unit);
 }
@@ -210,7 +216,8 @@ void print_summary(std::ostream& out, const RunDiagnosis& r) {
       out << fmt::format("    {:<28} {}\n", q.name, fmt_value(q.value, q.std, q.unit));
   out << "  candidates (held-out error, gain, verdict):\n";
   for (const auto& c : d.candidates)
-    out << fmt::format("    {:<20} {:>7.2f} % {:>+7.1f} %  {}\n", c.name, 100 * c.score.cv_error, c.gain_percent, c.verdict);
+    out << fmt::format("    {:<20} {:>9} {:>9}  {}\n", c.name, percent_cell(c.score.cv_error, "{:.2f} %"),
+                       percent_cell(c.gain_percent / 100, "{:+.1f} %"), c.verdict);
   for (const auto& n : r.notes) out << "  note: " << n << "\n";
   out << fmt::format("  ({:.1f} s)\n", d.seconds);
 }
@@ -269,8 +276,9 @@ nlohmann::json to_json(const RunDiagnosis& r) {
     for (const auto& c : v)
       t.push_back({{"name", c.name},
                    {"relative_error", std::isfinite(c.score.cv_error) ? nlohmann::json(c.score.cv_error) : nlohmann::json(nullptr)},
-                   {"gain_percent", c.gain_percent},
-                   {"z", c.z},
+                   {"scored_held_out", c.score.held_out()},
+                   {"gain_percent", std::isfinite(c.gain_percent) ? nlohmann::json(c.gain_percent) : nlohmann::json(nullptr)},
+                   {"z", std::isfinite(c.z) ? nlohmann::json(c.z) : nlohmann::json(nullptr)},
                    {"bic", c.score.bic},
                    {"aic", c.score.aic},
                    {"max_pnr", c.score.max_extension_pnr},
@@ -366,8 +374,8 @@ void write_report(const std::string& dir, const RunDiagnosis& r) {
     std::vector<std::vector<std::string>> rows;
     rows.push_back({"nominal", fmt::format("{:.3f} %", 100 * d.nominal.cv_error), "", "", fmt::format("{:.0f}", d.nominal.bic), "", "reference"});
     for (const auto& c : d.candidates)
-      rows.push_back({c.name, fmt::format("{:.3f} %", 100 * c.score.cv_error), fmt::format("{:+.1f} %", c.gain_percent),
-                      fmt::format("{:.1f}", c.z), fmt::format("{:.0f}", c.score.bic), fmt::format("{:.1f}", c.score.max_extension_pnr),
+      rows.push_back({c.name, percent_cell(c.score.cv_error, "{:.3f} %"), percent_cell(c.gain_percent / 100, "{:+.1f} %"),
+                      std::isfinite(c.z) ? fmt::format("{:.1f}", c.z) : "-", fmt::format("{:.0f}", c.score.bic), fmt::format("{:.1f}", c.score.max_extension_pnr),
                       c.verdict});
     page.table({"candidate", "held-out error", "gain", "z", "BIC", "max PNR", "verdict"}, rows);
     std::vector<double> x, y;
@@ -380,8 +388,8 @@ void write_report(const std::string& dir, const RunDiagnosis& r) {
     if (!d.second_step.empty()) {
       rows.clear();
       for (const auto& c : d.second_step)
-        rows.push_back({d.cause + " + " + c.name, fmt::format("{:.3f} %", 100 * c.score.cv_error), fmt::format("{:+.1f} %", c.gain_percent),
-                        fmt::format("{:.1f}", c.z), c.verdict});
+        rows.push_back({d.cause + " + " + c.name, percent_cell(c.score.cv_error, "{:.3f} %"), percent_cell(c.gain_percent / 100, "{:+.1f} %"),
+                        std::isfinite(c.z) ? fmt::format("{:.1f}", c.z) : "-", c.verdict});
       page.heading("Second step (greedy forward selection)", 3);
       page.table({"model", "held-out error", "gain over the cause", "z", "verdict"}, rows);
     }

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <sstream>
 
 #include <fmt/format.h>
@@ -126,7 +127,27 @@ ResidualAnalysis analyse_residuals(const Observations& obs, const Eigen::MatrixX
 
 namespace {
 
+/// The criteria that need no held-out data (the full fit's BIC, PNR and physical validity): why
+/// `s` cannot be supported against `ref` whatever its held-out error (empty: it may be).
+std::string fails_without_held_out(const Score& s, const Score& ref, const DiagnoseOptions& o) {
+  std::vector<std::string> why;
+  if (!(s.bic < ref.bic)) why.push_back("BIC not lower");
+  if (!s.full.invalid.empty()) why.push_back("not physical: " + s.full.invalid);
+  if (s.max_extension_pnr < o.min_pnr)
+    why.push_back(fmt::format("parameters not practically identifiable (PNR {:.1f} < {:.0f})", s.max_extension_pnr, o.min_pnr));
+  return fmt::format("{}", fmt::join(why, "; "));
+}
+
 void judge(CandidateResult& c, const Score& ref, double noise, const Observations& obs, const DiagnoseOptions& o) {
+  if (!c.score.held_out()) {
+    // Screened after the full fit: the folds were not run (they could not change the verdict).
+    c.gain_percent = std::numeric_limits<double>::quiet_NaN();
+    c.noise_fraction = std::numeric_limits<double>::quiet_NaN();
+    c.z = std::numeric_limits<double>::quiet_NaN();
+    c.supported = false;
+    c.verdict = c.score.screened + " (not scored on held-out data)";
+    return;
+  }
   c.gain_percent = ref.cv_error > 0 ? 100.0 * (1.0 - c.score.cv_error / ref.cv_error) : 0.0;
   c.noise_fraction = noise > 0 ? (ref.cv_error * ref.cv_error - c.score.cv_error * c.score.cv_error) / (noise * noise) : 1e300;
   const bool size = c.noise_fraction >= o.min_noise_fraction;
@@ -150,9 +171,11 @@ void judge(CandidateResult& c, const Score& ref, double noise, const Observation
 }
 
 void rank(std::vector<CandidateResult>& v) {
-  std::stable_sort(v.begin(), v.end(), [](const auto& a, const auto& b) {
+  // Supported first, then those scored on held-out data by their error, then the screened ones.
+  auto key = [](const CandidateResult& c) { return c.score.held_out() ? c.score.cv_error : std::numeric_limits<double>::infinity(); };
+  std::stable_sort(v.begin(), v.end(), [&](const auto& a, const auto& b) {
     if (a.supported != b.supported) return a.supported;
-    return a.score.cv_error < b.score.cv_error;
+    return key(a) < key(b);
   });
 }
 
@@ -171,16 +194,24 @@ Diagnosis diagnose(const ModelFactory& make, const std::vector<std::string>& can
   d.nominal = score(*make({}), obs, o.cv);
   d.nominal_residuals = analyse_residuals(obs, d.nominal.cv_prediction, ctx);
   d.noise_relative = noise_level(obs, d.nominal.cv_prediction);
+  // A candidate whose full fit already fails a criterion that needs no held-out data is not scored
+  // on held-out data: the folds cost most of a fit's time and could not change its verdict.
+  auto screened_against = [&](const Score& ref) {
+    CvOptions cv = o.cv;
+    cv.screen = [&ref, &o](const Score& s) { return fails_without_held_out(s, ref, o); };
+    return cv;
+  };
   for (const auto& c : candidates) {
     tell(c);
     CandidateResult r;
     r.name = c;
     try {
-      r.score = score(*make({c}), obs, o.cv);
+      r.score = score(*make({c}), obs, screened_against(d.nominal));
       judge(r, d.nominal, d.noise_relative, obs, o);
     } catch (const std::exception& e) {
       r.score.model = c;
       r.score.cv_error = std::numeric_limits<double>::infinity();
+      r.applicable = false;
       r.verdict = std::string("not applicable: ") + e.what();
     }
     d.candidates.push_back(std::move(r));
@@ -195,16 +226,17 @@ Diagnosis diagnose(const ModelFactory& make, const std::vector<std::string>& can
     for (const auto& c : d.candidates) {
       // Every other candidate, not only those that helped alone: an extension may only matter
       // together with the cause (a delay of a compliance's load, say).
-      if (c.name == d.cause || !std::isfinite(c.score.cv_error) || tried >= o.second_candidates) continue;
+      if (c.name == d.cause || !c.applicable || tried >= o.second_candidates) continue;
       ++tried;
       tell(d.cause + " + " + c.name);
       CandidateResult r;
       r.name = c.name;
       try {
-        r.score = score(*make({d.cause, c.name}), obs, o.cv, &first.score.full);
+        r.score = score(*make({d.cause, c.name}), obs, screened_against(first.score), &first.score.full);
         judge(r, first.score, d.noise_relative, obs, o);
       } catch (const std::exception& e) {
         r.score.cv_error = std::numeric_limits<double>::infinity();
+        r.applicable = false;
         r.verdict = std::string("not applicable: ") + e.what();
       }
       d.second_step.push_back(std::move(r));

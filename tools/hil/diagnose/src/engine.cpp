@@ -210,7 +210,8 @@ Fit fit_with(const Model& m, const Observations& obs, const std::vector<int>& tr
           mu *= 4.0;
         }
       }
-      if (!accepted || decrease < o.tolerance || step_norm < 1e-8) {
+      const double dof = static_cast<double>(std::max<Eigen::Index>(1, cur.r.size() - p - q));
+      if (!accepted || decrease < std::max(o.tolerance, o.noise_tolerance / dof) || step_norm < 1e-8) {
         f.converged = true;
         break;
       }
@@ -339,23 +340,11 @@ Score score(const Model& m, const Observations& obs, const CvOptions& o, const F
   }
   s.full = fit_with(m, obs, all, o.fit, cache, from ? &*from : nullptr, true);
   s.train_error = relative_error(obs, predict_with(cache.get(s.full.phi), s.full, n), all);
-  s.cv_prediction = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(n), 6);
-  for (const auto& block : time_blocks(n, o.folds)) {
-    if (block.empty()) continue;
-    std::vector<int> train;
-    for (int k : all)
-      if (k < block.front() - o.gap_samples || k > block.back() + o.gap_samples) train.push_back(k);
-    if (train.empty()) continue;
-    const Fit f = fit_with(m, obs, train, o.fit, cache, &s.full.phi, false);
-    const Eigen::MatrixXd pr = predict_with(cache.get(f.phi), f, n);
-    for (int k : block) s.cv_prediction.row(k) = pr.row(k);
-  }
-  s.cv_error = relative_error(obs, s.cv_prediction, all);
   const double rows = static_cast<double>(s.full.rows);
-  const double k = static_cast<double>(s.full.rank);
+  const double rank = static_cast<double>(s.full.rank);
   const double ll = rows * std::log(std::max(s.full.rss, 1e-300) / rows);
-  s.bic = ll + k * std::log(rows);
-  s.aic = ll + 2.0 * k;
+  s.bic = ll + rank * std::log(rows);
+  s.aic = ll + 2.0 * rank;
   s.min_extension_pnr = std::numeric_limits<double>::infinity();
   s.max_extension_pnr = 0.0;
   bool any = false;
@@ -367,6 +356,26 @@ Score score(const Model& m, const Observations& obs, const CvOptions& o, const F
     }
   if (!any) s.min_extension_pnr = 0.0;
   s.identifiable = s.max_extension_pnr >= 5.0;
+  if (o.screen) s.screened = o.screen(s);
+  if (!s.screened.empty()) {
+    s.cv_error = std::numeric_limits<double>::quiet_NaN();
+    s.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    return s;
+  }
+  FitOptions fold_fit = o.fit;
+  fold_fit.noise_tolerance = std::max(fold_fit.noise_tolerance, o.fold_noise_tolerance);
+  s.cv_prediction = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(n), 6);
+  for (const auto& block : time_blocks(n, o.folds)) {
+    if (block.empty()) continue;
+    std::vector<int> train;
+    for (int k : all)
+      if (k < block.front() - o.gap_samples || k > block.back() + o.gap_samples) train.push_back(k);
+    if (train.empty()) continue;
+    const Fit f = fit_with(m, obs, train, fold_fit, cache, &s.full.phi, false);
+    const Eigen::MatrixXd pr = predict_with(cache.get(f.phi), f, n);
+    for (int k : block) s.cv_prediction.row(k) = pr.row(k);
+  }
+  s.cv_error = relative_error(obs, s.cv_prediction, all);
   s.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return s;
 }

@@ -73,6 +73,7 @@ struct CandidateResult {
   double z = 0.0;             ///< significance of that reduction
   double noise_fraction = 0.0;  ///< held-out MSE reduction over the noise variance
   bool supported = false;
+  bool applicable = true;     ///< false: the model could not be built or fitted on this run
   std::string verdict;        ///< why (not)
 };
 

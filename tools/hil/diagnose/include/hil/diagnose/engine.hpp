@@ -9,6 +9,7 @@
 /// so residuals are relative errors. Pure numerics: no I/O.
 #include <Eigen/Core>
 #include <cmath>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -86,6 +87,10 @@ struct Fit {
 struct FitOptions {
   int max_iterations = 40;
   double tolerance = 1e-6;      ///< relative cost decrease that ends LM
+  /// LM also ends when an iteration lowers the cost by less than this many residual variances
+  /// (cost / (rows - parameters)); 0: off. A change of the training cost that small moves no
+  /// prediction and no test statistic (a parameter one standard deviation off costs one variance).
+  double noise_tolerance = 0.0;
 };
 
 /// Fits `m` on the samples `train` (indices into obs). \throws std::runtime_error if the design is zero.
@@ -96,10 +101,18 @@ Eigen::MatrixXd predict(const Model& m, const Fit& f, std::size_t samples);
 /// sqrt(mean((w (y - ŷ))²)) over the rows of `samples`: the contact paper's mean relative error.
 double relative_error(const Observations& obs, const Eigen::MatrixXd& prediction, const std::vector<int>& samples);
 
+struct Score;
+
 struct CvOptions {
   int folds = 5;                ///< contiguous time blocks
   int gap_samples = 5;          ///< samples either side of a test block left out of training
   FitOptions fit;
+  /// A fold's fit only predicts its held-out block: it starts from the full fit's optimum and stops
+  /// when an iteration gains less than this many residual variances (FitOptions::noise_tolerance).
+  double fold_noise_tolerance = 0.1;
+  /// Called after the full fit: a non-empty answer (why) skips the folds (Score::screened), for a
+  /// model that already fails a criterion needing no held-out data.
+  std::function<std::string(const Score&)> screen;
 };
 
 /// The score of one model.
@@ -113,6 +126,9 @@ struct Score {
   double min_extension_pnr = 0.0;   ///< smallest PNR over the identifiable extension parameters
   double max_extension_pnr = 0.0;
   bool identifiable = false;    ///< some extension parameter has PNR >= 5 (G1+)
+  /// Why the folds were skipped (CvOptions::screen); then cv_error is NaN and cv_prediction empty.
+  std::string screened;
+  bool held_out() const { return screened.empty(); }
   double seconds = 0.0;
 };
 
