@@ -79,6 +79,7 @@ TEST_P(HiddenEffect, IsNamedWithItsMagnitudeAndAGain) {
     EXPECT_EQ(named, std::set<std::string>(c.effects.begin(), c.effects.end()));
   } else {
     EXPECT_EQ(d.cause, c.effects.front());
+    EXPECT_EQ(d.second_cause, "") << "a second cause on a run with one hidden effect";
   }
   EXPECT_GT(d.gain_percent, 0.0);
   ASSERT_TRUE(d.extended.has_value());

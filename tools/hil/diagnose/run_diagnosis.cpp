@@ -281,7 +281,7 @@ nlohmann::json to_json(const RunDiagnosis& r) {
                    {"z", std::isfinite(c.z) ? nlohmann::json(c.z) : nlohmann::json(nullptr)},
                    {"bic", c.score.bic},
                    {"aic", c.score.aic},
-                   {"max_pnr", c.score.max_extension_pnr},
+                   {"max_pnr", c.pnr},
                    {"supported", c.supported},
                    {"verdict", c.verdict},
                    {"parameters", params_json(c.score.full, true)}});
@@ -375,7 +375,7 @@ void write_report(const std::string& dir, const RunDiagnosis& r) {
     rows.push_back({"nominal", fmt::format("{:.3f} %", 100 * d.nominal.cv_error), "", "", fmt::format("{:.0f}", d.nominal.bic), "", "reference"});
     for (const auto& c : d.candidates)
       rows.push_back({c.name, percent_cell(c.score.cv_error, "{:.3f} %"), percent_cell(c.gain_percent / 100, "{:+.1f} %"),
-                      std::isfinite(c.z) ? fmt::format("{:.1f}", c.z) : "-", fmt::format("{:.0f}", c.score.bic), fmt::format("{:.1f}", c.score.max_extension_pnr),
+                      std::isfinite(c.z) ? fmt::format("{:.1f}", c.z) : "-", fmt::format("{:.0f}", c.score.bic), fmt::format("{:.1f}", c.pnr),
                       c.verdict});
     page.table({"candidate", "held-out error", "gain", "z", "BIC", "max PNR", "verdict"}, rows);
     std::vector<double> x, y;

@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <set>
 #include <sstream>
 
 #include <fmt/format.h>
@@ -127,18 +128,31 @@ ResidualAnalysis analyse_residuals(const Observations& obs, const Eigen::MatrixX
 
 namespace {
 
+/// The largest parameter-to-noise ratio among the extension parameters `s` adds to `ref` (in the
+/// second step, those of the added candidate, not the cause's, which are identifiable already).
+double added_pnr(const Score& s, const Score& ref) {
+  std::set<std::string> had;
+  for (const auto& q : ref.full.reported)
+    if (q.extension) had.insert(q.name);
+  double best = 0.0;
+  for (const auto& q : s.full.reported)
+    if (q.extension && !had.count(q.name)) best = std::max(best, q.pnr());
+  return best;
+}
+
 /// The criteria that need no held-out data (the full fit's BIC, PNR and physical validity): why
 /// `s` cannot be supported against `ref` whatever its held-out error (empty: it may be).
 std::string fails_without_held_out(const Score& s, const Score& ref, const DiagnoseOptions& o) {
   std::vector<std::string> why;
   if (!(s.bic < ref.bic)) why.push_back("BIC not lower");
   if (!s.full.invalid.empty()) why.push_back("not physical: " + s.full.invalid);
-  if (s.max_extension_pnr < o.min_pnr)
-    why.push_back(fmt::format("parameters not practically identifiable (PNR {:.1f} < {:.0f})", s.max_extension_pnr, o.min_pnr));
+  if (const double pnr = added_pnr(s, ref); pnr < o.min_pnr)
+    why.push_back(fmt::format("parameters not practically identifiable (PNR {:.1f} < {:.0f})", pnr, o.min_pnr));
   return fmt::format("{}", fmt::join(why, "; "));
 }
 
 void judge(CandidateResult& c, const Score& ref, double noise, const Observations& obs, const DiagnoseOptions& o) {
+  c.pnr = added_pnr(c.score, ref);
   if (!c.score.held_out()) {
     // Screened after the full fit: the folds were not run (they could not change the verdict).
     c.gain_percent = std::numeric_limits<double>::quiet_NaN();
@@ -155,7 +169,7 @@ void judge(CandidateResult& c, const Score& ref, double noise, const Observation
   const bool gain = c.gain_percent >= 100.0 * o.min_gain;
   const bool signif = c.z >= o.min_z;
   const bool bic = c.score.bic < ref.bic;
-  const bool pnr = c.score.max_extension_pnr >= o.min_pnr;
+  const bool pnr = c.pnr >= o.min_pnr;
   const bool physical = c.score.full.invalid.empty();
   c.supported = gain && signif && bic && pnr && size && physical;
   std::vector<std::string> why;
@@ -164,9 +178,9 @@ void judge(CandidateResult& c, const Score& ref, double noise, const Observation
   if (!bic) why.push_back("BIC not lower");
   if (!physical) why.push_back("not physical: " + c.score.full.invalid);
   if (!size) why.push_back(fmt::format("below the noise (explains {:.2f} of the noise variance < {:.2f})", c.noise_fraction, o.min_noise_fraction));
-  if (!pnr) why.push_back(fmt::format("parameters not practically identifiable (PNR {:.1f} < {:.0f})", c.score.max_extension_pnr, o.min_pnr));
+  if (!pnr) why.push_back(fmt::format("parameters not practically identifiable (PNR {:.1f} < {:.0f})", c.pnr, o.min_pnr));
   c.verdict = c.supported ? fmt::format("supported: held-out gain {:.1f} %, z = {:.1f}, PNR {:.1f}, {:.2f} noise variances",
-                                        c.gain_percent, c.z, c.score.max_extension_pnr, c.noise_fraction)
+                                        c.gain_percent, c.z, c.pnr, c.noise_fraction)
                           : fmt::format("{}", fmt::join(why, "; "));
 }
 

@@ -72,6 +72,8 @@ struct CandidateResult {
   double gain_percent = 0.0;  ///< held-out error reduction against the model it extends
   double z = 0.0;             ///< significance of that reduction
   double noise_fraction = 0.0;  ///< held-out MSE reduction over the noise variance
+  /// The largest PNR among the parameters this candidate adds (not those of the model it extends).
+  double pnr = 0.0;
   bool supported = false;
   bool applicable = true;     ///< false: the model could not be built or fitted on this run
   std::string verdict;        ///< why (not)
