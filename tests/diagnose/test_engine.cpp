@@ -102,6 +102,50 @@ TEST(Engine, AScreenAfterTheFullFitSkipsTheFolds) {
   EXPECT_NEAR(t.cv_error, 0.05, 0.01);
 }
 
+/// y_c(t) = θ_0 exp(-a t) sin(2π f t + c) + θ_1, φ = (a, f): two coupled nonlinear parameters.
+class DecayFamily : public Model {
+ public:
+  explicit DecayFamily(const Observations& o) : o_(o) {}
+  std::string name() const override { return "decay"; }
+  std::vector<Param> linear() const override { return {{"amplitude", "", 1, false}, {"offset", "", 1, true}}; }
+  std::vector<Param> nonlinear() const override { return {{"rate", "1/s", 0.1, true, 0, 10}, {"frequency", "Hz", 0.1, true, 0.1, 5}}; }
+  std::vector<Eigen::VectorXd> starts() const override { return {Eigen::Vector2d(0.2, 1.15)}; }
+  void design(const Eigen::VectorXd& phi, Eigen::MatrixXd& A) const override {
+    A.setZero(static_cast<Eigen::Index>(6 * o_.size()), 2);
+    for (std::size_t k = 0; k < o_.size(); ++k)
+      for (int c = 0; c < 6; ++c) {
+        A(static_cast<Eigen::Index>(6 * k) + c, 0) = std::exp(-phi(0) * o_.t_s[k]) * std::sin(2 * M_PI * phi(1) * o_.t_s[k] + c);
+        A(static_cast<Eigen::Index>(6 * k) + c, 1) = 1.0;
+      }
+  }
+
+ private:
+  const Observations& o_;
+};
+
+TEST(Engine, SecantUpdatesReachTheSameOptimumWithFewerDesigns) {
+  Observations o;
+  const int n = 400;
+  o.y.resize(n, 6);
+  for (int k = 0; k < n; ++k) {
+    o.t_s.push_back(0.01 * k);
+    for (int c = 0; c < 6; ++c) o.y(k, c) = 2.0 * std::exp(-0.5 * o.t_s.back()) * std::sin(2 * M_PI * 1.23 * o.t_s.back() + c) + 0.3;
+  }
+  DecayFamily m(o);
+  FitOptions fd, secant;
+  fd.secant_updates = 0;
+  fd.tolerance = secant.tolerance = 1e-12;
+  const Fit a = fit(m, o, all(o.size()), fd);
+  const Fit b = fit(m, o, all(o.size()), secant);
+  for (const Fit* f : {&a, &b}) {
+    EXPECT_TRUE(f->converged);
+    EXPECT_NEAR(f->phi(0), 0.5, 1e-6);
+    EXPECT_NEAR(f->phi(1), 1.23, 1e-6);
+    EXPECT_NEAR(f->theta(0), 2.0, 1e-5);
+  }
+  EXPECT_LT(b.evaluations, a.evaluations);
+}
+
 TEST(Engine, TimeBlocksPartitionTheSamplesInOrder) {
   const auto b = time_blocks(103, 5);
   ASSERT_EQ(b.size(), 5u);

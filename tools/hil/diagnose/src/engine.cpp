@@ -174,26 +174,41 @@ Fit fit_with(const Model& m, const Observations& obs, const std::vector<int>& tr
   if (!cur.theta.allFinite()) throw std::runtime_error(m.name() + ": the fit is not finite");
 
   if (q > 0) {
-    // Levenberg-Marquardt on the projected residual in scaled units u = φ / scale.
+    // Levenberg-Marquardt on the projected residual in scaled units u = φ / scale. The Jacobian is
+    // by forward differences (q designs); after an accepted step it is updated by Broyden's secant
+    // formula instead (no design), up to o.secant_updates times in a row. A finite-difference Jacobian is
+    // recomputed when a secant one gives no descent within a few trials, and always to confirm
+    // convergence, so the fit stops on the same test as with finite differences throughout. The
+    // contact models' residuals are piecewise smooth and their fits crawl along valleys in small
+    // steps, where the Jacobian hardly changes: most iterations then cost one or two designs, not q + 1.
     Eigen::VectorXd scale(q);
     for (Eigen::Index j = 0; j < q; ++j) scale(j) = nl[static_cast<std::size_t>(j)].scale;
     double mu = -1.0;
     f.converged = false;
+    Eigen::MatrixXd J;
+    int secant = 0;       // secant updates since J was last computed by finite differences
+    bool refresh = true;  // recompute J by finite differences before the next iteration
     for (int it = 0; it < o.max_iterations; ++it) {
-      Eigen::MatrixXd J(cur.r.size(), q);
-      for (Eigen::Index j = 0; j < q; ++j) {
-        Eigen::VectorXd ph = phi;
-        const double h = fd_step(nl[static_cast<std::size_t>(j)], phi(j));
-        ph(j) += h;
-        J.col(j) = (ev.project(ph).r - cur.r) / (h / scale(j));
+      const bool by_fd = refresh || secant >= o.secant_updates;
+      if (by_fd) {
+        J.resize(cur.r.size(), q);
+        for (Eigen::Index j = 0; j < q; ++j) {
+          Eigen::VectorXd ph = phi;
+          const double h = fd_step(nl[static_cast<std::size_t>(j)], phi(j));
+          ph(j) += h;
+          J.col(j) = (ev.project(ph).r - cur.r) / (h / scale(j));
+        }
+        secant = 0;
+        refresh = false;
       }
       Eigen::JacobiSVD<Eigen::MatrixXd> svd(J, Eigen::ComputeThinU | Eigen::ComputeThinV);
       const Eigen::VectorXd sv = svd.singularValues();
       const Eigen::VectorXd g = svd.matrixU().transpose() * cur.r;
       if (mu < 0) mu = 1e-3 * (sv.size() > 0 ? sv(0) * sv(0) : 1.0);
+      const double mu_before = mu;
       bool accepted = false;
       double decrease = 0.0, step_norm = 0.0;
-      for (int tries = 0; tries < 12 && !accepted; ++tries) {
+      for (int tries = 0; tries < (by_fd ? 12 : 3) && !accepted; ++tries) {
         Eigen::VectorXd d = Eigen::VectorXd::Zero(q);
         for (Eigen::Index i = 0; i < sv.size(); ++i)
           if (sv(i) > 1e-9 * sv(0)) d -= (sv(i) * g(i) / (sv(i) * sv(i) + mu)) * svd.matrixV().col(i);
@@ -202,6 +217,11 @@ Fit fit_with(const Model& m, const Observations& obs, const std::vector<int>& tr
         if (pr.cost < cur.cost) {
           decrease = (cur.cost - pr.cost) / std::max(cur.cost, 1e-300);
           step_norm = d.norm();
+          const Eigen::VectorXd du = (trial - phi).cwiseQuotient(scale);  // the step taken (after the bounds)
+          if (du.squaredNorm() > 0) {
+            J += ((pr.r - cur.r) - J * du) * (du.transpose() / du.squaredNorm());
+            ++secant;
+          }
           cur = pr;
           phi = trial;
           mu = std::max(mu / 3.0, 1e-12);
@@ -212,6 +232,11 @@ Fit fit_with(const Model& m, const Observations& obs, const std::vector<int>& tr
       }
       const double dof = static_cast<double>(std::max<Eigen::Index>(1, cur.r.size() - p - q));
       if (!accepted || decrease < std::max(o.tolerance, o.noise_tolerance / dof) || step_norm < 1e-8) {
+        if (!by_fd) {  // confirm with a finite-difference Jacobian
+          if (!accepted) mu = mu_before;
+          refresh = true;
+          continue;
+        }
         f.converged = true;
         break;
       }

@@ -91,6 +91,9 @@ struct FitOptions {
   /// (cost / (rows - parameters)); 0: off. A change of the training cost that small moves no
   /// prediction and no test statistic (a parameter one standard deviation off costs one variance).
   double noise_tolerance = 0.0;
+  /// Broyden secant updates of the Jacobian allowed between finite-difference ones (0: finite
+  /// differences at every iteration). Convergence is always confirmed by finite differences.
+  int secant_updates = 4;
 };
 
 /// Fits `m` on the samples `train` (indices into obs). \throws std::runtime_error if the design is zero.
