@@ -98,6 +98,10 @@ def write_rig():
           "          - vertices_m: " + fmt_pts([(x, yy, z) for z in (-0.05, -0.012) for x in (-0.2, 0.2) for yy in (-0.2, 0.2)])]
     y += ["", "devices:", "  force_plate:", "    protocol: ati_ft_can", "    interface: vcan0", "    rate_hz: 1000",
           "    sensor_pose: {translation_m: [0.0, 0.0, 0.0]}",
+          # The controller's pose as float32 registers: the UR map's 0.1 mm steps are coarser than
+          # the contact's interference (50 N / K = 0.3 mm).
+          "  robot:", "    transport: tcp", "    host: 127.0.0.1", "    port: 5020", "    unit_id: 1", "    rate_hz: 125",
+          "    register_map: float32",
           "", "model:", "  contact:", "    stiffness_n_per_m: 1.8e5", "    friction_coefficient: 0.2",
           "    sticking_threshold_m_per_s: 3.0e-4", "    force_scale_n: 50.0", "    moment_scale_nm: 6.0",
           "  uncertainties:",
