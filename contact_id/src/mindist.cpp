@@ -241,7 +241,6 @@ double sat(const PosedPolyhedron& a, const PosedPolyhedron& b, double stop, bool
     if (record) {
       *record = SatRecord{};
       record->gap = g;
-      record->span = span;
       record->max_turn_rad = max_turn_rad;
       if (g < 0.0) rec.finish(*record, unsafe);
     }
@@ -263,7 +262,7 @@ double sat(const PosedPolyhedron& a, const PosedPolyhedron& b, double stop, bool
         continue;
       }
       c /= len;
-      turn = 2.0 / len;  // |Δ(c/|c|)| <= 2 |Δc|/|c|
+      if (record) turn = 2.0 / len;  // |Δ(c/|c|)| <= 2 |Δc|/|c| (only a recorded pass uses it)
       if (test(c)) return finish(gap);
     }
   return finish(gap);

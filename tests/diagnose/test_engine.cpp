@@ -337,6 +337,28 @@ TEST(ContactFamily, UnknownExtensionsAndRunsWithoutContactAreClearErrors) {
   }
 }
 
+TEST(ContactFamily, ACompliancesFreeDirectionsCanMakeItPositiveSemiDefinite) {
+  // Fitted coordinates C_xy = 2 with the diagonal unidentified (0): not PSD as it stands, but the
+  // free diagonal can make it so. With nothing free, or only off-diagonal freedom against a
+  // negative diagonal (the trace stays negative), it cannot.
+  Mat6 C = Mat6::Zero();
+  C(0, 1) = C(1, 0) = 2.0;
+  std::vector<Mat6> diag, off;
+  for (int i = 0; i < 6; ++i) {
+    Mat6 E = Mat6::Zero();
+    E(i, i) = 1.0;
+    diag.push_back(E);
+    for (int j = i + 1; j < 6; ++j) {
+      Mat6 F = Mat6::Zero();
+      F(i, j) = F(j, i) = 1.0;
+      off.push_back(F);
+    }
+  }
+  EXPECT_NEAR(max_min_eigenvalue(C, {}), -2.0, 1e-12);
+  EXPECT_GE(max_min_eigenvalue(C, diag), 0.0);
+  EXPECT_LT(max_min_eigenvalue(-Mat6::Identity(), off), -0.5);
+}
+
 TEST(Generator, DrawsSeededEffectsAndRefusesUnknownOnes) {
   const auto r = test::scene_run("press_slide");
   Effects a, b, c;

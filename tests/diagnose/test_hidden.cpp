@@ -105,7 +105,7 @@ INSTANTIATE_TEST_SUITE_P(
     ::testing::Values(Case{"acu_2a", {}, 11}, Case{"acu_2a", {"sensor_bias"}, 12}, Case{"acu_2a", {"sensor_gain"}, 13},
                       Case{"acu_2a", {"time_offset"}, 14}, Case{"acu_2a", {"viscous_friction"}, 15},
                       Case{"acu_2a", {"contact_damping"}, 16}, Case{"acu_2a", {"nonlinear_stiffness"}, 17},
-                      // robot_compliance: see docs/diagnosis.md (named nonlinear_stiffness on this scene)
+                      // robot_compliance: see RobotComplianceOnAcu2a below
                       Case{"acu_2a", {"geometric_offset"}, 19},
                       Case{"acu_1a", {}, 21}, Case{"acu_1a", {"viscous_friction"}, 22},
                       Case{"acu_2a", {"sensor_bias", "viscous_friction"}, 23}),
@@ -118,6 +118,31 @@ INSTANTIATE_TEST_SUITE_P(
                       Case{"press_slide", {"viscous_friction"}, 35}, Case{"press_slide", {"nonlinear_stiffness"}, 36},
                       Case{"press_slide", {"geometric_offset"}, 37}),
     case_name);
+
+// A lateral wrist compliance on ACU 2a: in series with the V-guides' contact stiffness it softens
+// the contact under load, which a Hertz-like exponent also describes; on this trajectory
+// nonlinear_stiffness predicts held-out data slightly better (docs/diagnosis.md, Known limits).
+// The compliance must still be found, as the cause or as the second cause, physical (a positive
+// semi-definite compliance with its identifiable coordinates exists) and with a positive gain.
+TEST(HiddenEffectPair, RobotComplianceOnAcu2aIsNamedFirstOrSecond) {
+  const auto r = test::scene_run("acu_2a");
+  Effects e;
+  draw_effect("robot_compliance", 18, r.scene, e);
+  const auto data = make_contact_data(r.scene, r.model.v_tm, test::measure(r, e, 18), r.force_scale_n, r.moment_scale_nm);
+  const ModelFactory make = [&data](const std::set<std::string>& x) { return std::make_unique<ContactFamily>(data, x); };
+  const Diagnosis d = diagnose(make, contact_extensions(), data.obs, {});
+  std::string table;
+  for (const auto& k : d.candidates) table += "  " + k.name + ": " + k.verdict + "\n";
+  for (const auto& k : d.second_step) table += "  + " + k.name + ": " + k.verdict + "\n";
+  SCOPED_TRACE("cause " + d.cause + ", second " + d.second_cause + ":\n" + table);
+  EXPECT_TRUE(d.cause == "robot_compliance" || d.second_cause == "robot_compliance");
+  EXPECT_GT(d.gain_percent, 0.0);
+  for (const auto& k : d.candidates)
+    if (k.name == "robot_compliance") {
+      EXPECT_EQ(k.score.full.invalid, "");
+      EXPECT_TRUE(k.supported);
+    }
+}
 
 }  // namespace
 }  // namespace hil::diagnose

@@ -72,8 +72,9 @@ struct SatRecord {
   int watch[kWatch] = {};
   int watched = 0;
   double second_still = 0.0;   ///< ...and the smallest push of all the rest (bound under translations)
-  double second_turning = 0.0; ///< ...less the most a turn up to max_turn_rad can take off (bound under turns)
-  double span = 0.0;         ///< r_a + r_b + |c_a - c_b|: the lever of a turning axis on a push
+  /// ...less the most a turn up to max_turn_rad can take off (bound under turns: each candidate's
+  /// turn rate times max_turn_rad times the lever r_a + r_b + |c_a - c_b|)
+  double second_turning = 0.0;
   double max_turn_rad = 0.0;
 };
 

@@ -227,11 +227,11 @@ ContactFamily::ContactFamily(const ContactData& d, std::set<std::string> extensi
     const auto full = basis_;
     basis_.clear();
     const Eigen::VectorXd sv = svd.singularValues();
-    for (Eigen::Index i = 0; i < sv.size() && i < 6; ++i) {
-      if (!(sv(i) > 0.05 * sv(0))) break;
+    for (Eigen::Index i = 0; i < svd.matrixV().cols(); ++i) {
       Mat6 B = Mat6::Zero();
       for (Eigen::Index j = 0; j < c0.size(); ++j) B += svd.matrixV()(j, i) * full[static_cast<std::size_t>(j)];
-      basis_.push_back(B);
+      const bool seen = i < sv.size() && i < 6 && sv(i) > 0.05 * sv(0) && basis_.size() == static_cast<std::size_t>(i);
+      (seen ? basis_ : null_basis_).push_back(B);
     }
     for (std::size_t i = 0; i < basis_.size(); ++i)
       nonlinear_.push_back({"compliance_c" + std::to_string(i + 1), "", 1.0, true, -100, 100});
@@ -546,6 +546,26 @@ std::vector<Reported> ContactFamily::report(const Fit& f) const {
   return out;
 }
 
+double max_min_eigenvalue(const Mat6& C, const std::vector<Mat6>& free_directions, int iterations) {
+  Mat6 X = C;
+  Eigen::SelfAdjointEigenSolver<Mat6> es(X);
+  double best = es.eigenvalues()(0);
+  if (free_directions.empty()) return best;
+  const double step0 = std::max(C.norm(), 1e-12);
+  for (int it = 0; it < iterations && best < 0; ++it) {
+    const Vec6 u = es.eigenvectors().col(0);
+    Eigen::VectorXd g(static_cast<Eigen::Index>(free_directions.size()));
+    for (std::size_t k = 0; k < free_directions.size(); ++k) g(static_cast<Eigen::Index>(k)) = u.dot(free_directions[k] * u);
+    const double gn = g.norm();
+    if (!(gn > 1e-12)) break;  // no free direction moves the lowest eigenvalue
+    const double step = step0 / std::sqrt(1.0 + it);
+    for (std::size_t k = 0; k < free_directions.size(); ++k) X += (step * g(static_cast<Eigen::Index>(k)) / gn) * free_directions[k];
+    es.compute(X);
+    best = std::max(best, es.eigenvalues()(0));
+  }
+  return best;
+}
+
 std::string ContactFamily::check(const Fit& f) const {
   for (const auto& q : f.reported) {
     const bool nonneg = q.name == "mu" || q.name == "viscous_n_s_per_m" || q.name == "damping_n_s_per_m";
@@ -567,8 +587,13 @@ std::string ContactFamily::check(const Fit& f) const {
         V(i, j) = std::sqrt(std::max(0.0, b.dot(f.cov.block(p + i_cmp_, p + i_cmp_, r, r) * b)));
       }
     const Mat6 Cs = s.asDiagonal() * C * s.asDiagonal(), Vs = s.asDiagonal() * V * s.asDiagonal();
-    const double lo = Eigen::SelfAdjointEigenSolver<Mat6>(Cs).eigenvalues()(0);
-    if (lo < -2.0 * Vs.norm()) return "the compliance is not positive semi-definite";
+    // The fit fixes C only along the identifiable directions; the others are free. It is physical
+    // when some compliance with the fitted coordinates is positive semi-definite (within two
+    // standard deviations): max over the free coordinates z of λ_min(C + Σ z_k N_k), a concave
+    // function of z, by subgradient ascent (the gradient is u^T N_k u, u the lowest eigenvector).
+    std::vector<Mat6> Ns;
+    for (const auto& N : null_basis_) Ns.push_back(s.asDiagonal() * N * s.asDiagonal());
+    if (max_min_eigenvalue(Cs, Ns) < -2.0 * Vs.norm()) return "no positive semi-definite compliance has the fitted coordinates";
   }
   return "";
 }

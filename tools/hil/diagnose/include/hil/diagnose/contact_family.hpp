@@ -88,6 +88,7 @@ class ContactFamily : public Model {
   std::set<std::string> ext_;
   std::vector<Param> linear_, nonlinear_;
   std::vector<Mat6> basis_;
+  std::vector<Mat6> null_basis_;  ///< the symmetric directions the data cannot see (the rest of the 21)
   int gain_ref_ = 2;
   // offsets into φ
   int i_geo_ = -1, i_cmp_ = -1, i_exp_ = -1, i_tau_ = -1, i_gain_ = -1;
@@ -144,6 +145,11 @@ class ContactFamily : public Model {
   bool sample_contacts(std::size_t k, const cid::Kinematics& kin, const Geometry& g, const std::vector<cid::ContactPoint>* base,
                        std::vector<cid::ContactPoint>& out) const;
 };
+
+/// max over z of the smallest eigenvalue of C + Σ z_k N_k (symmetric C, N_k): whether some matrix
+/// that agrees with C outside the free directions N_k is positive semi-definite (result >= 0).
+/// Subgradient ascent from z = 0 (the function is concave); stops once it is >= 0.
+double max_min_eigenvalue(const Mat6& C, const std::vector<Mat6>& free_directions, int iterations = 2000);
 
 /// The wrench on the plate (fp frame, about the fp origin) of a force f (world) applied to object 1
 /// at the point p (world): the plate feels -f at p.
