@@ -339,19 +339,25 @@ void Acquirer::publish_wrench(const WrenchReading& r) {
 void Acquirer::check_health(std::int64_t now_ns, bool periodic) {
   const bool plate_changed = plate_mon_.update(now_ns);
   const bool robot_changed = robot_ && robot_mon_.update(now_ns);
-  auto log_change = [](const DeviceMonitor& m, const DeviceHealth& h) {
-    if (m.state() == DeviceState::ok) spdlog::info("{}: ok again", h.device);
-    else spdlog::warn("{}: {} ({})", h.device, to_string(m.state()), m.reason());
+  auto log_state = [](const DeviceMonitor& m, const std::string& device, int held_back) {
+    const std::string more = held_back > 0 ? fmt::format(" [{} more state change(s) not logged]", held_back) : "";
+    if (m.state() == DeviceState::ok) spdlog::info("{}: ok again{}", device, more);
+    else spdlog::warn("{}: {} ({}){}", device, to_string(m.state()), m.reason(), more);
   };
+  int held_back = 0;
   if (plate_changed) {
     const auto h = merged(plate_mon_.health(now_ns), plate_->counters());
-    log_change(plate_mon_, h);
+    if (plate_log_.change(plate_mon_.state(), now_ns, held_back)) log_state(plate_mon_, h.device, held_back);
     publish_status(h, now_ns);
+  } else if (periodic && plate_log_.flush(now_ns, held_back)) {
+    log_state(plate_mon_, opt_.force_plate_name, held_back);
   }
   if (robot_changed) {
     const auto h = robot_mon_.health(now_ns);
-    log_change(robot_mon_, h);
+    if (robot_log_.change(robot_mon_.state(), now_ns, held_back)) log_state(robot_mon_, h.device, held_back);
     publish_status(h, now_ns);
+  } else if (robot_ && periodic && robot_log_.flush(now_ns, held_back)) {
+    log_state(robot_mon_, opt_.robot_name, held_back);
   }
   if (periodic && now_ns - last_status_ns_ >= static_cast<std::int64_t>(opt_.status_period_s * 1e9)) {
     last_status_ns_ = now_ns;

@@ -98,4 +98,25 @@ DeviceHealth DeviceMonitor::health(std::int64_t now_ns) const {
   return h;
 }
 
+bool StateLog::change(DeviceState s, std::int64_t t_ns, int& held_back) {
+  const bool serious = s == DeviceState::fault || s == DeviceState::disconnected;
+  if (!serious && logged_ && t_ns - last_ns_ < quiet_ns_) {
+    ++held_;
+    return false;
+  }
+  held_back = held_;
+  held_ = 0;
+  last_ns_ = t_ns;
+  logged_ = true;
+  return true;
+}
+
+bool StateLog::flush(std::int64_t t_ns, int& held_back) {
+  if (held_ == 0 || t_ns - last_ns_ < quiet_ns_) return false;
+  held_back = held_;
+  held_ = 0;
+  last_ns_ = t_ns;
+  return true;
+}
+
 }  // namespace hil::acquisition

@@ -74,3 +74,24 @@ TEST(Monitor, DropsAndLinkLoss) {
   EXPECT_FALSE(h.connected);
   EXPECT_DOUBLE_EQ(h.rate_hz, 0.0);
 }
+
+TEST(StateLog, AFlappingDeviceIsLoggedOncePerWindowAndEndsOnItsState) {
+  StateLog log(1.0);
+  int held = -1;
+  EXPECT_TRUE(log.change(DeviceState::degraded, 0, held));  // the first change is logged
+  EXPECT_EQ(held, 0);
+  // Flapping between ok and degraded within the second: held back, counted.
+  EXPECT_FALSE(log.change(DeviceState::ok, 10 * ms, held));
+  EXPECT_FALSE(log.change(DeviceState::degraded, 20 * ms, held));
+  EXPECT_FALSE(log.change(DeviceState::ok, 30 * ms, held));
+  // A fault or a lost link is always logged, with the count held back so far.
+  EXPECT_TRUE(log.change(DeviceState::fault, 40 * ms, held));
+  EXPECT_EQ(held, 3);
+  EXPECT_FALSE(log.change(DeviceState::ok, 50 * ms, held));
+  EXPECT_FALSE(log.flush(500 * ms, held)) << "not before the window has passed";
+  EXPECT_TRUE(log.flush(1050 * ms, held)) << "the log must end on the current state (ok)";
+  EXPECT_EQ(held, 1);
+  EXPECT_FALSE(log.flush(3000 * ms, held)) << "nothing held back";
+  EXPECT_TRUE(log.change(DeviceState::degraded, 3100 * ms, held));  // a new window
+  EXPECT_EQ(held, 0);
+}

@@ -84,6 +84,7 @@ class Acquirer {
   mutable std::mutex mutex_;  ///< guards sync_, monitors, writers, sinks
   Synchronizer sync_;
   DeviceMonitor plate_mon_, robot_mon_;
+  StateLog plate_log_, robot_log_;  ///< which state changes reach the log (all reach the bus)
   std::unique_ptr<dds::Writer<hil_msgs::msg::PoseWrenchSample>> w_sample_;
   std::unique_ptr<dds::Writer<hil_msgs::msg::DeviceStatus>> w_status_;
   std::unique_ptr<dds::Writer<geometry_msgs::msg::WrenchStamped>> w_wrench_;
