@@ -335,6 +335,14 @@ TEST(ContactFamily, UnknownExtensionsAndRunsWithoutContactAreClearErrors) {
   } catch (const std::runtime_error& err) {
     EXPECT_NE(std::string(err.what()).find("sample 7"), std::string::npos) << err.what();
   }
+  m = test::measure(r, {}, 1, false);
+  m[12].t_s = m[11].t_s;  // (the strict run reader refuses this first; the library says so too)
+  try {
+    (void)make_contact_data(r.scene, r.model.v_tm, m);
+    FAIL() << "expected an error";
+  } catch (const std::runtime_error& err) {
+    EXPECT_NE(std::string(err.what()).find("sample 12: time does not increase"), std::string::npos) << err.what();
+  }
 }
 
 TEST(ContactFamily, ACompliancesFreeDirectionsCanMakeItPositiveSemiDefinite) {
