@@ -164,21 +164,14 @@ void judge(CandidateResult& c, const Score& ref, double noise, const Observation
   }
   c.gain_percent = ref.cv_error > 0 ? 100.0 * (1.0 - c.score.cv_error / ref.cv_error) : 0.0;
   c.noise_fraction = noise > 0 ? (ref.cv_error * ref.cv_error - c.score.cv_error * c.score.cv_error) / (noise * noise) : 1e300;
-  const bool size = c.noise_fraction >= o.min_noise_fraction;
   c.z = paired_z(obs, ref.cv_prediction, c.score.cv_prediction);
-  const bool gain = c.gain_percent >= 100.0 * o.min_gain;
-  const bool signif = c.z >= o.min_z;
-  const bool bic = c.score.bic < ref.bic;
-  const bool pnr = c.pnr >= o.min_pnr;
-  const bool physical = c.score.full.invalid.empty();
-  c.supported = gain && signif && bic && pnr && size && physical;
   std::vector<std::string> why;
-  if (!gain) why.push_back(fmt::format("held-out gain {:.2f} % < {:.0f} %", c.gain_percent, 100 * o.min_gain));
-  if (!signif) why.push_back(fmt::format("not consistent (z = {:.1f} < {:.0f})", c.z, o.min_z));
-  if (!bic) why.push_back("BIC not lower");
-  if (!physical) why.push_back("not physical: " + c.score.full.invalid);
-  if (!size) why.push_back(fmt::format("below the noise (explains {:.2f} of the noise variance < {:.2f})", c.noise_fraction, o.min_noise_fraction));
-  if (!pnr) why.push_back(fmt::format("parameters not practically identifiable (PNR {:.1f} < {:.0f})", c.pnr, o.min_pnr));
+  if (c.gain_percent < 100.0 * o.min_gain) why.push_back(fmt::format("held-out gain {:.2f} % < {:.0f} %", c.gain_percent, 100 * o.min_gain));
+  if (c.z < o.min_z) why.push_back(fmt::format("not consistent (z = {:.1f} < {:.0f})", c.z, o.min_z));
+  if (c.noise_fraction < o.min_noise_fraction)
+    why.push_back(fmt::format("below the noise (explains {:.2f} of the noise variance < {:.2f})", c.noise_fraction, o.min_noise_fraction));
+  if (const auto rest = fails_without_held_out(c.score, ref, o); !rest.empty()) why.push_back(rest);
+  c.supported = why.empty();
   c.verdict = c.supported ? fmt::format("supported: held-out gain {:.1f} %, z = {:.1f}, PNR {:.1f}, {:.2f} noise variances",
                                         c.gain_percent, c.z, c.pnr, c.noise_fraction)
                           : fmt::format("{}", fmt::join(why, "; "));
