@@ -37,6 +37,12 @@ class Cli(unittest.TestCase):
     def test_unknown_subcommand_fails(self):
         self.assertNotEqual(hil("frobnicate").returncode, 0)
 
+    def test_demo_refuses_bad_options(self):
+        for args, field in ((("--decimate", "0"), "--decimate"), (("--effect", "magnetism"), "magnetism")):
+            r = hil("demo", *args, "--out", os.path.join(tempfile.mkdtemp(), "run"))
+            self.assertNotEqual(r.returncode, 0, r.stdout)
+            self.assertIn(field, r.stdout + r.stderr)
+
     def test_validate_examples(self):
         r = hil("validate", EXAMPLE_RUN)
         self.assertEqual(r.returncode, 0, r.stderr)

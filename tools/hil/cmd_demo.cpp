@@ -172,7 +172,7 @@ void add_demo(CLI::App& app) {
   cmd->add_option("--effect", o.effect, "hide this effect instead (a diagnosis candidate)");
   cmd->add_option("--out", o.out, "where to record (default: a new folder under the temp directory)");
   cmd->add_option("--speed", o.speed, "playback speed")->capture_default_str();
-  cmd->add_option("--decimate", o.decimate, "keep every n-th trajectory sample")->capture_default_str()->check(CLI::PositiveNumber);
+  cmd->add_option("--decimate", o.decimate, "keep every n-th trajectory sample")->capture_default_str()->check(CLI::Range(1, 1000));
   cmd->callback([] { set_action([] { return demo(o); }); });
 }
 
