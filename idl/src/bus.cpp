@@ -1,7 +1,10 @@
 #include "hil/dds/bus.hpp"
 
+#include "hil/format/error.hpp"
+
 #include <fastdds/dds/domain/DomainParticipantFactory.hpp>
 
+#include <algorithm>
 #include <cstdlib>
 #include <filesystem>
 #include <stdexcept>
@@ -16,15 +19,28 @@ std::string default_profile_path() {
   return HIL_DDS_PROFILE_SOURCE;
 }
 
-int domain_from_env(int fallback) {
-  if (const char* env = std::getenv("HIL_DDS_DOMAIN"); env && *env) {
-    char* end = nullptr;
-    const long d = std::strtol(env, &end, 10);
-    if (*end != '\0' || d < 0 || d > 232) throw std::runtime_error(std::string("HIL_DDS_DOMAIN: expected 0..232, found '") + env + "'");
-    return static_cast<int>(d);
-  }
+namespace {
+int parse_domain(const char* variable, const char* value) {
+  // 232: the largest id whose default RTPS ports (7400 + 250 * domain + offsets) fit in 16 bits,
+  // the same limit ROS 2 documents for ROS_DOMAIN_ID.
+  const std::string v(value);
+  const bool digits = !v.empty() && v.size() <= 3 && std::all_of(v.begin(), v.end(), [](char c) { return c >= '0' && c <= '9'; });
+  const int d = digits ? std::stoi(v) : -1;
+  if (d < 0 || d > 232)
+    throw format::FormatError({std::string("$") + variable, 0, 0, ""}, "expected a DDS domain id, an integer 0..232, found '" + v + "'");
+  return d;
+}
+}  // namespace
+
+int domain_from(const char* hil_dds_domain, const char* ros_domain_id, int fallback) {
+  if (hil_dds_domain && *hil_dds_domain) return parse_domain("HIL_DDS_DOMAIN", hil_dds_domain);
+  if (ros_domain_id && *ros_domain_id) return parse_domain("ROS_DOMAIN_ID", ros_domain_id);
   return fallback;
 }
+
+int domain_from_env(int fallback) { return domain_from(std::getenv("HIL_DDS_DOMAIN"), std::getenv("ROS_DOMAIN_ID"), fallback); }
+
+int resolve_domain(int command_line, int fallback) { return command_line >= 0 ? command_line : domain_from_env(fallback); }
 
 Participant::Participant(const ParticipantOptions& o) : domain_id_(o.domain_id) {
   auto* factory = DomainParticipantFactory::get_instance();

@@ -37,8 +37,14 @@ struct ParticipantOptions {
 /// The host-only profile: $HIL_DDS_PROFILE if set, else the installed copy, else the source tree's.
 std::string default_profile_path();
 
-/// The domain id from $HIL_DDS_DOMAIN, else `fallback`.
+/// The DDS domain id: $HIL_DDS_DOMAIN (hil's own variable wins), else $ROS_DOMAIN_ID (so hil
+/// joins the ROS 2 nodes of the same shell), else `fallback`. An empty variable counts as unset.
+/// \throws format::FormatError naming the variable when its value is not an integer 0..232.
 int domain_from_env(int fallback = 0);
+/// The same precedence on given values (null or empty = unset); pure, for tests.
+int domain_from(const char* hil_dds_domain, const char* ros_domain_id, int fallback = 0);
+/// `command_line` (--dds-domain) when >= 0, else domain_from_env(fallback).
+int resolve_domain(int command_line, int fallback = 0);
 
 /// One DDS domain participant. Not copyable; topics are shared by the writers and readers made from it.
 class Participant {

@@ -2,10 +2,12 @@
 /// \file Maps each bus message to its generated Fast DDS type support, so that the templates in
 /// bus.hpp take the message type alone.
 #include "builtin_interfacesPubSubTypes.h"
+#include "diagnostic_msgsPubSubTypes.h"
 #include "geometry_msgsPubSubTypes.h"
 #include "hil_msgsPubSubTypes.h"
 #include "sensor_msgsPubSubTypes.h"
 #include "std_msgsPubSubTypes.h"
+#include "tf2_msgsPubSubTypes.h"
 
 namespace hil::dds {
 
@@ -27,7 +29,13 @@ HIL_DDS_TYPE(geometry_msgs::msg, PoseStamped)
 HIL_DDS_TYPE(geometry_msgs::msg, Twist)
 HIL_DDS_TYPE(geometry_msgs::msg, Wrench)
 HIL_DDS_TYPE(geometry_msgs::msg, WrenchStamped)
+HIL_DDS_TYPE(geometry_msgs::msg, Transform)
+HIL_DDS_TYPE(geometry_msgs::msg, TransformStamped)
 HIL_DDS_TYPE(sensor_msgs::msg, JointState)
+HIL_DDS_TYPE(tf2_msgs::msg, TFMessage)
+HIL_DDS_TYPE(diagnostic_msgs::msg, KeyValue)
+HIL_DDS_TYPE(diagnostic_msgs::msg, DiagnosticStatus)
+HIL_DDS_TYPE(diagnostic_msgs::msg, DiagnosticArray)
 HIL_DDS_TYPE(hil_msgs::msg, PoseWrenchSample)
 HIL_DDS_TYPE(hil_msgs::msg, DeviceStatus)
 HIL_DDS_TYPE(hil_msgs::msg, StiffnessMeasurement)
