@@ -9,6 +9,7 @@
 #include <ctime>
 #include <cstring>
 
+#include "hil/acquisition/ros_msgs.hpp"
 #include "hil/acquisition/sample_msg.hpp"
 #include "hil/dds/topics.hpp"
 #include "hil/drivers/can_channel.hpp"
@@ -121,6 +122,13 @@ Acquirer::Acquirer(AcquirerOptions options, std::unique_ptr<drivers::ForcePlate>
       w_wrench_ = std::make_unique<dds::Writer<geometry_msgs::msg::WrenchStamped>>(*bus_, dds::topics::kWrench, q);
       w_pose_ = std::make_unique<dds::Writer<geometry_msgs::msg::PoseStamped>>(*bus_, dds::topics::kPose, q);
       w_joints_ = std::make_unique<dds::Writer<sensor_msgs::msg::JointState>>(*bus_, dds::topics::kJointStates, q);
+      // tf2's static broadcaster QoS: reliable, transient local, keep last 1 (one message, the
+      // whole tree), so a listener started later still gets the frames.
+      if (!opt_.static_frames.empty())
+        w_tf_static_ = std::make_unique<dds::Writer<tf2_msgs::msg::TFMessage>>(*bus_, dds::topics::kTfStatic, dds::StreamQos{true, 1, 1});
+      // diagnostic_updater's QoS: reliable, volatile, a short keep-last history.
+      w_diagnostics_ = std::make_unique<dds::Writer<diagnostic_msgs::msg::DiagnosticArray>>(*bus_, dds::topics::kDiagnostics,
+                                                                                          dds::StreamQos{true, 10, 0});
     }
   }
   if (recorder_) raw_ = std::make_unique<RawWriter>(*recorder_);
@@ -142,6 +150,10 @@ void Acquirer::start() {
     robot_->connect();
     spdlog::info("robot controller: {}", robot_->config().describe());
   }
+  plate_hardware_id_ = plate_info_.protocol + (plate_info_.serial.empty() ? "" : " serial " + plate_info_.serial) + " on " +
+                       plate_->channel().name();
+  if (robot_) robot_hardware_id_ = robot_->config().describe();
+  if (w_tf_static_) w_tf_static_->write(to_tf_message(opt_.static_frames, to_time(static_cast<double>(realtime_ns()) * 1e-9)));
   if (opt_.wait_for_subscribers > 0 && w_sample_ &&
       !w_sample_->wait_for_readers(opt_.wait_for_subscribers, std::chrono::seconds(10)))
     spdlog::warn("acquire: fewer than {} subscribers after 10 s; starting anyway", opt_.wait_for_subscribers);
@@ -159,11 +171,13 @@ void Acquirer::stop() {
   if (raw_) raw_->flush();
   if (recorder_) recorder_->flush();
   const auto now = realtime_ns();
-  publish_status(merged(plate_mon_.health(now), plate_->counters()), now);
-  if (robot_) publish_status(robot_mon_.health(now), now);
+  std::vector<DeviceHealth> last{merged(plate_mon_.health(now), plate_->counters())};
+  if (robot_) last.push_back(robot_mon_.health(now));
+  publish_status(last, now);
   // Subscribers get the last samples before the writers go away with this object.
   if (w_sample_) w_sample_->wait_for_acknowledgments(std::chrono::seconds(2));
   if (w_status_) w_status_->wait_for_acknowledgments(std::chrono::seconds(1));
+  if (w_diagnostics_) w_diagnostics_->wait_for_acknowledgments(std::chrono::seconds(1));
 }
 
 void Acquirer::tare() { plate_->tare(); }
@@ -310,16 +324,7 @@ void Acquirer::emit(const SyncedSample& s) {
     p.header(m.header());
     p.pose(m.pose_world_ee());
     w_pose_->write(p);
-    if (s.joints_rad.size() > 0) {
-      sensor_msgs::msg::JointState j;
-      j.header(m.header());
-      j.header().frame_id("");
-      std::vector<std::string> names;
-      for (Eigen::Index i = 0; i < s.joints_rad.size(); ++i) names.push_back("j" + std::to_string(i + 1));
-      j.name(names);
-      j.position(m.joint_positions_rad());
-      w_joints_->write(j);
-    }
+    if (s.joints_rad.size() > 0) w_joints_->write(to_joint_state(m, opt_.joint_names));
   }
 }
 
@@ -348,30 +353,40 @@ void Acquirer::check_health(std::int64_t now_ns, bool periodic) {
   if (plate_changed) {
     const auto h = merged(plate_mon_.health(now_ns), plate_->counters());
     if (plate_log_.change(plate_mon_.state(), now_ns, held_back)) log_state(plate_mon_, h.device, held_back);
-    publish_status(h, now_ns);
+    publish_status({h}, now_ns);
   } else if (periodic && plate_log_.flush(now_ns, held_back)) {
     log_state(plate_mon_, opt_.force_plate_name, held_back);
   }
   if (robot_changed) {
     const auto h = robot_mon_.health(now_ns);
     if (robot_log_.change(robot_mon_.state(), now_ns, held_back)) log_state(robot_mon_, h.device, held_back);
-    publish_status(h, now_ns);
+    publish_status({h}, now_ns);
   } else if (robot_ && periodic && robot_log_.flush(now_ns, held_back)) {
     log_state(robot_mon_, opt_.robot_name, held_back);
   }
   if (periodic && now_ns - last_status_ns_ >= static_cast<std::int64_t>(opt_.status_period_s * 1e9)) {
     last_status_ns_ = now_ns;
-    publish_status(merged(plate_mon_.health(now_ns), plate_->counters()), now_ns);
-    if (robot_) publish_status(robot_mon_.health(now_ns), now_ns);
+    std::vector<DeviceHealth> all{merged(plate_mon_.health(now_ns), plate_->counters())};
+    if (robot_) all.push_back(robot_mon_.health(now_ns));
+    publish_status(all, now_ns);
     if (recorder_) recorder_->flush();
     if (raw_) raw_->flush();
   }
 }
 
-void Acquirer::publish_status(const DeviceHealth& h, std::int64_t now_ns) {
+void Acquirer::publish_status(const std::vector<DeviceHealth>& hs, std::int64_t now_ns) {
   if (!w_status_) return;
-  w_status_->write(to_msg(h, now_ns));
-  ++status_sent_;
+  // Each device on hil's own topic, and the same statuses in one array on ROS's /diagnostics.
+  diagnostic_msgs::msg::DiagnosticArray diag;
+  diag.header().stamp(to_time(static_cast<double>(now_ns) * 1e-9));
+  for (const auto& h : hs) {
+    const auto m = to_msg(h, now_ns);
+    w_status_->write(m);
+    ++status_sent_;
+    if (w_diagnostics_)
+      diag.status().push_back(to_diagnostic_status(m, h.device == opt_.force_plate_name ? plate_hardware_id_ : robot_hardware_id_));
+  }
+  if (w_diagnostics_ && !diag.status().empty()) w_diagnostics_->write(diag);
 }
 
 }  // namespace hil::acquisition

@@ -18,6 +18,7 @@
 #include "hil/acquisition/acquirer.hpp"
 #include "hil/drivers/socketcan.hpp"
 #include "hil/format/error.hpp"
+#include "hil/format/ros_frames.hpp"
 #include "drivers_from_rig.hpp"
 
 namespace hil::cli {
@@ -114,6 +115,8 @@ AcquireResult run_acquisition(const AcquireOptions& o, const std::function<void(
   ao.sync.output_rate_hz = o.output_rate_hz;
   ao.T_world_base = T_world_base;
   ao.ros_topics = o.ros_topics;
+  ao.static_frames = format::static_frames(rig);  // rt/tf_static
+  ao.joint_names = format::joint_names(rig, with_robot ? mcfg.map.joint_count() : 0);
   ao.wait_for_subscribers = o.wait_subscribers;
   if (with_robot && !mcfg.map.has_pose() && !mcfg.kinematics)
     throw format::FormatError({o.rig, 0, 0, "robot"}, "the register map reads joints only: the rig needs a robot DH table");
@@ -173,7 +176,7 @@ void add_acquire(CLI::App& app) {
   cmd->add_flag("--no-robot", o.no_robot, "acquire the force plate only");
   cmd->add_flag("--tare", o.tare, "tare the force plate at start");
   cmd->add_option("--wait-subscribers", o.wait_subscribers, "wait (up to 10 s) for this many PoseWrenchSample subscribers before starting");
-  cmd->add_flag("!--no-ros-topics", o.ros_topics, "do not publish rt/hil/wrench, rt/hil/pose, rt/hil/joint_states");
+  cmd->add_flag("!--no-ros-topics", o.ros_topics, "do not publish rt/hil/wrench, rt/hil/pose, rt/hil/joint_states, rt/tf_static, rt/diagnostics");
   cmd->add_option("--play", o.play, "start the fake rig in-process playing this run (no hardware, no SocketCAN)")
       ->check(CLI::ExistingDirectory);
   cmd->add_option("--play-speed", o.play_speed, "playback speed of --play")->capture_default_str();

@@ -19,6 +19,7 @@
 #include "hil/dds/bus.hpp"
 #include "hil/drivers/force_plate.hpp"
 #include "hil/drivers/robot_controller.hpp"
+#include "hil/format/ros_frames.hpp"
 
 namespace hil::acquisition {
 
@@ -31,8 +32,13 @@ struct AcquirerOptions {
   /// that they see the run from its first sample.
   int wait_for_subscribers = 0;
   /// Also publish rt/hil/wrench (every force-plate reading as it arrives: the low-latency live
-  /// stream), rt/hil/pose and rt/hil/joint_states (at the output rate).
+  /// stream), rt/hil/pose and rt/hil/joint_states (at the output rate), the rig's fixed frames on
+  /// rt/tf_static (once, kept for late joiners) and device health on rt/diagnostics (docs/ros.md).
   bool ros_topics = true;
+  /// The rig's fixed frames (format::static_frames(rig)); none: nothing on rt/tf_static.
+  std::vector<format::StaticFrame> static_frames;
+  /// JointState names (format::joint_names(rig, n)); joints beyond these are named jK.
+  std::vector<std::string> joint_names;
   std::string force_plate_name = "force_plate";
   std::string robot_name = "robot";
 };
@@ -72,7 +78,7 @@ class Acquirer {
   void emit(const SyncedSample& s);
   void publish_wrench(const WrenchReading& r);
   void check_health(std::int64_t now_ns, bool periodic);
-  void publish_status(const DeviceHealth& h, std::int64_t now_ns);
+  void publish_status(const std::vector<DeviceHealth>& hs, std::int64_t now_ns);
 
   AcquirerOptions opt_;
   std::unique_ptr<drivers::ForcePlate> plate_;
@@ -90,6 +96,9 @@ class Acquirer {
   std::unique_ptr<dds::Writer<geometry_msgs::msg::WrenchStamped>> w_wrench_;
   std::unique_ptr<dds::Writer<geometry_msgs::msg::PoseStamped>> w_pose_;
   std::unique_ptr<dds::Writer<sensor_msgs::msg::JointState>> w_joints_;
+  std::unique_ptr<dds::Writer<tf2_msgs::msg::TFMessage>> w_tf_static_;
+  std::unique_ptr<dds::Writer<diagnostic_msgs::msg::DiagnosticArray>> w_diagnostics_;
+  std::string plate_hardware_id_, robot_hardware_id_;  ///< set in start(), before the threads
   std::vector<std::function<void(const SyncedSample&)>> sinks_;
   std::unique_ptr<RawWriter> raw_;
   std::int64_t last_status_ns_ = 0;
