@@ -17,6 +17,7 @@ deps() {
     libmodbus-dev libfastrtps-dev libfastcdr-dev fastddsgen fastdds-tools default-jre-headless
     can-utils iproute2 libgtest-dev libgmock-dev libbenchmark-dev
     python3-can python3-pymodbus python3-serial-asyncio python3-numpy
+    pybind11-dev python3-dev python3-pytest
   )
   local missing=()
   for p in "${pkgs[@]}"; do dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p"); done

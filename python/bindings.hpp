@@ -1,0 +1,14 @@
+#pragma once
+/// \file The parts of the `hil` module, each registering its functions (docs/python.md).
+#include <pybind11/pybind11.h>
+
+namespace hil::python {
+
+namespace py = pybind11;
+
+/// read_samples, read_run, read_rig: the strict readers of hil::format into numpy arrays and dicts.
+void add_readers(py::module_& m);
+/// identify_contact, diagnose, identify_stiffness: the command's numerics, results as dicts.
+void add_numerics(py::module_& m);
+
+}  // namespace hil::python

@@ -1,0 +1,182 @@
+// identify_contact / diagnose / identify_stiffness: the numerics behind `hil contact identify`,
+// `hil diagnose` and `hil stiffness identify`, on the same inputs, returning the commands' JSON
+// (built by the commands' own to_json) as dicts, plus arrays a plot needs. The GIL is released
+// while C++ computes. Docs: docs/python.md.
+#include <pybind11/stl.h>
+
+#include <cmath>
+#include <filesystem>
+#include <stdexcept>
+
+#include "bindings.hpp"
+#include "convert.hpp"
+#include "hil/calibration/reduction.hpp"
+#include "hil/format/run.hpp"
+#include "identify.hpp"          // tools/hil/contact
+#include "run_diagnosis.hpp"     // tools/hil/diagnose
+#include "stiffness_io.hpp"      // tools/hil/stiffness
+
+namespace hil::python {
+
+namespace cid = hil::contact_id;
+
+namespace {
+
+constexpr double kZ95 = 1.959963984540054;  // two-sided 95 % of the normal distribution
+
+/// value ± 1.96 std, or None when either is missing (null in the command's JSON).
+py::object interval95(const py::dict& d, const char* value, const char* std_dev) {
+  if (d[value].is_none() || d[std_dev].is_none()) return py::none();
+  const double v = d[value].cast<double>(), s = d[std_dev].cast<double>();
+  return py::make_tuple(v - kZ95 * s, v + kZ95 * s);
+}
+
+/// Per used sample: the measured plate wrench, the model's (Φ θ at geometry x, mapped to the plate
+/// frame) and their difference, N and N m, force-plate frame; with the contact counts.
+struct Fit {
+  std::vector<double> t;
+  std::vector<int> sample, contacts;
+  std::vector<cid::Vec6> measured_fp, model_fp;
+};
+
+Fit fit_arrays(const cid::ContactProblem& p, const Eigen::VectorXd& x, const cid::LinearEstimate& e) {
+  Fit f;
+  Eigen::MatrixX2d A;
+  p.regressor(x, A, &f.contacts);
+  Eigen::Vector2d theta = e.theta;
+  if (!std::isfinite(theta[1])) theta[1] = 0.0;  // μ not identifiable: all contacts stick, the column is zero
+  const Eigen::VectorXd w_o1 = (A * theta).cwiseQuotient(p.weights());
+  for (std::size_t a = 0; a < p.used().size(); ++a) {
+    const auto k = static_cast<std::size_t>(p.used()[a]);
+    const auto& m = p.data()[k];
+    const Eigen::Isometry3d T_world_o1 = cid::body_pose(p.scene().bodies[0], m.kin.T_world_ee);
+    f.t.push_back(m.t_s);
+    f.sample.push_back(static_cast<int>(k));
+    f.measured_fp.push_back(m.w_fp);
+    f.model_fp.push_back(cid::object1_to_plate(w_o1.segment<6>(static_cast<Eigen::Index>(6 * a)), p.scene().T_world_fp, T_world_o1));
+  }
+  return f;
+}
+
+py::dict fit_dict(const Fit& f) {
+  const auto n = f.t.size();
+  auto rows6 = [&](auto get) { return matrix(n, 6, get); };
+  py::dict d;
+  d["t"] = array(f.t);
+  d["sample"] = py::array_t<int>(static_cast<py::ssize_t>(n), f.sample.data());
+  d["contacts"] = py::array_t<int>(static_cast<py::ssize_t>(n), f.contacts.data());
+  d["measured_fp"] = rows6([&](std::size_t i, std::size_t c) { return f.measured_fp[i][static_cast<Eigen::Index>(c)]; });
+  d["model_fp"] = rows6([&](std::size_t i, std::size_t c) { return f.model_fp[i][static_cast<Eigen::Index>(c)]; });
+  d["residual_fp"] = rows6([&](std::size_t i, std::size_t c) {
+    const auto k = static_cast<Eigen::Index>(c);
+    return f.measured_fp[i][k] - f.model_fp[i][k];
+  });
+  return d;
+}
+
+/// Instantaneous (window 1) or sliding-window estimates; NaN where not estimated.
+py::dict instant_dict(const std::vector<cid::InstantEstimate>& v) {
+  py::dict d;
+  d["t"] = column(v.size(), [&](std::size_t i) { return v[i].t_s; });
+  d["K"] = column(v.size(), [&](std::size_t i) { return v[i].valid ? v[i].K : NAN; });
+  d["mu"] = column(v.size(), [&](std::size_t i) { return v[i].mu_valid ? v[i].mu : NAN; });
+  d["contacts"] = column(v.size(), [&](std::size_t i) { return static_cast<double>(v[i].contacts); });
+  return d;
+}
+
+py::dict identify_contact(const std::string& run_path, const std::string& rig, bool geometric, const std::string& lambda,
+                          const std::string& solver, const std::string& jacobian, int window, int lcurve_points,
+                          bool include_weak) {
+  if (window < 1) throw py::value_error("window: expected >= 1 used samples, got " + std::to_string(window));
+  if (lcurve_points < 3) throw py::value_error("lcurve_points: expected >= 3, got " + std::to_string(lcurve_points));
+  nlohmann::json j;
+  Fit fit;
+  std::vector<cid::InstantEstimate> inst, win;
+  {
+    py::gil_scoped_release free;
+    const auto run = format::load_run(run_path, rig);
+    const auto problem = cli::contact::problem_from_run(run);
+    cli::contact::IdentifyOptions o;
+    o.geometric = geometric;
+    o.lambda = lambda;
+    o.solver = solver;
+    o.jacobian = jacobian;
+    o.window = window;
+    o.lcurve_points = lcurve_points;
+    o.include_weak = include_weak;
+    const auto r = cli::contact::identify(problem, o);
+    j = cli::contact::to_json(problem, r);
+    // The final estimate: with the identified geometry when it was fitted, else the nominal one.
+    if (r.geometric) {
+      fit = fit_arrays(problem, r.geometric->x, r.geometric->theta);
+      inst = r.inst_geometric;
+      win = r.window_geometric;
+    } else {
+      fit = fit_arrays(problem, problem.scene().design(), r.nominal);
+      inst = r.inst_nominal;
+      win = r.window_nominal;
+    }
+  }
+  py::dict d = to_python(j);
+  d["K_ci95"] = interval95(d, "K", "K_std");
+  d["mu_ci95"] = interval95(d, "mu", "mu_std");
+  d["fit"] = fit_dict(fit);
+  d["instantaneous"] = instant_dict(inst);
+  d["window"] = instant_dict(win);
+  return d;
+}
+
+py::dict diagnose(const std::string& path, const std::string& rig, const std::vector<std::string>& candidates, int folds) {
+  if (folds < 2) throw py::value_error("folds: must be at least 2, got " + std::to_string(folds));
+  nlohmann::json j;
+  {
+    py::gil_scoped_release free;
+    cli::diagnose::Options o;
+    o.candidates = candidates;
+    o.folds = folds;
+    // A file is a stiffness-experiment table, a folder a run (as `hil diagnose`).
+    const auto r = std::filesystem::is_regular_file(path) ? cli::diagnose::diagnose_table(path, rig, o)
+                                                          : cli::diagnose::diagnose_run(format::load_run(path, rig), o);
+    j = cli::diagnose::to_json(r);
+  }
+  return to_python(j);
+}
+
+py::dict identify_stiffness(const std::string& table_path, const std::string& rig, double noise_pos_m, double noise_rot_rad,
+                            double neglect_below) {
+  if (!(noise_pos_m >= 0.0) || !(noise_rot_rad >= 0.0))
+    throw py::value_error("noise_pos_m, noise_rot_rad: expected >= 0 (0: estimated from the residuals)");
+  if (!(neglect_below >= 0.0)) throw py::value_error("neglect_below: expected >= 0 (0: M6 off)");
+  nlohmann::json j;
+  {
+    py::gil_scoped_release free;
+    const calibration::VjmModel model(cli::stiffness::load_robot(rig));
+    const auto table = cli::stiffness::read_stiffness_table(table_path, model.dof(), true);
+    calibration::PipelineOptions o;  // the defaults of `hil stiffness identify`
+    o.neglect_below = neglect_below;
+    const auto r = calibration::calibrate(model, table.rows, {noise_pos_m, noise_rot_rad}, o);
+    j = cli::stiffness::result_to_json(model, r);
+  }
+  return to_python(j);
+}
+
+}  // namespace
+
+void add_numerics(py::module_& m) {
+  m.def("identify_contact", &identify_contact, py::arg("run"), py::arg("rig") = "", py::arg("geometric") = false,
+        py::arg("lambda_") = "auto", py::arg("solver") = "lm", py::arg("jacobian") = "golub-pereyra", py::arg("window") = 25,
+        py::arg("lcurve_points") = 30, py::arg("include_weak") = false,
+        "Contact stiffness K (N/m) and friction mu of a run against its rig, as `hil contact identify --json`, "
+        "plus K_ci95 / mu_ci95 (95 % intervals), fit (measured, model and residual plate wrench per sample in "
+        "contact), instantaneous and window estimates.");
+  m.def("diagnose", &diagnose, py::arg("path"), py::arg("rig") = "", py::arg("candidates") = std::vector<std::string>{},
+        py::arg("folds") = 5,
+        "The diagnosis of a run folder (or of a stiffness table with rig=), as `hil diagnose --json`: cause, "
+        "second_cause, candidates with held-out gain, the extended model's parameters with intervals.");
+  m.def("identify_stiffness", &identify_stiffness, py::arg("table"), py::arg("rig"), py::arg("noise_pos_m") = 0.0,
+        py::arg("noise_rot_rad") = 0.0, py::arg("neglect_below") = 2.0,
+        "Elastostatic calibration of the rig's robot from a stiffness-experiment table, as "
+        "`hil stiffness identify --json`: kept parameters with std, ci95 and PNR, reduction, ranks, residuals.");
+}
+
+}  // namespace hil::python
