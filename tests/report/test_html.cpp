@@ -76,6 +76,16 @@ TEST(Report, EachPlotIsAlsoAStandaloneFigure) {
   std::stringstream ss;
   ss << f.rdbuf();
   EXPECT_NE(ss.str().find("<svg xmlns='http://www.w3.org/2000/svg'"), std::string::npos);
+  // Each figure's data beside it, same base name.
+  const std::vector<std::string> want = {"t,a (N)\n0,0\n1,1\n", "t,b (N)\n0,1\n1,0\n"};
+  for (std::size_t k = 0; k < files.size(); ++k) {
+    auto csv = std::filesystem::path(files[k]).replace_extension(".csv");
+    ASSERT_TRUE(std::filesystem::exists(csv)) << csv;
+    std::ifstream c(csv);
+    std::stringstream cs;
+    cs << c.rdbuf();
+    EXPECT_EQ(cs.str(), want[k]);
+  }
   std::filesystem::remove_all(dir);
   // A folder that cannot be created is an error naming it.
   try {
@@ -84,6 +94,60 @@ TEST(Report, EachPlotIsAlsoAStandaloneFigure) {
   } catch (const std::runtime_error& e) {
     EXPECT_NE(std::string(e.what()).find("/proc/hil-no-such/figures"), std::string::npos);
   }
+}
+
+std::vector<std::vector<std::string>> csv_rows(const std::string& text) {
+  std::vector<std::vector<std::string>> rows;
+  std::istringstream in(text);
+  for (std::string line; std::getline(in, line);) {
+    std::vector<std::string> cells;
+    std::size_t b = 0;
+    for (std::size_t e; (e = line.find(',', b)) != std::string::npos; b = e + 1) cells.push_back(line.substr(b, e - b));
+    cells.push_back(line.substr(b));
+    rows.push_back(cells);
+  }
+  return rows;
+}
+
+TEST(Report, PlotDataIsEverySampleWrittenExactly) {
+  // Far more samples than the drawing keeps, values that need 17 digits, and a NaN.
+  const std::size_t n = 20000;
+  Series a, b;
+  a.name = "measured";
+  b.name = "nominal";
+  for (std::size_t i = 0; i < n; ++i) {
+    const double t = static_cast<double>(i) / 3.0;
+    a.x.push_back(t);
+    b.x.push_back(t);
+    a.y.push_back(std::sin(t) / 7.0);
+    b.y.push_back(i == 5 ? std::nan("") : std::exp(-t) * 1e-300 + 0.1);
+  }
+  const PlotOptions o("fx", "t (s)", "N");
+  ASSERT_LT(path_points(svg_plot({a, b}, o)).size(), n / 4);  // the drawing is decimated...
+  const auto rows = csv_rows(csv_table({a, b}, o));
+  ASSERT_EQ(rows.size(), n + 1);  // ...the data is not
+  EXPECT_EQ(rows[0], (std::vector<std::string>{"t (s)", "measured (N)", "nominal (N)"}));
+  for (std::size_t i = 0; i < n; ++i) {
+    ASSERT_EQ(rows[i + 1].size(), 3u) << i;
+    EXPECT_EQ(std::stod(rows[i + 1][0]), a.x[i]);
+    EXPECT_EQ(std::stod(rows[i + 1][1]), a.y[i]);
+    if (i == 5) EXPECT_EQ(rows[i + 1][2], "");
+    else EXPECT_EQ(std::stod(rows[i + 1][2]), b.y[i]) << rows[i + 1][2];
+  }
+}
+
+TEST(Report, PlotDataOfSeriesOnDifferentAxes) {
+  // Points and a two-point line: an x and a y column per series, the shorter one padded.
+  const Series pts("instantaneous", {0.5, 1.5, 2.5}, {10, 20, 30});
+  const Series g("global, fitted", {0, 3}, {15, 15});
+  const auto rows = csv_rows(csv_table({pts, g}, PlotOptions("K", "t (s)", "N/m")));
+  ASSERT_EQ(rows.size(), 4u);
+  EXPECT_EQ(rows[0][0], "instantaneous: t (s)");
+  EXPECT_EQ(rows[0][1], "instantaneous (N/m)");
+  // A header with a comma is quoted (the naive split above cuts it in two).
+  EXPECT_EQ(rows[0][2] + "," + rows[0][3], "\"global, fitted: t (s)\"");
+  EXPECT_EQ(rows[1], (std::vector<std::string>{"0.5", "10", "0", "15"}));
+  EXPECT_EQ(rows[3], (std::vector<std::string>{"2.5", "30", "", ""}));
 }
 
 }  // namespace

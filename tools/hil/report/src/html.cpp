@@ -1,6 +1,7 @@
 #include "hil/report/html.hpp"
 
 #include <algorithm>
+#include <charconv>
 #include <cctype>
 #include <cmath>
 #include <cstdio>
@@ -102,7 +103,63 @@ std::string slug(const std::string& title) {
   return s.empty() ? "plot" : s;
 }
 
+/// The shortest text that reads back to the same double; empty for NaN (a missing value).
+std::string exact(double v) {
+  if (std::isnan(v)) return "";
+  char b[32];
+  const auto r = std::to_chars(b, b + sizeof b, v);
+  return std::string(b, r.ptr);
+}
+
+std::string csv_cell(const std::string& s) {
+  if (s.find_first_of(",\"\n\r") == std::string::npos) return s;
+  std::string q = "\"";
+  for (char c : s) q += c == '"' ? std::string("\"\"") : std::string(1, c);
+  return q + "\"";
+}
+
+/// "name (unit)" for a column; the plot's axis label is the unit or the quantity.
+std::string column(const std::string& name, const std::string& label) {
+  if (label.empty()) return name;
+  return name.empty() ? label : name + " (" + label + ")";
+}
+
 }  // namespace
+
+std::string csv_table(const std::vector<Series>& series, const PlotOptions& o) {
+  const std::string xlabel = o.xlabel.empty() ? "x" : o.xlabel;
+  auto name = [&](std::size_t k) { return series[k].name.empty() ? "series " + std::to_string(k + 1) : series[k].name; };
+  bool shared = !series.empty();
+  std::size_t rows = 0;
+  for (const auto& s : series) {
+    shared = shared && s.x == series.front().x && s.y.size() >= s.x.size();
+    rows = std::max(rows, std::min(s.x.size(), s.y.size()));
+  }
+  std::string out;
+  if (shared) {
+    out += csv_cell(xlabel);
+    for (std::size_t k = 0; k < series.size(); ++k) out += "," + csv_cell(column(name(k), o.ylabel));
+    out += "\n";
+    for (std::size_t i = 0; i < rows; ++i) {
+      out += exact(series.front().x[i]);
+      for (const auto& s : series) out += "," + exact(s.y[i]);
+      out += "\n";
+    }
+    return out;
+  }
+  for (std::size_t k = 0; k < series.size(); ++k)
+    out += (k ? "," : "") + csv_cell(name(k) + ": " + xlabel) + "," + csv_cell(column(name(k), o.ylabel));
+  out += "\n";
+  for (std::size_t i = 0; i < rows; ++i) {
+    for (std::size_t k = 0; k < series.size(); ++k) {
+      const auto& s = series[k];
+      const bool has = i < std::min(s.x.size(), s.y.size());
+      out += (k ? "," : "") + (has ? exact(s.x[i]) : "") + "," + (has ? exact(s.y[i]) : "");
+    }
+    out += "\n";
+  }
+  return out;
+}
 
 std::string escape(const std::string& s) {
   std::string o;
@@ -217,7 +274,7 @@ void Page::plot(const std::vector<Series>& series, const PlotOptions& options) {
   body_ += "<div class='plot'>" + svg + "</div>\n";
   char n[8];
   std::snprintf(n, sizeof n, "%02zu-", figures_.size() + 1);
-  figures_.emplace_back(n + slug(options.title) + ".svg", std::move(svg));
+  figures_.push_back({n + slug(options.title), std::move(svg), csv_table(series, options)});
 }
 
 std::string Page::html() const {
@@ -239,11 +296,15 @@ std::vector<std::string> Page::write_figures(const std::string& dir) const {
   std::filesystem::create_directories(dir, ec);
   if (ec) throw std::runtime_error(dir + ": cannot create the figures folder: " + ec.message());
   std::vector<std::string> written;
-  for (const auto& [name, svg] : figures_) {
-    const std::string path = (std::filesystem::path(dir) / name).string();
+  for (const auto& fig : figures_) {
+    const std::string path = (std::filesystem::path(dir) / (fig.base + ".svg")).string();
     std::ofstream f(path, std::ios::binary);
-    f << "<?xml version='1.0' encoding='utf-8'?>\n" << svg;
+    f << "<?xml version='1.0' encoding='utf-8'?>\n" << fig.svg;
     if (!f) throw std::runtime_error(path + ": cannot write the figure");
+    const std::string data = (std::filesystem::path(dir) / (fig.base + ".csv")).string();
+    std::ofstream c(data, std::ios::binary);
+    c << fig.csv;
+    if (!c) throw std::runtime_error(data + ": cannot write the figure's data");
     written.push_back(path);
   }
   return written;

@@ -41,6 +41,13 @@ struct PlotOptions {
 /// The SVG element of one plot.
 std::string svg_plot(const std::vector<Series>& series, const PlotOptions& options);
 
+/// One plot's data as CSV: every sample of every series (not the pixel-decimated drawing), numbers
+/// in their shortest exact form, NaN as an empty cell. When the series share their x, one x column
+/// ("t (s)") and one column per series ("measured (N)"); otherwise an x and a y column per series
+/// ("measured: t (s)", "measured (N)"), shorter series padded with empty cells. Header cells
+/// holding a comma or a quote are quoted (RFC 4180).
+std::string csv_table(const std::vector<Series>& series, const PlotOptions& options);
+
 /// HTML-escapes text.
 std::string escape(const std::string& s);
 
@@ -56,14 +63,19 @@ class Page {
   std::string html() const;
   /// \throws std::runtime_error if the file cannot be written.
   void write(const std::string& path) const;
-  /// Each plot as a standalone SVG file in `dir` (created), named "NN-title.svg" in page order;
-  /// returns the paths. \throws std::runtime_error if a file cannot be written.
+  /// Each plot as a standalone SVG file in `dir` (created), named "NN-title.svg" in page order,
+  /// and its data beside it as "NN-title.csv" (csv_table); returns the SVG paths.
+  /// \throws std::runtime_error if a file cannot be written.
   std::vector<std::string> write_figures(const std::string& dir) const;
 
  private:
+  struct Figure {
+    std::string base;  ///< file name without extension
+    std::string svg, csv;
+  };
   std::string title_;
   std::string body_;
-  std::vector<std::pair<std::string, std::string>> figures_;  ///< file name, SVG
+  std::vector<Figure> figures_;
 };
 
 }  // namespace hil::report
