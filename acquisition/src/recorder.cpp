@@ -68,6 +68,16 @@ void RunRecorder::append(const SyncedSample& s) {
 
 void RunRecorder::flush() { writer_->flush(); }
 
+void RunRecorder::set_source_identity(const std::string& source, std::vector<std::pair<std::string, std::string>> identity) {
+  for (auto& s : info_.sources) {
+    if (s.name != source) continue;
+    s.identity = std::move(identity);
+    format::write_run_info((fs::path(dir_) / "run.yaml").string(), info_);
+    return;
+  }
+  throw std::invalid_argument("run has no source named '" + source + "'");
+}
+
 void RunRecorder::close(const std::string& summary_notes) {
   if (closed_) return;
   closed_ = true;

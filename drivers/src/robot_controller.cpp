@@ -123,6 +123,35 @@ void RobotControllerDriver::connect() {
   backoff_s_ = cfg_.reconnect_min_s;
 }
 
+ControllerIdentity RobotControllerDriver::identify() noexcept {
+  ControllerIdentity id;
+  if (impl_->ctx == nullptr || !impl_->connected) {
+    id.error = "not connected";
+    return id;
+  }
+  std::uint8_t answer[MODBUS_MAX_PDU_LENGTH] = {};
+  const int n = modbus_report_slave_id(impl_->ctx, static_cast<int>(sizeof answer), answer);
+  if (n < 0) {
+    id.error = modbus_strerror(errno);
+    modbus_flush(impl_->ctx);
+    return id;
+  }
+  id.answered = true;
+  if (n >= 1) id.server_id = answer[0];
+  if (n >= 2) id.running = answer[1] == 0xFF;
+  for (int i = 2; i < n && i < static_cast<int>(sizeof answer); ++i) {
+    const auto c = answer[i];
+    if (c >= 0x20 && c < 0x7F) {
+      id.text += static_cast<char>(c);
+    } else {
+      char hex[8];
+      std::snprintf(hex, sizeof hex, "\\x%02X", c);
+      id.text += hex;
+    }
+  }
+  return id;
+}
+
 void RobotControllerDriver::disconnect() noexcept {
   impl_->reset();
   counters_.connected = false;

@@ -55,6 +55,33 @@ TEST(Run, WriteInfoRoundTrips) {
   EXPECT_EQ(back.notes.substr(0, 9), "two\nlines");
 }
 
+TEST(Run, DeviceIdentityRoundTripsAsText) {
+  hil::test::TempDir dir;
+  hil::format::RunInfo info;
+  info.rig = "r";
+  info.start_time_utc = "2026-11-21T10:00:00.5Z";
+  info.output_rate_hz = 50;
+  info.sources.push_back({"force_plate", "can", 1000, "", {{"serial", "0123"}, {"firmware", "1.10"}, {"units", "N, N m"}}});
+  info.sources.push_back({"robot", "modbus", 125, "", {}});
+  hil::format::write_run_info(dir.path() + "/run.yaml", info);
+  const auto back = hil::format::load_run_info(dir.path() + "/run.yaml");
+  // A serial with a leading zero and a firmware like 1.10 stay the same text, in the same order.
+  EXPECT_EQ(back.sources.at(0).identity, info.sources.at(0).identity);
+  EXPECT_TRUE(back.sources.at(1).identity.empty());
+}
+
+TEST(Run, DeviceIdentityMustBeAMapOfValues) {
+  const std::string src = kInfo + "sources:\n  - name: fp\n    kind: can\n    identity:\n";
+  const auto ok = hil::format::parse_run_info(src + "      serial: FT-1\n      counts_per_force: 1000000\n", "run.yaml");
+  EXPECT_EQ(ok.sources.at(0).identity.at(1).second, "1000000");
+  EXPECT_TRUE(fails_with([&] { hil::format::parse_run_info(src + "      serial: [1, 2]\n", "run.yaml"); }, 9,
+                         "sources[0].identity.serial", "expected a single value"));
+  EXPECT_TRUE(fails_with([&] { hil::format::parse_run_info(src + "      bad key: x\n", "run.yaml"); }, 0, "sources[0].identity",
+                         "identity keys are names"));
+  EXPECT_TRUE(fails_with([&] { hil::format::parse_run_info(kInfo + "sources:\n  - {name: fp, kind: can, identity: FT-1}\n", "run.yaml"); },
+                         0, "sources[0].identity", "expected a mapping"));
+}
+
 TEST(Run, MissingPartsAndRigMismatch) {
   hil::test::TempDir dir;
   EXPECT_TRUE(fails_with([&] { hil::format::load_run(dir.path()); }, 0, "", "needs run.yaml"));

@@ -34,7 +34,7 @@ RunInfo parse_run_info(const std::string& text, const std::string& display_name)
   r.output_rate_hz = root.req("output_rate_hz").num_positive();
   if (root.has("sources")) {
     for (const auto& s : root.child("sources").seq()) {
-      s.only({"name", "kind", "rate_hz", "raw"});
+      s.only({"name", "kind", "rate_hz", "raw", "identity"});
       SourceSpec src;
       src.name = s.req("name").str();
       src.kind = s.req("kind").str();
@@ -43,6 +43,17 @@ RunInfo parse_run_info(const std::string& text, const std::string& display_name)
         s.child("kind").fail("expected can, modbus, simulation, import or other, found '" + src.kind + "'");
       if (s.has("rate_hz")) src.rate_hz = s.child("rate_hz").num_positive();
       src.raw = s.str("raw", "");
+      if (s.has("identity")) {
+        const YNode id = s.child("identity");
+        id.expect_map();
+        for (const auto& kv : id.raw()) {
+          const auto key = kv.first.as<std::string>();
+          if (key.empty() || key.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_") != std::string::npos)
+            id.fail("identity keys are names (letters, digits, _), found '" + key + "'");
+          if (!kv.second.IsScalar()) id.child(key).fail("expected a single value (text or number)");
+          src.identity.emplace_back(key, kv.second.as<std::string>());
+        }
+      }
       r.sources.push_back(src);
     }
   }
@@ -70,14 +81,29 @@ void write_run_info(const std::string& path, const RunInfo& info) {
     e << YAML::BeginMap << YAML::Key << "name" << YAML::Value << s.name << YAML::Key << "kind" << YAML::Value << s.kind;
     if (s.rate_hz > 0) e << YAML::Key << "rate_hz" << YAML::Value << s.rate_hz;
     if (!s.raw.empty()) e << YAML::Key << "raw" << YAML::Value << s.raw;
+    if (!s.identity.empty()) {
+      e << YAML::Key << "identity" << YAML::Value << YAML::BeginMap;
+      // Quoted: a serial like 0123 or a firmware like 1.10 must read back as the same text.
+      for (const auto& [k, v] : s.identity) e << YAML::Key << k << YAML::Value << YAML::DoubleQuoted << v;
+      e << YAML::EndMap;
+    }
     e << YAML::EndMap;
   }
   e << YAML::EndSeq;
   if (!info.notes.empty()) e << YAML::Key << "notes" << YAML::Value << YAML::Literal << info.notes;
   e << YAML::EndMap;
-  std::ofstream out(path, std::ios::binary);
-  out << e.c_str() << '\n';
-  if (!out) throw std::runtime_error(path + ": cannot write run.yaml");
+  // Written beside and renamed over: a recorder rewrites run.yaml while recording (device
+  // identity, the closing summary), and a crash must leave the old or the new file, never half.
+  const std::string tmp = path + ".tmp";
+  {
+    std::ofstream out(tmp, std::ios::binary);
+    out << e.c_str() << '\n';
+    out.flush();
+    if (!out) throw std::runtime_error(tmp + ": cannot write run.yaml");
+  }
+  std::error_code ec;
+  std::filesystem::rename(tmp, path, ec);
+  if (ec) throw std::runtime_error(path + ": cannot replace run.yaml: " + ec.message());
 }
 
 Run load_run(const std::string& dir, const std::string& rig_path) {

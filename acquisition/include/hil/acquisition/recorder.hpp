@@ -26,6 +26,10 @@ class RunRecorder {
 
   void append(const SyncedSample& s);
   void flush();
+  /// Records what a device said about itself under its source in run.yaml (rewritten at once).
+  /// \throws std::invalid_argument when the run has no source of that name.
+  void set_source_identity(const std::string& source, std::vector<std::pair<std::string, std::string>> identity);
+  const format::RunInfo& info() const { return info_; }
   /// Flushes, closes and rewrites run.yaml with a summary in its notes. Idempotent.
   void close(const std::string& summary_notes = "");
 

@@ -1,7 +1,7 @@
 #pragma once
 /// \file The robot-controller driver: Modbus TCP or RTU through libmodbus, polling a register map.
-/// **Read-only by design**: this driver only issues read requests (function codes 3 and 4); no
-/// write function is compiled into it.
+/// **Read-only by design**: this driver only issues read requests (function codes 3 and 4, and
+/// 0x11 Report Server ID once for the controller's identity); no write function is compiled into it.
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <array>
@@ -59,6 +59,17 @@ struct RobotSample {
   Eigen::Quaterniond q_base_tcp = Eigen::Quaterniond::Identity();
 };
 
+/// What a controller says about itself (Modbus function 0x11, Report Server ID). Many
+/// controllers (Universal Robots' server among them) do not implement it: then `answered` is
+/// false and `error` holds the Modbus exception.
+struct ControllerIdentity {
+  bool answered = false;
+  int server_id = -1;    ///< the first byte of the answer (device specific)
+  bool running = false;  ///< run indicator (0xFF = on)
+  std::string text;      ///< the additional bytes, printable ASCII kept, others as \xNN
+  std::string error;     ///< why there is no answer
+};
+
 /// Polls one controller. Holds one libmodbus context: use one driver per thread.
 class RobotControllerDriver {
  public:
@@ -74,6 +85,8 @@ class RobotControllerDriver {
   /// retries, or when the link breaks: disconnect and reconnect on later polls with back-off.
   PollStatus poll(RobotSample& out) noexcept;
   void disconnect() noexcept;
+  /// Asks the connected controller for its identity (one request, no retry). Never throws.
+  ControllerIdentity identify() noexcept;
 
   const DeviceCounters& counters() const noexcept { return counters_; }
   const std::string& last_problem() const noexcept { return last_problem_; }

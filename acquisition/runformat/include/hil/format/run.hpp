@@ -2,6 +2,7 @@
 /// \file A run folder: run.yaml + samples.csv (+ rig.yaml, raw/). See docs/formats.md.
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "hil/format/rig.hpp"
@@ -14,6 +15,9 @@ struct SourceSpec {
   std::string kind;   ///< can | modbus | simulation | import | other
   double rate_hz = 0.0;  ///< nominal device rate; 0 = unknown
   std::string raw;    ///< file under raw/ holding this source's stream, if recorded
+  /// What the device said about itself when the run started (serial, firmware, counts, server
+  /// id, ...), in the order it was recorded. Keys are names; values are text.
+  std::vector<std::pair<std::string, std::string>> identity = {};
 };
 
 struct RunInfo {
