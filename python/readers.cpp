@@ -102,6 +102,9 @@ py::dict meta_dict(const fmt_::RunInfo& info) {
     x["kind"] = s.kind;
     x["rate_hz"] = s.rate_hz;
     x["raw"] = s.raw;
+    py::dict identity;  // in the recorded order
+    for (const auto& [key, value] : s.identity) identity[py::str(key)] = value;
+    x["identity"] = identity;
     sources.append(x);
   }
   d["sources"] = sources;

@@ -112,6 +112,20 @@ def test_read_rig():
     assert robot_dev["port"] == 5020 and robot_dev["register_map"] == "ur"
 
 
+def test_run_sources_keep_the_device_identity(tmp_path):
+    shutil.copytree(RUN, tmp_path / "run")
+    (tmp_path / "run" / "run.yaml").write_text(
+        "format_version: 1\nrig: press_bench\nstart_time: 2026-11-21T09:00:00.000Z\noutput_rate_hz: 50\n"
+        "sources:\n"
+        "  - {name: force_plate, kind: can, rate_hz: 1000, identity: {serial: FT12345, firmware: '2.1'}}\n"
+        "  - {name: robot, kind: modbus, rate_hz: 125}\n")
+    meta = hil.read_run(str(tmp_path / "run"))["meta"]
+    assert meta["sources"][0]["identity"] == {"serial": "FT12345", "firmware": "2.1"}
+    assert list(meta["sources"][0]["identity"]) == ["serial", "firmware"]
+    assert meta["sources"][1]["identity"] == {} and meta["sources"][1]["raw"] == ""
+    assert meta["notes"] == ""
+
+
 def test_bad_cell_names_file_line_and_column(tmp_path):
     shutil.copytree(RUN, tmp_path / "run")
     path = tmp_path / "run" / "samples.csv"
@@ -214,10 +228,28 @@ def test_diagnose_names_a_hidden_sensor_bias(tmp_path):
     for i, c in enumerate(["fx", "fy", "fz", "mx", "my", "mz"]):
         par = d["cause"]["parameters"]["bias_" + c]
         assert abs(par["value"] - truth["sensor_bias"][i]) <= 3 * par["std"], c
+    out = tmp_path / "d.json"
+    p = subprocess.run([HIL_EXE, "diagnose", str(run), "--candidates", "sensor_bias,sensor_gain,viscous_friction",
+                        "--json", str(out), "--quiet"], capture_output=True, text=True, timeout=120)
+    assert p.returncode == 0, p.stderr
+    cli = json.loads(out.read_text())
+    assert cli["cause"]["name"] == d["cause"]["name"]
+    assert cli["gain_percent"] == pytest.approx(d["gain_percent"], rel=1e-9)
+    assert [c["verdict"] for c in cli["candidates"]] == [c["verdict"] for c in d["candidates"]]
     with pytest.raises(RuntimeError, match="not_a_cause"):
         hil.diagnose(str(run), candidates=["not_a_cause"])
     with pytest.raises(ValueError, match="folds"):
         hil.diagnose(str(run), folds=1)
+
+
+def test_diagnose_a_stiffness_table():
+    # The shipped table's robot has compliant links the joint-compliance model lacks.
+    d = hil.diagnose(STIFF_TABLE, rig=STIFF_RIG)
+    assert d["mode"] == "stiffness"
+    assert d["cause"]["name"] == "link_compliance"
+    assert d["gain_percent"] > 10
+    with pytest.raises(hil.FormatError, match="needs --rig"):
+        hil.diagnose(STIFF_TABLE)
 
 
 def test_identify_stiffness_on_the_shipped_table():
