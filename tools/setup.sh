@@ -15,10 +15,12 @@ deps() {
     build-essential cmake ninja-build pkg-config python3
     libeigen3-dev libspdlog-dev libfmt-dev libyaml-cpp-dev libcli11-dev nlohmann-json3-dev
     libmodbus-dev libfastrtps-dev libfastcdr-dev fastddsgen fastdds-tools default-jre-headless
-    can-utils iproute2 libgtest-dev libgmock-dev libbenchmark-dev
+    can-utils iproute2 libgtest-dev libgmock-dev libbenchmark-dev zlib1g-dev libzstd-dev liblz4-dev
     python3-can python3-pymodbus python3-serial-asyncio python3-numpy
     pybind11-dev python3-dev python3-pytest
   )
+  # Node and npm for the independent MCAP reader's tests (tests/mcap); kept when already there (Node 20).
+  command -v npm >/dev/null 2>&1 || pkgs+=(nodejs npm)
   local missing=()
   for p in "${pkgs[@]}"; do dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p"); done
   if ((${#missing[@]})); then

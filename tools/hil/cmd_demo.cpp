@@ -99,6 +99,7 @@ int demo(const DemoOptions& o) {
   ao.output_rate_hz = played.info.output_rate_hz;
   ao.progress = false;
   ao.wait_subscribers = 1;  // our own monitor sees the run from its first sample
+  ao.mcap = true;            // run.mcap beside the CSV: open it in Foxglove or PlotJuggler (docs/mcap.md)
   std::atomic<std::uint64_t> n{0};
   const double total_s = played.samples.samples.back().t_s / o.speed;
   const auto t0 = std::chrono::steady_clock::now();
@@ -157,6 +158,7 @@ int demo(const DemoOptions& o) {
   std::cout << fmt::format("[6/6] the hidden effect was {} ({}): {}\n", effect, truth_file,
                            named ? "named by the diagnosis" : "NOT named by the diagnosis (" + diag.result.cause + ")");
   std::cout << "      Look at it live with `hil echo pose_wrench`, replay it with `hil replay " << out << "`.\n";
+  std::cout << "      The recording as MCAP (Foxglove, PlotJuggler, ros2 bag): " << (fs::path(out) / "run.mcap").string() << "\n";
   const bool ok = rec.samples.size() > 0 && bus_samples == rec.samples.size() && std::abs(fz_rec - fz_played) < 5.0 &&
                   worker.processed() > 0 && named;
   if (!ok) std::cout << "demo: the bus, the recording, the played run or the diagnosis disagree (see above)\n";

@@ -31,5 +31,6 @@ void add_replay(CLI::App& app);     // bus: publish a recorded run
 void add_acquire(CLI::App& app);    // the rig service
 void add_import(CLI::App& app);     // marker + force-plate CSV -> run (issue 6)
 void add_diagnose(CLI::App& app);   // the diagnosis (issue 6)
+void add_export(CLI::App& app);     // run -> MCAP (issue 13)
 
 }  // namespace hil::cli

@@ -49,6 +49,7 @@ int main(int argc, char** argv) {
   add_acquire(app);
   add_import(app);
   add_diagnose(app);
+  add_export(app);
 
   try {
     app.parse(argc, argv);

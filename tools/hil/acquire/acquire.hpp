@@ -28,6 +28,8 @@ struct AcquireOptions {
   bool play_over_socketcan = false;  ///< the fake plate talks on the SocketCAN interface instead of loopback
   drivers::CanFaults plate_faults;
   drivers::ModbusFaults robot_faults;
+  bool mcap = false;                     ///< also record run.mcap (docs/mcap.md)
+  std::string mcap_compression = "zstd";  ///< none | zstd | lz4
 };
 
 struct AcquireResult {

@@ -20,6 +20,7 @@
 #include "hil/format/error.hpp"
 #include "hil/format/ros_frames.hpp"
 #include "drivers_from_rig.hpp"
+#include "mcap_sink.hpp"
 
 namespace hil::cli {
 namespace {
@@ -120,8 +121,15 @@ AcquireResult run_acquisition(const AcquireOptions& o, const std::function<void(
   ao.wait_for_subscribers = o.wait_subscribers;
   if (with_robot && !mcfg.map.has_pose() && !mcfg.kinematics)
     throw format::FormatError({o.rig, 0, 0, "robot"}, "the register map reads joints only: the rig needs a robot DH table");
+  // --mcap: run.mcap beside the CSV, from the same samples (docs/mcap.md). Made before the
+  // acquirer so that it outlives it: the acquirer's last samples reach a sink still there.
+  std::unique_ptr<McapSink> mcap_sink;
+  if (o.mcap)
+    mcap_sink = std::make_unique<McapSink>(recorder.dir() + "/run.mcap", rig, with_robot ? mcfg.map.joint_count() : 0, start_ns,
+                                           mcap::parse_compression(o.mcap_compression));
   acquisition::Acquirer acq(ao, std::move(plate), std::move(robot), bus.get(), &recorder);
   if (observer) acq.on_sample(observer);
+  if (mcap_sink) acq.on_sample([&mcap_sink](const acquisition::SyncedSample& s) { mcap_sink->sample(s); });
 
   if (fake_plate) fake_plate->start();
   if (fake_robot) fake_robot->start();
@@ -138,8 +146,10 @@ AcquireResult run_acquisition(const AcquireOptions& o, const std::function<void(
     if (duration > 0 && now - t0 >= std::chrono::duration<double>(duration)) break;
     if (now >= next_flush) {  // the CAN log is written by the plate thread; FILE* locks make this safe
       can_log_ptr->flush();
+      if (mcap_sink) mcap_sink->flush();
       next_flush += std::chrono::seconds(1);
     }
+    if (mcap_sink) mcap_sink->health(acq.health(), acquisition::realtime_ns());
     if (o.progress && now >= next_progress) {
       spdlog::info("acquire: {} samples, {:.0f} s", acq.samples(), std::chrono::duration<double>(now - t0).count());
       next_progress += std::chrono::seconds(5);
@@ -159,6 +169,10 @@ AcquireResult run_acquisition(const AcquireOptions& o, const std::function<void(
     summary += fmt::format(" {}: {} samples, {} errors, {} dropped{}.", h.device, h.samples, h.errors, h.frames_dropped,
                            h.last_error.empty() ? "" : ", last error: " + h.last_error);
   recorder.close(summary);
+  if (mcap_sink) {
+    mcap_sink->health(r.health, acquisition::realtime_ns(), true);  // the devices' final state
+    mcap_sink->close();
+  }
   r.summary = summary;
   return r;
 }
@@ -179,6 +193,10 @@ void add_acquire(CLI::App& app) {
   cmd->add_flag("!--no-ros-topics", o.ros_topics, "do not publish rt/hil/wrench, rt/hil/pose, rt/hil/joint_states, rt/tf_static, rt/diagnostics");
   cmd->add_option("--play", o.play, "start the fake rig in-process playing this run (no hardware, no SocketCAN)")
       ->check(CLI::ExistingDirectory);
+  cmd->add_flag("--mcap", o.mcap, "also record run.mcap in the run folder (ROS 2 channels, docs/mcap.md)");
+  cmd->add_option("--mcap-compression", o.mcap_compression, "chunk compression of run.mcap: none, zstd or lz4")
+      ->check(CLI::IsMember({"none", "zstd", "lz4"}))
+      ->capture_default_str();
   cmd->add_option("--play-speed", o.play_speed, "playback speed of --play")->capture_default_str();
   cmd->add_flag("--play-on-can", o.play_over_socketcan,
                 "with --play: the fake plate answers on the SocketCAN interface (e.g. vcan0) instead of an in-process bus");
