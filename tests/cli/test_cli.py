@@ -85,6 +85,13 @@ class Cli(unittest.TestCase):
             self.assertIn("named by the diagnosis", r.stdout)
             self.assertTrue(os.path.exists(os.path.join(out, "run-diagnosis", "index.html")))
             self.assertEqual(hil("validate", os.path.join(out, "run")).returncode, 0)
+            # The demo's run.mcap through the independent MCAP reader (tests/mcap), when node is there.
+            if os.environ.get("HIL_MCAP_CHECK"):
+                run = os.path.join(out, "run")
+                c = subprocess.run([os.environ["HIL_MCAP_NODE"], os.environ["HIL_MCAP_CHECK"], os.path.join(run, "run.mcap"),
+                                    os.path.join(run, "samples.csv"), "--tf", "force_plate,receptacle_frame,acu_frame",
+                                    "--min-status", "2"], capture_output=True, text=True, timeout=120)
+                self.assertEqual(c.returncode, 0, c.stdout + c.stderr)
         finally:
             shutil.rmtree(out)
 
