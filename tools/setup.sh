@@ -16,7 +16,7 @@ deps() {
     libeigen3-dev libspdlog-dev libfmt-dev libyaml-cpp-dev libcli11-dev nlohmann-json3-dev
     libmodbus-dev libfastrtps-dev libfastcdr-dev fastddsgen fastdds-tools default-jre-headless
     can-utils iproute2 libgtest-dev libgmock-dev libbenchmark-dev zlib1g-dev libzstd-dev liblz4-dev
-    python3-can python3-pymodbus python3-serial-asyncio python3-numpy
+    python3-can python3-pymodbus python3-serial-asyncio python3-numpy python3-jsonschema
     pybind11-dev python3-dev python3-pytest
   )
   # Node and npm for the independent MCAP reader's tests (tests/mcap); kept when already there (Node 20).

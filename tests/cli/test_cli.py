@@ -34,13 +34,58 @@ class Cli(unittest.TestCase):
         self.assertEqual(r.returncode, 0)
         self.assertRegex(r.stdout, r"hil \d+\.\d+\.\d+")
 
-    def test_unknown_subcommand_fails(self):
-        self.assertNotEqual(hil("frobnicate").returncode, 0)
+    def usage_error(self, args, *needles, hint="hil"):
+        """Exit 2, 'error: ...' naming the bad word, a hint to the command's --help, nothing on stdout."""
+        r = hil(*args)
+        self.assertEqual(r.returncode, 2, (args, r.stdout, r.stderr))
+        self.assertEqual(r.stdout, "", args)
+        first, second = (r.stderr.splitlines() + ["", ""])[:2]
+        self.assertTrue(first.startswith("error: "), r.stderr)
+        for n in needles:
+            self.assertIn(n, first, args)
+        self.assertEqual(second, "run '%s --help' for the usage" % hint)
+        return first
+
+    def test_usage_errors_exit_2_naming_the_word(self):
+        self.usage_error(["frobnicate"], "unknown command 'frobnicate'")
+        self.assertNotIn("did you mean", self.usage_error(["frobnicate"]))
+        self.usage_error(["diagnoze", "x"], "unknown command 'diagnoze'", "did you mean 'diagnose'")
+        self.usage_error(["stiffness", "identfy"], "unknown command 'identfy'", "'hil stiffness'",
+                         "did you mean 'identify'", hint="hil stiffness")
+        self.usage_error([], "needs a command", "validate")
+        self.usage_error(["contact"], "'hil contact' needs a command", "identify", hint="hil contact")
+        self.usage_error(["validate", EXAMPLE_RUN, "--jsn"], "unknown option '--jsn'", "did you mean '--json'",
+                         hint="hil validate")
+        self.usage_error(["--frob", "validate", EXAMPLE_RUN], "unknown option '--frob'")
+        self.usage_error(["validate"], "PATH is required", hint="hil validate")
+        self.usage_error(["validate", EXAMPLE_RUN, "extra"], "unexpected argument 'extra'", hint="hil validate")
+        self.usage_error(["stiffness", "identify", "t.csv"], "--rig is required", hint="hil stiffness identify")
+        self.usage_error(["diagnose", EXAMPLE_RUN, "--rig"], "--rig", hint="hil diagnose")
+        self.usage_error(["diagnose", EXAMPLE_RUN, "--folds", "1"], "--folds", "1", hint="hil diagnose")
+        self.usage_error(["diagnose", EXAMPLE_RUN, "--folds", "many"], "--folds", "many", hint="hil diagnose")
+        self.usage_error(["--log-level", "loud", "validate", EXAMPLE_RUN], "--log-level", "loud", hint="hil validate")
+        # Help is not an error.
+        for args in (["--help"], ["stiffness", "identify", "--help"]):
+            r = hil(*args)
+            self.assertEqual((r.returncode, r.stderr), (0, ""), args)
+            self.assertIn("Usage:", r.stdout)
+
+    def test_bad_input_after_parsing_exits_2_and_failures_1(self):
+        r = hil("validate", os.path.join(tempfile.mkdtemp(), "none"))
+        self.assertEqual(r.returncode, 2, r.stderr)
+        self.assertIn("no such file", r.stderr)
+        # A run folder that cannot be written is a failure, not bad input.
+        r = hil("contact", "simulate", "--rig", EXAMPLE_RIG, "--trajectory",
+                os.path.join(SRC, "examples", "trajectories", "press_slide.csv"), "--out", "/proc/hil-no-such/run")
+        self.assertEqual(r.returncode, 1, r.stderr)
+        self.assertIn("/proc/hil-no-such/run", r.stderr)
 
     def test_demo_refuses_bad_options(self):
         for args, field in ((("--decimate", "0"), "--decimate"), (("--effect", "magnetism"), "magnetism")):
             r = hil("demo", *args, "--out", os.path.join(tempfile.mkdtemp(), "run"))
             self.assertNotEqual(r.returncode, 0, r.stdout)
+            if field == "--decimate":
+                self.assertEqual(r.returncode, 2, r.stderr)  # a usage error
             self.assertIn(field, r.stdout + r.stderr)
 
     def test_validate_examples(self):
@@ -187,7 +232,7 @@ class BadInput(unittest.TestCase):
 
     def expect_error(self, *needles):
         r = hil("validate", self.run)
-        self.assertNotEqual(r.returncode, 0, r.stdout)
+        self.assertEqual(r.returncode, 2, r.stdout + r.stderr)  # bad input
         self.assertNotIn("Segmentation", r.stderr)
         for n in needles:
             self.assertIn(n, r.stderr)

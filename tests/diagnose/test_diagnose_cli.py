@@ -93,12 +93,12 @@ class Diagnose(unittest.TestCase):
         self.assertIn("cause:           sensor_bias", r.stdout)
         self.assertNotIn("geometric_offset", r.stdout)
         r = hil("diagnose", run, "--candidates", "gravity")
-        self.assertNotEqual(r.returncode, 0)
+        self.assertEqual(r.returncode, 2, r.stderr)  # bad input
         self.assertIn("'gravity' is not a candidate", r.stderr)
 
     def test_bad_input(self):
         r = hil("diagnose", os.path.join(self.dir, "missing"))
-        self.assertNotEqual(r.returncode, 0)
+        self.assertEqual(r.returncode, 2, r.stderr)
         self.assertIn("missing", r.stderr)
         # A run whose poses never bring the objects into contact.
         run = self.simulate("far")
@@ -135,15 +135,15 @@ class Diagnose(unittest.TestCase):
         self.assertTrue(os.listdir(os.path.join(rep, "figures")))
         # Without --rig, and with a candidate of the other families: clear errors.
         r = hil("diagnose", table, "--quiet")
-        self.assertNotEqual(r.returncode, 0)
+        self.assertEqual(r.returncode, 2, r.stderr)
         self.assertIn("--rig", r.stderr)
         r = hil("diagnose", table, "--rig", rig, "--candidates", "time_offset", "--quiet")
-        self.assertNotEqual(r.returncode, 0)
+        self.assertEqual(r.returncode, 2, r.stderr)
         self.assertIn("time_offset", r.stderr)
         # Cross-validation needs at least two folds.
         r = hil("diagnose", table, "--rig", rig, "--folds", "1", "--quiet")
-        self.assertNotEqual(r.returncode, 0)
-        self.assertIn("--folds must be at least 2", r.stderr)
+        self.assertEqual(r.returncode, 2, r.stderr)  # a usage error
+        self.assertIn("--folds: Value 1 not in range 2 to", r.stderr)
 
     @unittest.skipUnless(os.path.exists(TIAGO), "../shared/data/tiago-suspension is not beside this checkout")
     def test_tiago_deflection_mode(self):

@@ -1,53 +1,112 @@
-// `hil validate PATH`: checks a run folder, a rig file, run.yaml or samples.csv and summarises it.
+// `hil validate PATH [--json [OUT|-]]`: checks a run folder, a rig file, run.yaml or samples.csv
+// and summarises it, as text and optionally as JSON (hil.validation).
 #include <fmt/format.h>
 
 #include <filesystem>
 #include <iostream>
 
 #include "commands.hpp"
+#include "hil/format/error.hpp"
 #include "hil/format/run.hpp"
+#include "output.hpp"
 #include "summary.hpp"
 
 namespace hil::cli {
 namespace fs = std::filesystem;
 
-int validate(const std::string& path, const std::string& rig_path) {
-  if (!fs::exists(path)) throw std::runtime_error(path + ": no such file or folder");
-  if (fs::is_directory(path)) {
-    const auto run = format::load_run(path, rig_path);
-    std::cout << fmt::format("run {}: OK\n", path);
-    print_run_summary(std::cout, run);
-    return 0;
-  }
-  const auto name = fs::path(path).filename().string();
-  if (name == "run.yaml") {
-    const auto info = format::load_run_info(path);
-    std::cout << fmt::format("run.yaml {}: OK (rig '{}', started {}, output {} Hz, {} sources)\n", path, info.rig,
-                             info.start_time_utc, info.output_rate_hz, info.sources.size());
-    return 0;
-  }
+namespace {
+
+/// What PATH is: run, run_info (run.yaml), samples (.csv) or rig (.yaml). \throws FormatError.
+std::string kind_of(const std::string& path) {
+  if (!fs::exists(path)) throw format::FormatError({path, 0, 0, ""}, "no such file or folder");
+  if (fs::is_directory(path)) return "run";
+  if (fs::path(path).filename() == "run.yaml") return "run_info";
   const auto ext = fs::path(path).extension().string();
-  if (ext == ".csv") {
-    const auto table = format::read_samples(path);
-    std::cout << fmt::format("samples {}: OK\n", path);
-    print_samples_summary(std::cout, table);
-    return 0;
-  }
-  if (ext == ".yaml" || ext == ".yml") {
-    const auto rig = format::load_rig(path);
-    std::cout << fmt::format("rig {}: OK\n", path);
-    print_rig_summary(std::cout, rig);
-    return 0;
-  }
-  throw std::runtime_error(path + ": not a run folder, rig file (.yaml), run.yaml or samples.csv");
+  if (ext == ".csv") return "samples";
+  if (ext == ".yaml" || ext == ".yml") return "rig";
+  throw format::FormatError({path, 0, 0, ""}, "not a run folder, rig file (.yaml), run.yaml or samples.csv");
 }
+
+/// Checks PATH of that kind, prints the human summary to `text` and returns it as JSON.
+nlohmann::json check(const std::string& kind, const std::string& path, const std::string& rig_path, std::ostream& text) {
+  if (kind == "run") {
+    const auto run = format::load_run(path, rig_path);
+    text << fmt::format("run {}: OK\n", path);
+    print_run_summary(text, run);
+    return run_summary_json(run);
+  }
+  if (kind == "run_info") {
+    const auto info = format::load_run_info(path);
+    text << fmt::format("run.yaml {}: OK (rig '{}', started {}, output {} Hz, {} sources)\n", path, info.rig, info.start_time_utc,
+                        info.output_rate_hz, info.sources.size());
+    return run_info_json(info);
+  }
+  if (kind == "samples") {
+    const auto table = format::read_samples(path);
+    text << fmt::format("samples {}: OK\n", path);
+    print_samples_summary(text, table);
+    return samples_summary_json(table);
+  }
+  const auto rig = format::load_rig(path);
+  text << fmt::format("rig {}: OK\n", path);
+  print_rig_summary(text, rig);
+  return rig_summary_json(rig);
+}
+
+nlohmann::json error_json(const std::string& path, const std::exception& e) {
+  auto null_if = [](auto v, bool unknown) { return unknown ? nlohmann::json() : nlohmann::json(v); };
+  if (const auto* f = dynamic_cast<const format::FormatError*>(&e)) {
+    const auto& w = f->where();
+    return {{"file", w.file.empty() ? path : w.file}, {"line", null_if(w.line, w.line == 0)}, {"column", null_if(w.column, w.column == 0)},
+            {"field", null_if(w.field, w.field.empty())}, {"message", f->message()}, {"text", e.what()}};
+  }
+  return {{"file", path}, {"line", nullptr}, {"column", nullptr}, {"field", nullptr}, {"message", e.what()}, {"text", e.what()}};
+}
+
+/// `json_out` empty: no JSON. A failed check still writes the JSON (ok: false, the error), then
+/// rethrows for main() to print the error and exit 2.
+int validate(const std::string& path, const std::string& rig_path, const std::string& json_out) {
+  auto& text = human(is_stdout(json_out));
+  nlohmann::json j;
+  tag_format(j, "validation");
+  j["path"] = path;
+  j["rig"] = rig_path.empty() ? nlohmann::json() : nlohmann::json(rig_path);
+  j["kind"] = nullptr;
+  try {
+    const auto kind = kind_of(path);
+    j["kind"] = kind;
+    j["summary"] = check(kind, path, rig_path, text);
+    j["ok"] = true;
+    j["errors"] = nlohmann::json::array();
+  } catch (const std::exception& e) {
+    if (json_out.empty()) throw;
+    j["ok"] = false;
+    j["summary"] = nullptr;
+    j["errors"] = nlohmann::json::array({error_json(path, e)});
+    write_json(json_out, j);
+    throw;
+  }
+  if (!json_out.empty()) write_json(json_out, j);
+  return 0;
+}
+
+}  // namespace
 
 void add_validate(CLI::App& app) {
   auto* cmd = app.add_subcommand("validate", "Check a run folder, a rig file, run.yaml or samples.csv and summarise it");
-  static std::string path, rig;
+  static std::string path, rig, json;
+  static CLI::Option* json_opt = nullptr;
   cmd->add_option("PATH", path, "run folder, rig file, run.yaml or samples.csv")->required();
   cmd->add_option("--rig", rig, "rig file to check the run against (default: the run's rig.yaml)");
-  cmd->callback([] { set_action([] { return validate(path, rig); }); });
+  json_opt = cmd->add_option("--json", json,
+                             "also write the summary (or the error) as JSON (hil.validation) to OUT; without OUT or with -, to "
+                             "stdout and the text to stderr")
+                 ->expected(0, 1)
+                 ->type_name("[OUT|-]");
+  cmd->callback([] {
+    const std::string out = json_opt->count() > 0 && json.empty() ? "-" : json;
+    set_action([out] { return validate(path, rig, out); });
+  });
 }
 
 }  // namespace hil::cli

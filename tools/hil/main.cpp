@@ -8,6 +8,7 @@
 
 #include "commands.hpp"
 #include "hil/format/error.hpp"
+#include "usage.hpp"
 
 namespace hil::cli {
 
@@ -54,7 +55,7 @@ int main(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+    return report_parse_error(app, e, std::cerr);  // 2, naming the bad word (0 for --help)
   }
   auto logger = spdlog::stderr_color_mt("hil");
   spdlog::set_default_logger(logger);
@@ -64,7 +65,7 @@ int main(int argc, char** argv) {
     return g_action ? g_action() : 1;
   } catch (const hil::format::FormatError& e) {
     std::cerr << "error: " << e.what() << '\n';
-    return 2;
+    return kExitUsage;
   } catch (const std::exception& e) {
     std::cerr << "error: " << e.what() << '\n';
     return 1;

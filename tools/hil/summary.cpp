@@ -49,6 +49,56 @@ void print_rig_summary(std::ostream& os, const format::RigSpec& rig) {
   os << fmt::format("  geometric uncertainties: {}\n", rig.model.uncertainties.size());
 }
 
+nlohmann::json samples_summary_json(const format::SampleTable& t) {
+  using nlohmann::json;
+  const auto s = format::summarize(t);
+  json j = {{"count", s.count}, {"duration_s", s.duration_s}, {"rate_hz", s.rate_hz}, {"median_step_s", s.median_dt_s},
+            {"joints", t.joint_count()}, {"extra_columns", t.extra_columns}, {"gaps", json::array()}, {"ranges", json::object()}};
+  for (const auto& g : s.gaps) j["gaps"].push_back({{"t_s", g.t_s}, {"dt_s", g.dt_s}, {"line", g.line}});
+  for (const auto& r : s.ranges) j["ranges"][r.column] = {{"min", r.min}, {"max", r.max}};
+  return j;
+}
+
+nlohmann::json rig_summary_json(const format::RigSpec& rig) {
+  using nlohmann::json;
+  json j = {{"name", rig.name}, {"frames", rig.frames.size()}, {"robot", nullptr}, {"objects", json::array()},
+            {"features", format::total_features(rig)}, {"polyhedra", format::total_polyhedra(rig)}, {"force_plate", nullptr},
+            {"robot_controller", nullptr}, {"contact_model", nullptr}, {"geometric_uncertainties", rig.model.uncertainties.size()}};
+  if (rig.robot)
+    j["robot"] = {{"name", rig.robot->name}, {"joints", rig.robot->joints.size()},
+                  {"convention", rig.robot->convention == format::DhConvention::standard ? "standard" : "modified"}};
+  for (const auto& o : rig.objects)
+    j["objects"].push_back({{"name", o.name}, {"frame", o.frame}, {"features", o.features.size()}, {"polyhedra", o.polyhedron_count()}});
+  if (rig.devices.force_plate) {
+    const auto& d = *rig.devices.force_plate;
+    j["force_plate"] = {{"protocol", d.protocol}, {"interface", d.interface}, {"base_id", d.base_id}, {"rate_hz", d.rate_hz}};
+  }
+  if (rig.devices.robot) {
+    const auto& d = *rig.devices.robot;
+    json r = {{"transport", d.transport}, {"unit_id", d.unit_id}, {"register_map", d.register_map}, {"rate_hz", d.rate_hz}};
+    if (d.transport == "tcp") r["host"] = d.host, r["port"] = d.port;
+    else r["serial_device"] = d.serial_device, r["baud"] = d.baud;
+    j["robot_controller"] = r;
+  }
+  if (rig.model.contact)
+    j["contact_model"] = {{"stiffness_n_per_m", rig.model.contact->stiffness_n_per_m},
+                          {"friction_coefficient", rig.model.contact->friction_coefficient},
+                          {"sticking_threshold_m_per_s", rig.model.contact->sticking_threshold_m_per_s}};
+  return j;
+}
+
+nlohmann::json run_info_json(const format::RunInfo& info) {
+  nlohmann::json j = {{"rig", info.rig}, {"start_time_utc", info.start_time_utc}, {"output_rate_hz", info.output_rate_hz},
+                      {"sources", nlohmann::json::array()}};
+  for (const auto& s : info.sources) j["sources"].push_back({{"name", s.name}, {"kind", s.kind}, {"rate_hz", s.rate_hz}, {"raw", s.raw}});
+  return j;
+}
+
+nlohmann::json run_summary_json(const format::Run& run) {
+  return {{"run_info", run_info_json(run.info)}, {"samples", samples_summary_json(run.samples)},
+          {"rig", run.rig ? rig_summary_json(*run.rig) : nlohmann::json()}};
+}
+
 void print_run_summary(std::ostream& os, const format::Run& run) {
   os << fmt::format("  recorded on rig '{}', started {}, output {} Hz\n", run.info.rig, run.info.start_time_utc, run.info.output_rate_hz);
   for (const auto& s : run.info.sources)

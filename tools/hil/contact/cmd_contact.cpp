@@ -12,6 +12,7 @@
 #include <thread>
 
 #include "../commands.hpp"
+#include "../output.hpp"
 #include "hil/format/error.hpp"
 #include "hil/format/run.hpp"
 #include "hil/diagnose/contact_family.hpp"
@@ -30,6 +31,7 @@ namespace {
 /// The hidden truth of an injected simulation, for the test that checks the diagnosis.
 nlohmann::json effects_json(const hil::diagnose::Effects& e, const cid::ContactModel& m, unsigned seed) {
   nlohmann::json j;
+  tag_format(j, "hidden_effects");
   j["effects"] = e.names();
   j["effect_seed"] = seed;
   j["K"] = m.K;
@@ -69,23 +71,19 @@ int simulate_run(const SimulateArgs& a) {
   if (a.force_noise >= 0) s.force_noise_n = a.force_noise;
   if (a.moment_noise >= 0) s.moment_noise_nm = a.moment_noise;
   if (a.seed >= 0) s.seed = static_cast<unsigned>(a.seed);
-  if (a.decimate < 1) throw std::runtime_error("--decimate must be >= 1");
+  if (a.decimate < 1) throw format::FormatError({"command line", 0, 0, "--decimate"}, "must be at least 1");
   const Eigen::VectorXd x_true = contact::uncertainty_vector(scene, truth.geometric, a.truth.empty() ? a.rig : a.truth);
   const auto traj = contact::read_trajectory(a.trajectory);
   std::vector<cid::SimulatedSample> sim;
   if (a.inject.empty()) {
-    if (!a.truth_out.empty()) throw std::runtime_error("--truth-out needs --inject");
+    if (!a.truth_out.empty()) throw format::FormatError({"command line", 0, 0, "--truth-out"}, "needs --inject");
     sim = cid::simulate(scene, truth.model, x_true, traj.kin, s);
   } else {
     hil::diagnose::Effects e;
     e.geometric = truth.geometric;
     for (const auto& name : a.inject) hil::diagnose::draw_effect(name, a.effect_seed, scene, e);
     sim = hil::diagnose::simulate_with_effects(scene, truth.model, e, traj.t, traj.kin, s);
-    if (!a.truth_out.empty()) {
-      std::ofstream f(a.truth_out);
-      f << effects_json(e, truth.model, a.effect_seed).dump(2) << "\n";
-      if (!f) throw std::runtime_error(a.truth_out + ": cannot write");
-    }
+    if (!a.truth_out.empty()) write_json(a.truth_out, effects_json(e, truth.model, a.effect_seed));
   }
 
   fs::create_directories(a.out);
@@ -109,7 +107,7 @@ int simulate_run(const SimulateArgs& a) {
   info.rig = rig.name;
   info.start_time_utc = "2026-01-01T00:00:00.000Z";
   info.output_rate_hz = rate / a.decimate;
-  info.sources.push_back({"simulation", "simulation", rate, ""});
+  info.sources.push_back({"simulation", "simulation", rate, "", {}});
   info.notes = fmt::format(
       "Simulated by `hil contact simulate` from {} ({} samples at {:.4g} Hz, decimated by {}), truth {}. Sensor: "
       "position resolution {} m, velocity resolution {} m/s, force resolution {} N (noise {} N), moment resolution {} N m "
@@ -120,7 +118,7 @@ int simulate_run(const SimulateArgs& a) {
   if (!a.inject.empty()) info.notes += " Hidden effects injected (which ones is kept out of the run).";
   format::write_run_info((fs::path(a.out) / "run.yaml").string(), info);
   fs::copy_file(a.rig, fs::path(a.out) / "rig.yaml", fs::copy_options::overwrite_existing);
-  std::cout << fmt::format("wrote run {}: {} samples at {:.4g} Hz, {} in contact (K = {:.4g} N/m, mu = {:.3g})\n", a.out,
+  human(is_stdout(a.truth_out)) << fmt::format("wrote run {}: {} samples at {:.4g} Hz, {} in contact (K = {:.4g} N/m, mu = {:.3g})\n", a.out,
                            table.samples.size(), info.output_rate_hz, in_contact, truth.model.K, truth.model.mu);
   return 0;
 }
@@ -148,15 +146,12 @@ int identify(const IdentifyArgs& a) {
   o.lcurve_points = a.lcurve_points;
   o.include_weak = a.include_weak;
   const auto r = contact::identify(problem, o);
-  contact::print(std::cout, problem, r);
-  if (!a.json.empty()) {
-    std::ofstream f(a.json);
-    f << contact::to_json(problem, r).dump(2) << "\n";
-    if (!f) throw std::runtime_error(a.json + ": cannot write");
-  }
+  auto& text = human(is_stdout(a.json));
+  contact::print(text, problem, r);
+  if (!a.json.empty()) write_json(a.json, contact::to_json(problem, r));
   if (!a.report.empty()) {
     contact::write_report(a.report, fs::path(a.run).filename().string(), problem, r);
-    std::cout << "report: " << (fs::path(a.report) / "index.html").string() << "\n";
+    text << "report: " << (fs::path(a.report) / "index.html").string() << "\n";
   }
   return 0;
 }
@@ -186,7 +181,7 @@ void add_contact(CLI::App& app) {
                   "sensor_bias, sensor_gain, viscous_friction, contact_damping, nonlinear_stiffness); repeatable")
       ->delimiter(',');
   sim->add_option("--effect-seed", sa.effect_seed, "seed of the injected effects' random magnitudes")->capture_default_str();
-  sim->add_option("--truth-out", sa.truth_out, "write the injected effects (the hidden truth) as JSON");
+  sim->add_option("--truth-out", sa.truth_out, "write the injected effects (the hidden truth) as JSON (hil.hidden_effects; - for stdout)");
   sim->callback([] { set_action([] { return simulate_run(sa); }); });
 
   static IdentifyArgs ia;
@@ -200,7 +195,7 @@ void add_contact(CLI::App& app) {
   id->add_option("--jacobian", ia.jacobian, "golub-pereyra or kaufman (lm only)")->capture_default_str();
   id->add_option("--window", ia.window, "sliding window (samples) of the instantaneous estimates")->capture_default_str();
   id->add_option("--lcurve-points", ia.lcurve_points, "values of lambda on the L-curve")->capture_default_str();
-  id->add_option("--json", ia.json, "write the results as JSON");
+  id->add_option("--json", ia.json, "write the results as JSON (hil.contact_identification; - for stdout, the text then goes to stderr)");
   id->add_option("--report", ia.report, "write an HTML report into this folder");
   id->callback([] { set_action([] { return identify(ia); }); });
 

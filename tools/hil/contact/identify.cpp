@@ -1,4 +1,5 @@
 #include "identify.hpp"
+#include "../output.hpp"
 #include "hil/format/error.hpp"
 #include "rig_adapter.hpp"
 
@@ -197,6 +198,7 @@ nlohmann::json to_json(const cid::ContactProblem& p, const IdentifyResult& r) {
   using nlohmann::json;
   const auto& e = r.geometric ? r.geometric->theta : r.nominal;
   json j;
+  tag_format(j, "contact_identification");
   j["K"] = num_or_null(e.K);
   j["K_std"] = num_or_null(e.K_std);
   j["mu"] = e.mu_identifiable ? num_or_null(e.mu) : json();

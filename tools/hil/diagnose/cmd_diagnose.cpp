@@ -8,6 +8,7 @@
 #include <iostream>
 
 #include "../commands.hpp"
+#include "../output.hpp"
 #include "hil/format/run.hpp"
 #include "run_diagnosis.hpp"
 
@@ -26,7 +27,6 @@ int diagnose_cmd(const DiagnoseArgs& a) {
   diagnose::Options o;
   o.candidates = a.candidates;
   o.folds = a.folds;
-  if (o.folds < 2) throw std::runtime_error("--folds must be at least 2");
   const bool tty = isatty(STDERR_FILENO) != 0;
   if (!a.quiet)
     o.progress = [tty](int step, int total, const std::string& what) {
@@ -39,15 +39,12 @@ int diagnose_cmd(const DiagnoseArgs& a) {
   const auto r = std::filesystem::is_regular_file(a.run) ? diagnose::diagnose_table(a.run, a.rig, o)
                                                           : diagnose::diagnose_run(format::load_run(a.run, a.rig), o);
   if (!a.quiet && tty) std::cerr << "\r" << std::string(80, ' ') << "\r";
-  diagnose::print_summary(std::cout, r);
-  if (!a.json.empty()) {
-    std::ofstream f(a.json);
-    f << diagnose::to_json(r).dump(2) << "\n";
-    if (!f) throw std::runtime_error(a.json + ": cannot write");
-  }
+  auto& text = human(is_stdout(a.json));
+  diagnose::print_summary(text, r);
+  if (!a.json.empty()) write_json(a.json, diagnose::to_json(r));
   if (!a.report.empty()) {
     diagnose::write_report(a.report, r);
-    std::cout << "report: " << (std::filesystem::path(a.report) / "index.html").string() << "\n";
+    text << "report: " << (std::filesystem::path(a.report) / "index.html").string() << "\n";
   }
   return 0;
 }
@@ -60,10 +57,10 @@ void add_diagnose(CLI::App& app) {
                                "What the nominal model gets wrong on a run, the named cause, the extended model and its held-out gain");
   d->add_option("RUN", da.run, "run folder, or a stiffness-experiment table (CSV, with --rig of its robot)")->required();
   d->add_option("--rig", da.rig, "rig file (default: the run's rig.yaml)");
-  d->add_option("--json", da.json, "write the diagnosis as JSON");
+  d->add_option("--json", da.json, "write the diagnosis as JSON (hil.diagnosis; - for stdout, the summary then goes to stderr)");
   d->add_option("--report", da.report, "write an HTML report into this folder");
   d->add_option("--candidates", da.candidates, "only these candidate causes (default: all that apply)")->delimiter(',');
-  d->add_option("--folds", da.folds, "blocks of the cross-validation over time")->capture_default_str();
+  d->add_option("--folds", da.folds, "blocks of the cross-validation over time")->capture_default_str()->check(CLI::Range(2, 1000));
   d->add_flag("--quiet", da.quiet, "no progress lines");
   d->callback([] { set_action([] { return diagnose_cmd(da); }); });
 }

@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <fstream>
 
+#include "../output.hpp"
 #include "hil/format/error.hpp"
 #include "hil/report/html.hpp"
 #include "rig_adapter.hpp"
@@ -93,7 +94,8 @@ nlohmann::json params_json(const dg::Fit& f, bool extension_only) {
 static std::vector<std::string> checked_candidates(const Options& o, const std::vector<std::string>& all) {
   for (const auto& c : o.candidates)
     if (std::find(all.begin(), all.end(), c) == all.end())
-      throw std::runtime_error(fmt::format("--candidates: '{}' is not a candidate here (expected one of {})", c, fmt::join(all, ", ")));
+      throw format::FormatError({"command line", 0, 0, "--candidates"},
+                                fmt::format("'{}' is not a candidate here (expected one of {})", c, fmt::join(all, ", ")));
   return o.candidates.empty() ? all : o.candidates;
 }
 
@@ -226,6 +228,7 @@ nlohmann::json to_json(const RunDiagnosis& r) {
   const auto& d = r.result;
   const auto& obs = r.obs();
   nlohmann::json j;
+  tag_format(j, "diagnosis");
   j["run"] = r.run_name;
   j["mode"] = r.mode;
   j["samples"] = obs.size();

@@ -9,6 +9,7 @@
 #include <thread>
 
 #include "../commands.hpp"
+#include "../output.hpp"
 #include "hil/calibration/experiment.hpp"
 #include "hil/calibration/online.hpp"
 #include "hil/dds/topics.hpp"
@@ -106,24 +107,16 @@ void add_reduction_options(CLI::App* cmd, ReductionArgs& a) {
   cmd->add_option("--template", a.templates, "M2 template for a link: Lk=beam|full|<36 digits 0/1, row-major>");
 }
 
-std::ostream& output(const std::string& path, std::ofstream& file) {
-  if (path.empty() || path == "-") return std::cout;
-  file.open(path);
-  if (!file) throw std::runtime_error(path + ": cannot write");
-  return file;
-}
-
 // ---- identify
 int identify(const std::string& data_path, const std::string& rig, const std::string& json_out, const ReductionArgs& a) {
   const hc::VjmModel model(load_robot(rig));
   const auto table = read_stiffness_table(data_path, model.dof(), true);
   const auto opt = pipeline_options(a, model);
   const auto r = hc::calibrate(model, table.rows, {a.noise_pos_m, a.noise_rot_rad}, opt);
-  print_report(std::cout, model, r);
+  print_report(human(is_stdout(json_out)), model, r);
   if (!json_out.empty()) {
-    std::ofstream f;
-    output(json_out, f) << result_to_json(model, r).dump(2) << '\n';
-    if (json_out != "-") spdlog::info("model written to {}", json_out);
+    write_json(json_out, result_to_json(model, r));
+    if (!is_stdout(json_out)) spdlog::info("model written to {}", json_out);
   }
   return 0;
 }
@@ -136,6 +129,7 @@ struct ModelFile {
 
 ModelFile load_model(const std::string& path, const std::string& rig) {
   const auto j = load_json(path);
+  check_model_format(j, path, false);
   if (!j.is_object() || !j.contains("springs")) throw FormatError({path, 0, 0, "springs"}, "a model file needs a \"springs\" object");
   hc::SerialRobot robot;
   if (!rig.empty()) robot = load_robot(rig);
@@ -149,8 +143,8 @@ ModelFile load_model(const std::string& path, const std::string& rig) {
 int predict(const std::string& model_path, const std::string& data_path, const std::string& rig, bool compensate, const std::string& out_path) {
   const auto mf = load_model(model_path, rig);
   const auto table = read_stiffness_table(data_path, mf.model.dof(), false);
-  std::ofstream f;
-  std::ostream& os = output(out_path, f);
+  Output out(out_path.empty() ? "-" : out_path);
+  std::ostream& os = out.stream();
   const int n = mf.model.dof();
   const auto& first = table.rows.front();
   const bool markers = first.kind == hc::MeasurementKind::markers;
@@ -193,6 +187,7 @@ int predict(const std::string& model_path, const std::string& data_path, const s
     }
     os << '\n';
   }
+  out.close();
   return 0;
 }
 
@@ -213,6 +208,7 @@ struct SimArgs {
 int simulate(const SimArgs& a) {
   const hc::VjmModel model(load_robot(a.rig));
   const auto j = load_json(a.truth);
+  check_model_format(j, a.truth, false);
   if (!j.is_object() || !j.contains("springs")) throw FormatError({a.truth, 0, 0, "springs"}, "a truth file needs a \"springs\" object");
   const auto truth = read_springs(j.at("springs"), model, a.truth);
   for (const auto& c : hc::check_spd(model, truth))
@@ -235,11 +231,12 @@ int simulate(const SimArgs& a) {
   if (plan.kind == hc::MeasurementKind::markers && plan.p_ee_marker_m.empty())
     throw FormatError({"command line", 0, 0, "--marker"}, "--measure markers needs at least one --marker X,Y,Z");
   const auto rows = hc::simulate(model, truth, plan, {a.noise_pos_m, a.noise_rot_rad});
-  std::ofstream f;
-  std::ostream& os = output(a.out, f);
+  Output out(a.out.empty() ? "-" : a.out);
+  std::ostream& os = out.stream();
   os << fmt::format("# hil stiffness simulate: rig {}, truth {}, seed {}, noise σ {} m / {} rad\n", a.rig, a.truth, a.seed, a.noise_pos_m,
                     a.noise_rot_rad);
   write_stiffness_table(os, rows, model.dof());
+  out.close();
   return 0;
 }
 
@@ -332,6 +329,7 @@ int worker(const std::string& rig, const std::string& model_path, const Reductio
     // Keep the reduced model of an earlier `identify --json`: its kept parameters are estimated,
     // its fixed ones stay at their values.
     const auto j = load_json(model_path);
+    check_model_format(j, model_path, true);
     const auto all = hc::m1_symmetrise(hc::complete_parameters(model));
     auto lookup = [&](const nlohmann::json& e, const char* list) {
       const std::string name = e.at("name").get<std::string>();
@@ -388,7 +386,7 @@ void add_stiffness(CLI::App& app) {
     static ReductionArgs a;
     cmd->add_option("DATA", data, "stiffness-experiment table (CSV, docs/calibration.md)")->required();
     cmd->add_option("--rig", rig, "rig file with the robot's DH table")->required();
-    cmd->add_option("--json", json, "write the report and the identified model as JSON (- for stdout)");
+    cmd->add_option("--json", json, "write the report and the identified model as JSON (hil.stiffness_model; - for stdout, the text report then goes to stderr)");
     add_reduction_options(cmd, a);
     cmd->callback([] { set_action([] { return identify(data, rig, json, a); }); });
   }
@@ -400,7 +398,7 @@ void add_stiffness(CLI::App& app) {
     cmd->add_option("--data", data, "table of configurations and loads (measured columns optional)")->required();
     cmd->add_option("--rig", rig, "rig file (default: the robot stored in the model)");
     cmd->add_flag("--compensate", compensate, "also print the target pose, the compensated pose and joints");
-    cmd->add_option("--out", out, "output CSV (default stdout)");
+    cmd->add_option("--out", out, "output CSV (default or -: stdout)");
     cmd->callback([] { set_action([] { return predict(model, data, rig, compensate, out); }); });
   }
   {
@@ -417,7 +415,7 @@ void add_stiffness(CLI::App& app) {
     cmd->add_option("--noise-pos-m", a.noise_pos_m, "position noise σ, m")->capture_default_str();
     cmd->add_option("--noise-rot-rad", a.noise_rot_rad, "rotation noise σ, rad")->capture_default_str();
     cmd->add_option("--seed", a.seed, "random seed")->capture_default_str();
-    cmd->add_option("--out", a.out, "output CSV (default stdout)");
+    cmd->add_option("--out", a.out, "output CSV (default or -: stdout)");
     cmd->callback([] { set_action([] { return simulate(a); }); });
   }
   {

@@ -7,6 +7,7 @@
 #include <map>
 #include <sstream>
 
+#include "../output.hpp"
 #include "hil/calibration/experiment.hpp"
 #include "hil/format/csv.hpp"
 #include "hil/format/error.hpp"
@@ -363,10 +364,28 @@ const char* const kAxis[] = {"dx", "dy", "dz", "rx", "ry", "rz"};
 
 }  // namespace
 
+void check_model_format(const nlohmann::json& j, const std::string& file, bool required) {
+  const std::string want = "hil.stiffness_model";
+  if (!j.is_object()) throw FormatError({file, 0, 0, ""}, "expected a JSON object (a " + want + " file)");
+  if (!j.contains("format")) {
+    if (required) throw FormatError({file, 0, 0, "format"}, "not a stiffness model: no \"format\": \"" + want + "\" (write one with `hil stiffness identify --json`)");
+    return;
+  }
+  const auto& f = j.at("format");
+  const std::string kind = f.is_string() ? f.get<std::string>() : f.dump();
+  if (kind != want && kind != "hil-stiffness-model")
+    throw FormatError({file, 0, 0, "format"}, "this is a '" + kind + "' file, not a stiffness model (" + want + ", written by `hil stiffness identify --json`)");
+  if (j.contains("format_version")) {
+    const auto& v = j.at("format_version");
+    if (!v.is_number_integer() || v.get<long>() < 1 || v.get<long>() > kJsonFormatVersion)
+      throw FormatError({file, 0, 0, "format_version"}, fmt::format("expected 1 to {} (this hil's version of {}), found {}", kJsonFormatVersion, want, v.dump()));
+  }
+}
+
 nlohmann::json result_to_json(const hc::VjmModel& model, const hc::CalibrationResult& r) {
   nlohmann::json j;
-  j["format"] = "hil-stiffness-model";
-  j["version"] = 1;
+  tag_format(j, "stiffness_model");
+  j["version"] = kJsonFormatVersion;  // the key of files before "format_version", kept for their readers
   j["parameters"] = nlohmann::json::array();
   for (const auto& p : r.kept)
     j["parameters"].push_back({{"name", p.parameter.name}, {"value", p.value}, {"std", number_or_null(p.std_dev)},

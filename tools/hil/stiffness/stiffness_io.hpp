@@ -37,6 +37,11 @@ calibration::SerialRobot robot_from_json(const nlohmann::json& j, const std::str
 /// Parses a JSON file. \throws FormatError on syntax errors (with the byte offset).
 nlohmann::json load_json(const std::string& path);
 
+/// Refuses a JSON file of another kind than a stiffness model ("format": "hil.stiffness_model",
+/// or the earlier "hil-stiffness-model"), naming the file and what it is. A file without a
+/// "format" is accepted unless `required` (hand-written truth files need not carry one).
+void check_model_format(const nlohmann::json& j, const std::string& file, bool required);
+
 /// The identify report as JSON (also a model file for predict and worker).
 nlohmann::json result_to_json(const calibration::VjmModel& model, const calibration::CalibrationResult& r);
 /// The text report: reduction table beside the paper's, parameters, rank, residuals, SPD checks.
