@@ -3,6 +3,7 @@
 // (built by the commands' own to_json) as dicts, plus arrays a plot needs. The GIL is released
 // while C++ computes. Docs: docs/python.md.
 #include <pybind11/stl.h>
+#include <pybind11/stl/filesystem.h>  // paths as str or os.PathLike
 
 #include <cmath>
 #include <filesystem>
@@ -84,7 +85,7 @@ py::dict instant_dict(const std::vector<cid::InstantEstimate>& v) {
   return d;
 }
 
-py::dict identify_contact(const std::string& run_path, const std::string& rig, bool geometric, const std::string& lambda,
+py::dict identify_contact(const Path& run_path, const Path& rig, bool geometric, const std::string& lambda,
                           const std::string& solver, const std::string& jacobian, int window, int lcurve_points,
                           bool include_weak) {
   if (window < 1) throw py::value_error("window: expected >= 1 used samples, got " + std::to_string(window));
@@ -94,7 +95,7 @@ py::dict identify_contact(const std::string& run_path, const std::string& rig, b
   std::vector<cid::InstantEstimate> inst, win;
   {
     py::gil_scoped_release free;
-    const auto run = format::load_run(run_path, rig);
+    const auto run = format::load_run(run_path.string(), rig.string());
     const auto problem = cli::contact::problem_from_run(run);
     cli::contact::IdentifyOptions o;
     o.geometric = geometric;
@@ -126,7 +127,7 @@ py::dict identify_contact(const std::string& run_path, const std::string& rig, b
   return d;
 }
 
-py::dict diagnose(const std::string& path, const std::string& rig, const std::vector<std::string>& candidates, int folds) {
+py::dict diagnose(const Path& path, const Path& rig, const std::vector<std::string>& candidates, int folds) {
   if (folds < 2) throw py::value_error("folds: must be at least 2, got " + std::to_string(folds));
   nlohmann::json j;
   {
@@ -135,14 +136,14 @@ py::dict diagnose(const std::string& path, const std::string& rig, const std::ve
     o.candidates = candidates;
     o.folds = folds;
     // A file is a stiffness-experiment table, a folder a run (as `hil diagnose`).
-    const auto r = std::filesystem::is_regular_file(path) ? cli::diagnose::diagnose_table(path, rig, o)
-                                                          : cli::diagnose::diagnose_run(format::load_run(path, rig), o);
+    const auto r = std::filesystem::is_regular_file(path) ? cli::diagnose::diagnose_table(path.string(), rig.string(), o)
+                                                          : cli::diagnose::diagnose_run(format::load_run(path.string(), rig.string()), o);
     j = cli::diagnose::to_json(r);
   }
   return to_python(j);
 }
 
-py::dict identify_stiffness(const std::string& table_path, const std::string& rig, double noise_pos_m, double noise_rot_rad,
+py::dict identify_stiffness(const Path& table_path, const Path& rig, double noise_pos_m, double noise_rot_rad,
                             double neglect_below) {
   if (!(noise_pos_m >= 0.0) || !(noise_rot_rad >= 0.0))
     throw py::value_error("noise_pos_m, noise_rot_rad: expected >= 0 (0: estimated from the residuals)");
@@ -150,8 +151,8 @@ py::dict identify_stiffness(const std::string& table_path, const std::string& ri
   nlohmann::json j;
   {
     py::gil_scoped_release free;
-    const calibration::VjmModel model(cli::stiffness::load_robot(rig));
-    const auto table = cli::stiffness::read_stiffness_table(table_path, model.dof(), true);
+    const calibration::VjmModel model(cli::stiffness::load_robot(rig.string()));
+    const auto table = cli::stiffness::read_stiffness_table(table_path.string(), model.dof(), true);
     calibration::PipelineOptions o;  // the defaults of `hil stiffness identify`
     o.neglect_below = neglect_below;
     const auto r = calibration::calibrate(model, table.rows, {noise_pos_m, noise_rot_rad}, o);

@@ -1,6 +1,7 @@
 // read_samples / read_run / read_rig: the project's strict readers (every error names file, line,
 // column or field), their results as numpy arrays and dicts. Docs: docs/python.md.
 #include <pybind11/stl.h>
+#include <pybind11/stl/filesystem.h>  // paths as str or os.PathLike
 
 #include <cmath>
 #include <cstdint>
@@ -284,11 +285,11 @@ py::dict rig_dict(const fmt_::RigSpec& rig) {
 void add_readers(py::module_& m) {
   m.def(
       "read_samples",
-      [](const std::string& path) {
+      [](const Path& path) {
         fmt_::SampleTable t;
         {
           py::gil_scoped_release free;
-          t = fmt_::read_samples(path);
+          t = fmt_::read_samples(path.string());
         }
         return samples_dict(t);
       },
@@ -298,11 +299,11 @@ void add_readers(py::module_& m) {
       "joints (N,J) rad; joint_names, columns, extra {name: values}, line (source line per sample), file.");
   m.def(
       "read_run",
-      [](const std::string& path, const std::string& rig) {
+      [](const Path& path, const Path& rig) {
         fmt_::Run run;
         {
           py::gil_scoped_release free;
-          run = fmt_::load_run(path, rig);
+          run = fmt_::load_run(path.string(), rig.string());
         }
         py::dict d = samples_dict(run.samples);
         d["dir"] = run.dir;
@@ -315,11 +316,11 @@ void add_readers(py::module_& m) {
       "rig file given, else the run's rig.yaml, else None) and dir.");
   m.def(
       "read_rig",
-      [](const std::string& path) {
+      [](const Path& path) {
         fmt_::RigSpec rig;
         {
           py::gil_scoped_release free;
-          rig = fmt_::load_rig(path);
+          rig = fmt_::load_rig(path.string());
         }
         return rig_dict(rig);
       },
