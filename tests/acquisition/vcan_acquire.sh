@@ -14,6 +14,11 @@ CD=$!
 sleep 0.3
 PORT=${HIL_FAKE_PORT:-15020}
 start_fake_rig "$SRC/examples/runs/press_slide" $PORT
+# The bring-up check (docs/hardware.md) against the separate fake-rig process, over vcan0.
+"$HIL" acquire --rig "$WORK/rig.yaml" --can-interface vcan0 --robot-port $PORT --check > "$WORK/check.txt" 2>&1 ||
+  { echo "hil acquire --check failed:"; cat "$WORK/check.txt"; cat "$WORK/fake-rig.log"; exit 1; }
+grep -q "serial *FT-FAKE1" "$WORK/check.txt" && grep -q "on vcan0" "$WORK/check.txt" && grep -q "check passed" "$WORK/check.txt" ||
+  { echo "hil acquire --check did not print the plate's identity on vcan0:"; cat "$WORK/check.txt"; exit 1; }
 acquire_from_fake_rig $PORT "${HIL_DDS_DOMAIN:-171}"
 kill $FR $CD; wait $FR 2>/dev/null || true; wait $CD 2>/dev/null || true
 "$HIL" validate "$WORK/run" > "$WORK/validate.txt"

@@ -140,6 +140,40 @@ class Cli(unittest.TestCase):
         finally:
             shutil.rmtree(out)
 
+    def test_acquire_check_reads_each_device_once(self):
+        import re
+        r = hil("acquire", "--rig", EXAMPLE_RIG, "--play", EXAMPLE_RUN, "--check")
+        self.assertEqual(r.returncode, 0, r.stdout + r.stderr)
+        for want in ("serial             FT-FAKE1", "firmware           1.0.42", "counts_per_force   1000\n",
+                     "register_map       ur", "server_text        LMB", "joints", "check passed"):
+            self.assertIn(want, r.stdout)
+        # The pose read over Modbus is the played run's start (pz 0.054 m, moving 4 mm/s), in world.
+        m = re.search(r"pose +p \[(\S+), (\S+), (\S+)\] m", r.stdout)
+        self.assertIsNotNone(m, r.stdout)
+        self.assertAlmostEqual(float(m.group(3)), 0.054, delta=0.003)
+        m = re.search(r"wrench +f \[(\S+), (\S+), (\S+)\] N", r.stdout)
+        self.assertIsNotNone(m, r.stdout)
+        self.assertLess(abs(float(m.group(3))), 5.0)  # no contact yet at the run's start
+
+    def test_acquire_check_names_the_device_that_does_not_answer(self):
+        import socket
+        s = socket.socket()
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+        s.close()  # nothing listens there now
+        r = hil("acquire", "--rig", EXAMPLE_RIG, "--play", EXAMPLE_RUN, "--robot-port", str(port), "--check")
+        self.assertEqual(r.returncode, 1, r.stdout + r.stderr)
+        robot = r.stdout[r.stdout.index("robot controller"):]
+        self.assertIn("FAILED", robot)
+        self.assertIn("onnect", robot)  # connect failed: Connection refused
+        self.assertIn("serial             FT-FAKE1", r.stdout)  # the plate was still checked
+        self.assertIn("check failed", r.stdout)
+
+    def test_acquire_needs_out_unless_check(self):
+        r = hil("acquire", "--rig", EXAMPLE_RIG, "--play", EXAMPLE_RUN)
+        self.assertNotEqual(r.returncode, 0)
+        self.assertIn("--out", r.stdout + r.stderr)
+
     def test_acquire_refuses_to_overwrite_a_run(self):
         r = hil("acquire", "--rig", EXAMPLE_RIG, "--out", EXAMPLE_RUN, "--play", EXAMPLE_RUN)
         self.assertNotEqual(r.returncode, 0)
@@ -166,7 +200,12 @@ class Cli(unittest.TestCase):
             r = hil("validate", run)
             self.assertEqual(r.returncode, 0, r.stderr)
             with open(os.path.join(run, "run.yaml")) as f:
-                self.assertIn("Samples:", f.read())  # the closing summary
+                text = f.read()
+            self.assertIn("Samples:", text)  # the closing summary
+            # What the devices said about themselves (docs/hardware.md), under their sources.
+            self.assertIn('serial: "FT-FAKE1"', text)
+            self.assertIn('firmware: "1.0.42"', text)
+            self.assertIn('register_map: "ur"', text)
         finally:
             shutil.rmtree(out)
 
@@ -177,6 +216,8 @@ class Cli(unittest.TestCase):
             self.assertEqual(rc, -9)
             r = hil("validate", run)
             self.assertEqual(r.returncode, 0, r.stderr)
+            with open(os.path.join(run, "run.yaml")) as f:
+                self.assertIn('serial: "FT-FAKE1"', f.read())  # written as soon as the devices started
             m = __import__("re").search(r"samples: (\d+), duration ([0-9.]+) s", r.stdout)
             self.assertIsNotNone(m, r.stdout)
             # 3.5 s after start, flushed every second: at least ~1.5 s of 50 Hz samples are there.

@@ -1,6 +1,7 @@
 #pragma once
 // The acquisition run behind `hil acquire`, reusable by `hil demo`.
 #include <functional>
+#include <ostream>
 #include <string>
 #include <vector>
 
@@ -41,6 +42,10 @@ struct AcquireResult {
 /// Runs one acquisition to its end (duration, played run's end, or Ctrl-C). \throws on bad
 /// configuration or a device that cannot be started.
 AcquireResult run_acquisition(const AcquireOptions& o, const std::function<void(const acquisition::SyncedSample&)>& observer);
+
+/// `hil acquire --check`: each device's identity and one reading, printed to `out`.
+/// \returns 0 when every device answered, 1 otherwise. \throws on a bad rig file.
+int run_check(const AcquireOptions& o, std::ostream& out);
 
 void add_acquire(CLI::App& app);
 
