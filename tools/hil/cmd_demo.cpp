@@ -21,6 +21,7 @@
 #include "contact/worker.hpp"
 #include "run_diagnosis.hpp"
 #include "commands.hpp"
+#include "data_dir.hpp"
 #include "hil/acquisition/recorder.hpp"
 #include "hil/dds/bus.hpp"
 #include "hil/dds/topics.hpp"
@@ -30,8 +31,9 @@
 namespace hil::cli {
 namespace {
 struct DemoOptions {
-  std::string trajectory = std::string(HIL_SOURCE_DIR) + "/examples/acu/traj_2a.csv";
-  std::string rig = std::string(HIL_SOURCE_DIR) + "/examples/acu/acu.yaml";
+  // Defaults from hil's data dir (data_dir.hpp); empty if it is missing, refused when run.
+  std::string trajectory = data_file_or_empty("examples/acu/traj_2a.csv");
+  std::string rig = data_file_or_empty("examples/acu/acu.yaml");
   int decimate = 20;  ///< the 1 kHz trajectory to the paper's 50 Hz
   std::string out;
   double speed = 1.0;
@@ -175,7 +177,13 @@ void add_demo(CLI::App& app) {
   cmd->add_option("--out", o.out, "where to record (default: a new folder under the temp directory)");
   cmd->add_option("--speed", o.speed, "playback speed")->capture_default_str();
   cmd->add_option("--decimate", o.decimate, "keep every n-th trajectory sample")->capture_default_str()->check(CLI::Range(1, 1000));
-  cmd->callback([] { set_action([] { return demo(o); }); });
+  cmd->callback([] {
+    set_action([] {
+      if (o.trajectory.empty()) o.trajectory = data_file("examples/acu/traj_2a.csv").string();
+      if (o.rig.empty()) o.rig = data_file("examples/acu/acu.yaml").string();
+      return demo(o);
+    });
+  });
 }
 
 }  // namespace hil::cli
