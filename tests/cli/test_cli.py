@@ -64,6 +64,10 @@ class Cli(unittest.TestCase):
         self.usage_error(["diagnose", EXAMPLE_RUN, "--folds", "1"], "--folds", "1", hint="hil diagnose")
         self.usage_error(["diagnose", EXAMPLE_RUN, "--folds", "many"], "--folds", "many", hint="hil diagnose")
         self.usage_error(["--log-level", "loud", "validate", EXAMPLE_RUN], "--log-level", "loud", hint="hil validate")
+        self.usage_error(["contact", "identify", EXAMPLE_RUN, "--solver", "newton"], "--solver", "newton",
+                         hint="hil contact identify")
+        self.usage_error(["contact", "identify", EXAMPLE_RUN, "--geometric", "--lambda", "-1"], "--lambda", "'-1'",
+                         hint="hil contact identify")
         # Help is not an error.
         for args in (["--help"], ["stiffness", "identify", "--help"]):
             r = hil(*args)
