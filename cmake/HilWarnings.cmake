@@ -7,6 +7,7 @@ if(HIL_WERROR)
   target_compile_options(hil_warnings INTERFACE -Werror)
 endif()
 
+# BUILD_INTERFACE: a static library's private links go into its export; the flags must not.
 function(hil_target_warnings target)
-  target_link_libraries(${target} PRIVATE hil_warnings)
+  target_link_libraries(${target} PRIVATE $<BUILD_INTERFACE:hil_warnings>)
 endfunction()
