@@ -127,18 +127,40 @@ py::dict identify_contact(const Path& run_path, const Path& rig, bool geometric,
   return d;
 }
 
-py::dict diagnose(const Path& path, const Path& rig, const std::vector<std::string>& candidates, int folds) {
+/// Thrown out of the progress hook to stop a diagnosis for a pending Python exception (Ctrl-C, or
+/// the callback's own). Not a std::exception, so that the command's catch-alls let it through.
+struct StopForPython {};
+
+py::dict diagnose(const Path& path, const Path& rig, const std::vector<std::string>& candidates, int folds,
+                  const py::object& progress) {
   if (folds < 2) throw py::value_error("folds: must be at least 2, got " + std::to_string(folds));
+  if (!progress.is_none() && !PyCallable_Check(progress.ptr()))
+    throw py::type_error("progress: expected a callable (step, total, what) or None");
   nlohmann::json j;
-  {
+  std::exception_ptr python_error;
+  try {
     py::gil_scoped_release free;
     cli::diagnose::Options o;
     o.candidates = candidates;
     o.folds = folds;
+    // Between steps, with the GIL: Ctrl-C (signals reach Python only while it runs) and the callback.
+    o.progress = [&](int step, int total, const std::string& what) {
+      py::gil_scoped_acquire hold;
+      try {
+        if (PyErr_CheckSignals() != 0) throw py::error_already_set();
+        if (!progress.is_none()) progress(step, total, what);
+      } catch (const py::error_already_set&) {
+        python_error = std::current_exception();
+        throw StopForPython{};
+      }
+    };
     // A file is a stiffness-experiment table, a folder a run (as `hil diagnose`).
-    const auto r = std::filesystem::is_regular_file(path) ? cli::diagnose::diagnose_table(path.string(), rig.string(), o)
-                                                          : cli::diagnose::diagnose_run(format::load_run(path.string(), rig.string()), o);
+    const auto r = std::filesystem::is_regular_file(path)
+                       ? cli::diagnose::diagnose_table(path.string(), rig.string(), o)
+                       : cli::diagnose::diagnose_run(format::load_run(path.string(), rig.string()), o);
     j = cli::diagnose::to_json(r);
+  } catch (const StopForPython&) {
+    std::rethrow_exception(python_error);  // the GIL is held again: raise the Python exception
   }
   return to_python(j);
 }
@@ -171,9 +193,10 @@ void add_numerics(py::module_& m) {
         "plus K_ci95 / mu_ci95 (95 % intervals), fit (measured, model and residual plate wrench per sample in "
         "contact), instantaneous and window estimates.");
   m.def("diagnose", &diagnose, py::arg("path"), py::arg("rig") = "", py::arg("candidates") = std::vector<std::string>{},
-        py::arg("folds") = 5,
+        py::arg("folds") = 5, py::arg("progress") = py::none(),
         "The diagnosis of a run folder (or of a stiffness table with rig=), as `hil diagnose --json`: cause, "
-        "second_cause, candidates with held-out gain, the extended model's parameters with intervals.");
+        "second_cause, candidates with held-out gain, the extended model's parameters with intervals. "
+        "progress(step, total, what) is called before each step; Ctrl-C stops between steps.");
   m.def("identify_stiffness", &identify_stiffness, py::arg("table"), py::arg("rig"), py::arg("noise_pos_m") = 0.0,
         py::arg("noise_rot_rad") = 0.0, py::arg("neglect_below") = 2.0,
         "Elastostatic calibration of the rig's robot from a stiffness-experiment table, as "

@@ -242,6 +242,28 @@ def test_diagnose_names_a_hidden_sensor_bias(tmp_path):
         hil.diagnose(str(run), folds=1)
 
 
+def test_diagnose_progress_and_stopping_it():
+    seen = []
+    d = hil.diagnose(RUN, candidates=["sensor_bias", "sensor_gain"], progress=lambda *a: seen.append(a))
+    assert d["cause"]["name"] == "none"  # the run is the rig's own model with sensor noise
+    total = seen[0][1]  # the nominal model, each candidate, the second-step pairs the engine allows
+    assert seen[0] == (1, total, "nominal") and total >= 3
+    assert [s[2] for s in seen[1:3]] == ["sensor_bias", "sensor_gain"]
+    assert [s[0] for s in seen] == sorted(s[0] for s in seen) and seen[-1][:2] == (total, total)
+
+    class Stop(Exception):
+        pass
+
+    def stop_at_the_second_step(step, total, what):
+        if step == 2:
+            raise Stop(what)
+
+    with pytest.raises(Stop, match="sensor_bias"):  # the callback's own exception, unchanged
+        hil.diagnose(RUN, candidates=["sensor_bias", "sensor_gain"], progress=stop_at_the_second_step)
+    with pytest.raises(TypeError, match="progress"):
+        hil.diagnose(RUN, progress=3)
+
+
 def test_diagnose_a_stiffness_table():
     # The shipped table's robot has compliant links the joint-compliance model lacks.
     d = hil.diagnose(STIFF_TABLE, rig=STIFF_RIG)
