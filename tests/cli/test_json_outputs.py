@@ -137,9 +137,20 @@ class JsonOutputs(unittest.TestCase):
         self.assertEqual(self.check("diagnosis", self.stdout_json(r))["mode"], "stiffness")
 
     def test_contact_identification(self):
-        d = self.check("contact_identification", self.stdout_json(hil("contact", "identify", RUN, "--json", "-")))
+        rep = os.path.join(self.dir, "report")
+        r = hil("contact", "identify", RUN, "--json", "-", "--report", rep)
+        d = self.check("contact_identification", self.stdout_json(r))
         self.assertGreater(d["K"], 0)
         self.assertEqual(d["samples"], 325)
+        self.assertIn("report:", r.stderr)
+        # Series on different x (instantaneous estimates, a two-point global line): x and y per series.
+        [k_csv] = glob.glob(os.path.join(rep, "figures", "*-k-nominal-geometry.csv"))
+        with open(k_csv) as f:
+            rows = list(csv.reader(f))
+        self.assertEqual(rows[0], ["instantaneous: t (s)", "instantaneous (N/m)", "sliding window: t (s)",
+                                   "sliding window (N/m)", "global: t (s)", "global (N/m)"])
+        self.assertEqual(sum(1 for row in rows[1:] if row[5] != ""), 2)
+        self.assertAlmostEqual(float(rows[1][5]), d["nominal"]["K"], delta=1e-9 * d["nominal"]["K"])
         out = os.path.join(self.dir, "c.json")
         r = hil("contact", "identify", RUN, "--geometric", "--lcurve-points", "4", "--json", out)
         self.assertEqual(r.returncode, 0, r.stderr)
