@@ -96,6 +96,7 @@ std::vector<std::string> close_names(const std::string& word, const std::vector<
 
 int report_parse_error(const CLI::App& app, const CLI::ParseError& e, std::ostream& err) {
   if (e.get_exit_code() == 0) return app.exit(e);  // --help, --help-all, --version
+  if (dynamic_cast<const CLI::RuntimeError*>(&e) != nullptr) return app.exit(e);  // a callback's chosen exit status
   std::string path;
   const CLI::App* at = culprit(app, path);
   const auto rest = at->remaining(false);
