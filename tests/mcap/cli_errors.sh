@@ -1,0 +1,28 @@
+#!/bin/bash
+# Bad MCAP input through the command line: exit status 2 and one line naming the file, the byte
+# offset and what is wrong.   cli_errors.sh HIL SOURCE_DIR WORK_DIR
+set -uo pipefail
+hil=$1 src=$2 work=$3
+rm -rf "$work" && mkdir -p "$work"
+export HIL_DDS_DOMAIN=$((50 + $$ % 10))
+fail=0
+expect() {  # expect WHAT-IN-STDERR COMMAND...
+  local what=$1; shift
+  "$@" > "$work/out.txt" 2> "$work/err.txt"
+  local rc=$?
+  if [[ $rc -ne 2 ]] || ! grep -qF -- "$what" "$work/err.txt"; then
+    echo "FAIL: $* -> exit $rc, expected 2 and '$what' in: $(cat "$work/err.txt")" >&2
+    fail=1
+  fi
+}
+"$hil" export "$src/examples/runs/press_slide" --mcap "$work/good.mcap" --compression lz4 > /dev/null || exit 1
+size=$(stat -c %s "$work/good.mcap")
+head -c $((size / 2)) "$work/good.mcap" > "$work/half.mcap"
+expect "half.mcap: offset " "$hil" replay "$work/half.mcap" --speed 0
+expect "runs past the end of the file" "$hil" replay "$work/half.mcap" --speed 0
+printf 'not an mcap file at all' > "$work/text.mcap"
+expect "text.mcap: offset 0: bad magic" "$hil" replay "$work/text.mcap" --speed 0
+head -c $((size - 3)) "$work/good.mcap" > "$work/cut.mcap"
+expect "closing magic is missing" "$hil" replay "$work/cut.mcap" --speed 0
+expect "gzip" "$hil" export "$src/examples/runs/press_slide" --mcap "$work/x.mcap" --compression gzip
+exit $fail
