@@ -7,6 +7,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <map>
 #include <stdexcept>
 
 #include "bindings.hpp"
@@ -14,6 +15,7 @@
 #include "hil/calibration/reduction.hpp"
 #include "hil/format/run.hpp"
 #include "identify.hpp"          // tools/hil/contact
+#include "rig_adapter.hpp"       // tools/hil/contact
 #include "run_diagnosis.hpp"     // tools/hil/diagnose
 #include "stiffness_io.hpp"      // tools/hil/stiffness
 
@@ -183,6 +185,53 @@ py::dict identify_stiffness(const Path& table_path, const Path& rig, double nois
   return to_python(j);
 }
 
+/// The rig's contact scene along a trajectory file (as `hil contact simulate` without --inject),
+/// as arrays: what the model predicts, and what a sensor would measure.
+py::dict simulate_contact(const Path& rig_path, const Path& trajectory, const py::object& K, const py::object& mu,
+                          const std::map<std::string, double>& geometric, const cid::SensorModel& sensor) {
+  std::vector<double> t;
+  std::vector<cid::SimulatedSample> sim;
+  cid::ContactModel model;
+  {
+    const bool has_K = !K.is_none(), has_mu = !mu.is_none();
+    const double K_value = has_K ? K.cast<double>() : 0.0, mu_value = has_mu ? mu.cast<double>() : 0.0;
+    py::gil_scoped_release free;
+    const auto rig = format::load_rig(rig_path.string());
+    const auto scene = cli::contact::scene_from_rig(rig);
+    model = cli::contact::model_from_rig(rig);
+    if (has_K) model.K = K_value;
+    if (has_mu) model.mu = mu_value;
+    try {
+      model.check();
+    } catch (const std::invalid_argument& e) {
+      throw py::value_error(std::string("K, mu: ") + e.what());
+    }
+    const Eigen::VectorXd x_true = cli::contact::uncertainty_vector(scene, geometric, "geometric");
+    auto traj = cli::contact::read_trajectory(trajectory.string());
+    sim = cid::simulate(scene, model, x_true, traj.kin, sensor);
+    t = std::move(traj.t);
+  }
+  const auto n = sim.size();
+  auto rows = [&](auto get) { return matrix(n, 3, get); };
+  py::dict d;
+  d["t"] = column(n, [&](std::size_t i) { return t[i] - t[0]; });  // from the first sample, as a run
+  d["p"] = rows([&](std::size_t i, std::size_t c) { return sim[i].kin.T_world_ee.translation()[static_cast<Eigen::Index>(c)]; });
+  d["q"] = matrix(n, 4, [&](std::size_t i, std::size_t c) {
+    const Eigen::Quaterniond q(sim[i].kin.T_world_ee.linear());
+    return c == 0 ? q.w() : q.vec()[static_cast<Eigen::Index>(c - 1)];
+  });
+  d["v"] = rows([&](std::size_t i, std::size_t c) { return sim[i].kin.v_world_ee[static_cast<Eigen::Index>(c)]; });
+  d["w"] = rows([&](std::size_t i, std::size_t c) { return sim[i].kin.w_world_ee[static_cast<Eigen::Index>(c)]; });
+  d["f"] = rows([&](std::size_t i, std::size_t c) { return sim[i].w_fp[static_cast<Eigen::Index>(c)]; });
+  d["m"] = rows([&](std::size_t i, std::size_t c) { return sim[i].w_fp[static_cast<Eigen::Index>(c + 3)]; });
+  d["f_true"] = rows([&](std::size_t i, std::size_t c) { return sim[i].w_fp_true[static_cast<Eigen::Index>(c)]; });
+  d["m_true"] = rows([&](std::size_t i, std::size_t c) { return sim[i].w_fp_true[static_cast<Eigen::Index>(c + 3)]; });
+  d["contacts"] = column(n, [&](std::size_t i) { return static_cast<double>(sim[i].contacts); });
+  d["K"] = model.K;
+  d["mu"] = model.mu;
+  return d;
+}
+
 }  // namespace
 
 void add_numerics(py::module_& m) {
@@ -197,6 +246,28 @@ void add_numerics(py::module_& m) {
         "The diagnosis of a run folder (or of a stiffness table with rig=), as `hil diagnose --json`: cause, "
         "second_cause, candidates with held-out gain, the extended model's parameters with intervals. "
         "progress(step, total, what) is called before each step; Ctrl-C stops between steps.");
+  m.def(
+      "simulate_contact",
+      [](const Path& rig, const Path& trajectory, const py::object& K, const py::object& mu,
+         const std::map<std::string, double>& geometric, double position_resolution_m, double velocity_resolution_m_per_s,
+         double force_resolution_n, double moment_resolution_nm, double force_noise_n, double moment_noise_nm,
+         unsigned seed) {
+        const double v[] = {position_resolution_m, velocity_resolution_m_per_s, force_resolution_n,
+                            moment_resolution_nm, force_noise_n, moment_noise_nm};
+        for (double x : v)
+          if (!(x >= 0.0) || !std::isfinite(x)) throw py::value_error("sensor resolutions and noise: expected finite values >= 0");
+        return simulate_contact(rig, trajectory, K, mu, geometric,
+                                {position_resolution_m, velocity_resolution_m_per_s, force_resolution_n, moment_resolution_nm,
+                                 force_noise_n, moment_noise_nm, seed});
+      },
+      py::arg("rig"), py::arg("trajectory"), py::arg("K") = py::none(), py::arg("mu") = py::none(),
+      py::arg("geometric") = std::map<std::string, double>{}, py::arg("position_resolution_m") = 0.0,
+      py::arg("velocity_resolution_m_per_s") = 0.0, py::arg("force_resolution_n") = 0.0,
+      py::arg("moment_resolution_nm") = 0.0, py::arg("force_noise_n") = 0.0, py::arg("moment_noise_nm") = 0.0,
+      py::arg("seed") = 1u,
+      "The rig's contact scene along a trajectory CSV (t, px..qz[, vx..wz]), as `hil contact simulate`: the "
+      "read_samples arrays as a sensor measures them (f, m quantised and noisy), f_true, m_true, contacts, K, mu. "
+      "K and mu default to the rig's model; geometric: uncertainty name -> true value (m or rad).");
   m.def("identify_stiffness", &identify_stiffness, py::arg("table"), py::arg("rig"), py::arg("noise_pos_m") = 0.0,
         py::arg("noise_rot_rad") = 0.0, py::arg("neglect_below") = 2.0,
         "Elastostatic calibration of the rig's robot from a stiffness-experiment table, as "

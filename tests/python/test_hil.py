@@ -201,6 +201,40 @@ def test_identify_contact_agrees_with_the_command(tmp_path):
         assert r[key] == pytest.approx(cli[key], rel=1e-12), key
 
 
+def test_simulate_contact_reproduces_the_shipped_run():
+    # examples/runs/press_slide was written by `hil contact simulate` with these settings (its notes).
+    notes = hil.read_run(RUN)["meta"]["notes"]
+    assert "position resolution 2e-06 m, velocity resolution 0.0002 m/s, force resolution 0.05 N (noise 0.1 N)" in notes
+    assert "moment resolution 0.001 N m (noise 0.005 N m), seed 7" in notes
+    s = hil.simulate_contact(RIG, TRAJ, position_resolution_m=2e-6, velocity_resolution_m_per_s=2e-4,
+                             force_resolution_n=0.05, force_noise_n=0.1, moment_resolution_nm=0.001,
+                             moment_noise_nm=0.005, seed=7)
+    run = hil.read_run(RUN)
+    for key in ("t", "p", "q", "v", "w", "f", "m"):
+        np.testing.assert_array_equal(s[key], run[key], key)
+    assert s["K"] == 1.8e5 and s["mu"] == 0.2
+    # The identification finds contact on the measured (quantised) poses: a borderline sample may differ.
+    assert abs(np.count_nonzero(s["contacts"]) - hil.identify_contact(RUN)["samples_in_contact"]) <= 2
+    assert 0 < np.max(np.abs(s["f"] - s["f_true"])) < 0.05 + 6 * 0.1
+
+
+def test_simulate_contact_force_scales_with_the_stiffness():
+    # Surface compliance: the motion is given, so the wrench is proportional to K (same contacts).
+    a = hil.simulate_contact(RIG, TRAJ)
+    b = hil.simulate_contact(RIG, TRAJ, K=3.6e5)
+    assert np.max(np.abs(a["f_true"][:, 2])) > 10
+    np.testing.assert_allclose(b["f_true"], 2 * a["f_true"], rtol=1e-9, atol=1e-9)
+    np.testing.assert_array_equal(a["f"], a["f_true"])  # no sensor model: measured = true
+    c = hil.simulate_contact(RIG, TRAJ, geometric={"block_top_z": 1e-4})  # the top face 0.1 mm higher
+    assert np.max(np.abs(c["f_true"][:, 2])) > np.max(np.abs(a["f_true"][:, 2]))
+    with pytest.raises(ValueError, match="K"):
+        hil.simulate_contact(RIG, TRAJ, K=-1.0)
+    with pytest.raises(RuntimeError, match="no_such_offset"):
+        hil.simulate_contact(RIG, TRAJ, geometric={"no_such_offset": 1e-4})
+    with pytest.raises(hil.FormatError, match="trajectory.csv"):
+        hil.simulate_contact(RIG, os.path.join(SRC, "no_such", "trajectory.csv"))
+
+
 def test_identify_contact_bad_option():
     with pytest.raises(RuntimeError, match="--solver"):
         hil.identify_contact(RUN, geometric=True, solver="newton")
