@@ -55,7 +55,7 @@ fi
 has "find_package(hil 9)" "$(cat "$WORK/consumer-v9.log")" "hilConfig.cmake, version: $VERSION"
 
 echo "== 3. the consumer's numbers"
-out=$(cd "$WORK" && "$WORK/consumer/consumer")
+out=$(cd "$WORK" && "$WORK/consumer/consumer" "$WORK")
 echo "$out"
 has consumer "$out" "^rig acu_bench objects 2 features 8 polyhedra 15$"
 # The ACU body (0.3 m square, bottom at the ee) 0.5 mm into the base (top at z = -0.012) over the
@@ -75,6 +75,15 @@ for i in 1 2 3 4 5 6; do
 done
 line=$(grep '^cdr type' <<<"$out")
 has "cdr" "$line" "^cdr type hil_msgs::msg::dds_::PoseWrenchSample_ bytes [1-9][0-9]* index 7 t 1.25 z -0.0125 fz -90 my 17.1 joints 0.5 -0.25$"
+
+# The installed example run through MCAP files (hil::mcap with zstd and lz4) and back.
+for c in zstd lz4; do
+  line=$(grep "^mcap $c " <<<"$out") || fail "consumer: no MCAP line for $c"
+  [[ $(field "$line" samples 1) == 325 && $(field "$line" of 1) == 325 ]] || fail "consumer MCAP $c: $line (325 samples)"
+  fz=$(field "$line" fz 1)
+  [[ $fz == $(field "$line" fz 3) ]] || fail "consumer MCAP $c: the peak fz changed: $line"
+  awk -v f="$fz" 'BEGIN { exit !(f > 1 || f < -1) }' || fail "consumer MCAP $c: no loaded sample: $line"
+done
 
 echo "== 4. pkg-config"
 export PKG_CONFIG_PATH="$prefix/$LIBDIR/pkgconfig"
@@ -99,6 +108,8 @@ has "hil validate press_bench.yaml" "$out" "OK"
 has "hil validate press_bench.yaml" "$out" "features: 2"
 out=$(env -u HIL_DATA_DIR "$hil" validate "$prefix/$DATADIR/hil/examples/acu/acu.yaml")
 has "hil validate acu.yaml (the consumer's count)" "$out" "polyhedra: 15"
+out=$(env -u HIL_DATA_DIR "$hil" validate "$prefix/$DATADIR/hil/examples/runs/press_slide")
+has "hil validate press_slide (the consumer's MCAP count)" "$out" "samples: 325,"
 # With $HIL_DATA_DIR unset the demo's defaults come from <prefix>/share/hil (before the source tree).
 out=$(env -u HIL_DATA_DIR "$hil" demo --help)
 has "hil demo --help" "$out" "$prefix/$DATADIR/hil/examples/acu/acu.yaml"
