@@ -298,6 +298,9 @@ TEST_P(ExportPressSlide, ChannelsCountsAndValues) {
   EXPECT_GT(f.chunks.size(), 1u);
   for (const auto& ch : f.channels) {
     EXPECT_EQ(ch.message_encoding, "cdr") << ch.topic;
+    // The ros2 profile requires the QoS; /tf_static is latched (durability 1: transient_local).
+    EXPECT_NE(ch.metadata.at("offered_qos_profiles").find(ch.topic == topic::kTfStatic ? "durability: 1\n" : "durability: 2\n"),
+              std::string::npos) << ch.topic;
     EXPECT_EQ(f.schema(ch.schema_id)->encoding, "ros2msg") << ch.topic;
   }
   EXPECT_EQ(f.schema(f.channel(topic::kWrench)->schema_id)->name, "geometry_msgs/msg/WrenchStamped");

@@ -147,6 +147,17 @@ geometry_msgs::msg::Vector3 vec3(const Eigen::Vector3d& v) {
   return m;
 }
 
+/// The ros2 profile's required channel metadata: the publisher's QoS as rosbag2 records it
+/// (YAML, Humble's numeric enums, which later distributions still read): reliable, and
+/// transient_local for /tf_static so that `ros2 bag play` latches it as tf2 expects.
+std::string offered_qos(bool transient_local) {
+  constexpr const char* kForever = "    sec: 2147483647\n    nsec: 4294967295\n";
+  return fmt::format(
+      "- history: 3\n  depth: 0\n  reliability: 1\n  durability: {}\n  deadline:\n{}  lifespan:\n{}"
+      "  liveliness: 1\n  liveliness_lease_duration:\n{}  avoid_ros_namespace_conventions: false",
+      transient_local ? 1 : 2, kForever, kForever, kForever);
+}
+
 }  // namespace
 
 std::string ros2msg_schema(const std::string& type) {
@@ -269,15 +280,16 @@ RunMcapWriter::RunMcapWriter(const std::string& path, const format::RigSpec* rig
   wo.profile = "ros2";  // ros2 bag's profile: ros2msg schemas, cdr messages
   wo.library = "hil " HIL_MCAP_VERSION;
   w_ = std::make_unique<Writer>(path, wo);
-  auto channel = [&](const char* type, const char* topic) {
-    return w_->add_channel(w_->add_schema(type, "ros2msg", ros2msg_schema(type)), topic, "cdr");
+  auto channel = [&](const char* type, const char* topic, bool latched = false) {
+    return w_->add_channel(w_->add_schema(type, "ros2msg", ros2msg_schema(type)), topic, "cdr",
+                           {{"offered_qos_profiles", offered_qos(latched)}});
   };
   ch_wrench_ = channel("geometry_msgs/msg/WrenchStamped", topic::kWrench);
   ch_pose_ = channel("geometry_msgs/msg/PoseStamped", topic::kPose);
   ch_joints_ = channel("sensor_msgs/msg/JointState", topic::kJointStates);
   ch_sample_ = channel("hil_msgs/msg/PoseWrenchSample", topic::kPoseWrench);
   ch_status_ = channel("hil_msgs/msg/DeviceStatus", topic::kDeviceStatus);
-  ch_tf_ = channel("tf2_msgs/msg/TFMessage", topic::kTfStatic);
+  ch_tf_ = channel("tf2_msgs/msg/TFMessage", topic::kTfStatic, true);
   if (rig) {
     const auto frames = format::static_frames(*rig);
     const auto t = static_cast<std::uint64_t>(start_ns_);
