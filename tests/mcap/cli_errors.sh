@@ -1,6 +1,6 @@
 #!/bin/bash
 # Bad MCAP input through the command line: exit status 2 and one line naming the file, the byte
-# offset and what is wrong.   cli_errors.sh HIL SOURCE_DIR WORK_DIR
+# offset and what is wrong; a killed --mcap acquisition leaves a valid CSV run.   cli_errors.sh HIL SOURCE_DIR WORK_DIR
 set -uo pipefail
 hil=$1 src=$2 work=$3
 rm -rf "$work" && mkdir -p "$work"
@@ -25,4 +25,15 @@ expect "text.mcap: offset 0: bad magic" "$hil" replay "$work/text.mcap" --speed 
 head -c $((size - 3)) "$work/good.mcap" > "$work/cut.mcap"
 expect "closing magic is missing" "$hil" replay "$work/cut.mcap" --speed 0
 expect "gzip" "$hil" export "$src/examples/runs/press_slide" --mcap "$work/x.mcap" --compression gzip
+# A recording killed mid-way: the CSV run stays valid (the primary record), the MCAP holds its
+# complete chunks and is refused as truncated, not misread.
+"$hil" acquire --rig "$src/examples/rigs/press_bench.yaml" --out "$work/killed" --play "$src/examples/runs/press_slide" \
+  --duration 60 --mcap > /dev/null 2>&1 &
+pid=$!
+sleep 3.5
+kill -9 "$pid"
+wait "$pid" 2> /dev/null
+"$hil" validate "$work/killed" > /dev/null || { echo "FAIL: the CSV run of a killed --mcap acquisition does not validate" >&2; fail=1; }
+[[ $(stat -c %s "$work/killed/run.mcap") -gt 20000 ]] || { echo "FAIL: run.mcap of the killed acquisition holds less than ~1 s of chunks" >&2; fail=1; }
+expect "truncated" "$hil" replay "$work/killed/run.mcap" --speed 0  # at a chunk boundary or within one
 exit $fail
