@@ -87,10 +87,8 @@ class Cli(unittest.TestCase):
     def test_demo_refuses_bad_options(self):
         for args, field in ((("--decimate", "0"), "--decimate"), (("--effect", "magnetism"), "magnetism")):
             r = hil("demo", *args, "--out", os.path.join(tempfile.mkdtemp(), "run"))
-            self.assertNotEqual(r.returncode, 0, r.stdout)
-            if field == "--decimate":
-                self.assertEqual(r.returncode, 2, r.stderr)  # a usage error
-            self.assertIn(field, r.stdout + r.stderr)
+            self.assertEqual(r.returncode, 2, r.stdout + r.stderr)  # a usage error, before any work
+            self.assertIn(field, r.stderr)
 
     def test_validate_examples(self):
         r = hil("validate", EXAMPLE_RUN)
@@ -250,7 +248,15 @@ class Cli(unittest.TestCase):
 
     def test_echo_unknown_topic(self):
         r = hil("echo", "nonsense", "--timeout", "1")
-        self.assertNotEqual(r.returncode, 0)
+        self.assertEqual(r.returncode, 2, r.stderr)
+        self.assertIn("unknown topic 'nonsense'", r.stderr)
+
+    def test_simulate_refuses_an_unknown_effect(self):
+        r = hil("contact", "simulate", "--rig", EXAMPLE_RIG, "--trajectory",
+                os.path.join(SRC, "examples", "trajectories", "press_slide.csv"), "--out",
+                os.path.join(tempfile.mkdtemp(), "run"), "--inject", "sensor_bias,magnetism")
+        self.assertEqual(r.returncode, 2, r.stderr)
+        self.assertIn("magnetism", r.stderr.splitlines()[0])
 
 
 class BadInput(unittest.TestCase):

@@ -13,6 +13,7 @@
 #include "hil/acquisition/sample_msg.hpp"
 #include "hil/dds/bus.hpp"
 #include "hil/dds/topics.hpp"
+#include "hil/format/error.hpp"
 
 namespace hil::cli {
 namespace {
@@ -110,8 +111,9 @@ void add_echo(CLI::App& app) {
       if (topic == dds::topics::kContactEstimate) return echo<hil_msgs::msg::ContactEstimate>(p, topic, fmt_contact, o);
       if (topic == dds::topics::kStiffnessEstimate) return echo<hil_msgs::msg::StiffnessEstimate>(p, topic, fmt_stiffness, o);
       if (topic == dds::topics::kStiffnessMeasurement) return echo<hil_msgs::msg::StiffnessMeasurement>(p, topic, fmt_measurement, o);
-      throw std::runtime_error("echo: unknown topic '" + o.topic + "' (known: pose_wrench, device_status, contact_estimate, "
-                               "stiffness_estimate, stiffness_measurement)");
+      throw format::FormatError({"command line", 0, 0, "TOPIC"}, "unknown topic '" + o.topic +
+                                    "' (known: pose_wrench, device_status, contact_estimate, stiffness_estimate, "
+                                    "stiffness_measurement)");
     });
   });
 }

@@ -181,7 +181,8 @@ void add_contact(CLI::App& app) {
   sim->add_option("--inject", sa.inject,
                   "hide an effect in the data (a diagnosis candidate: geometric_offset, robot_compliance, time_offset, "
                   "sensor_bias, sensor_gain, viscous_friction, contact_damping, nonlinear_stiffness); repeatable")
-      ->delimiter(',');
+      ->delimiter(',')
+      ->check(CLI::IsMember(hil::diagnose::contact_extensions()));
   sim->add_option("--effect-seed", sa.effect_seed, "seed of the injected effects' random magnitudes")->capture_default_str();
   sim->add_option("--truth-out", sa.truth_out, "write the injected effects (the hidden truth) as JSON (hil.hidden_effects; - for stdout)");
   sim->callback([] { set_action([] { return simulate_run(sa); }); });
