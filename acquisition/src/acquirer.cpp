@@ -148,7 +148,10 @@ void Acquirer::start() {
                plate_->channel().name());
   if (robot_) {
     robot_->connect();
-    spdlog::info("robot controller: {}", robot_->config().describe());
+    robot_identity_ = robot_->identify();
+    spdlog::info("robot controller: {}{}", robot_->config().describe(),
+                 robot_identity_.answered ? ", server id " + std::to_string(robot_identity_.server_id) + " '" + robot_identity_.text + "'"
+                                          : "");
   }
   plate_hardware_id_ = plate_info_.protocol + (plate_info_.serial.empty() ? "" : " serial " + plate_info_.serial) + " on " +
                        plate_->channel().name();

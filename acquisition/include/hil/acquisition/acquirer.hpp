@@ -69,6 +69,8 @@ class Acquirer {
   std::uint64_t samples() const { return emitted_; }
   std::uint64_t status_messages() const { return status_sent_; }
   const drivers::ForcePlateInfo& plate_info() const { return plate_info_; }
+  /// The controller's answer to Report Server ID at start (or why there was none).
+  const drivers::ControllerIdentity& robot_identity() const { return robot_identity_; }
   /// CPU time (s) the two device threads used, pipeline work included; valid after stop().
   double device_threads_cpu_s() const { return cpu_ns_.load() * 1e-9; }
 
@@ -86,6 +88,7 @@ class Acquirer {
   dds::Participant* bus_;
   RunRecorder* recorder_;
   drivers::ForcePlateInfo plate_info_;
+  drivers::ControllerIdentity robot_identity_;
 
   mutable std::mutex mutex_;  ///< guards sync_, monitors, writers, sinks
   Synchronizer sync_;
