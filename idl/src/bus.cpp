@@ -3,6 +3,7 @@
 #include "hil/format/error.hpp"
 
 #include <fastdds/dds/domain/DomainParticipantFactory.hpp>
+#include <spdlog/spdlog.h>
 
 #include <algorithm>
 #include <cstdlib>
@@ -13,9 +14,25 @@
 namespace hil::dds {
 using namespace eprosima::fastdds::dds;
 
+namespace {
+// <prefix>/<datadir>/hil/dds_localhost.xml for a program in <prefix>/<bindir>: an installed tree
+// that was moved, or installed with another --prefix than the one configured, still finds it.
+std::filesystem::path profile_beside_program() {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  fs::path prefix = fs::read_symlink("/proc/self/exe", ec).parent_path();
+  if (ec) return {};
+  for (const auto& part : fs::path(HIL_INSTALL_BINDIR))
+    if (!part.empty()) prefix = prefix.parent_path();
+  return (prefix / HIL_INSTALL_DATADIR / "hil" / "dds_localhost.xml").lexically_normal();
+}
+}  // namespace
+
 std::string default_profile_path() {
   if (const char* env = std::getenv("HIL_DDS_PROFILE"); env && *env) return env;
-  if (std::filesystem::exists(HIL_DDS_PROFILE_INSTALLED)) return HIL_DDS_PROFILE_INSTALLED;
+  std::error_code ec;
+  if (const auto beside = profile_beside_program(); !beside.empty() && std::filesystem::exists(beside, ec)) return beside.string();
+  if (std::filesystem::exists(HIL_DDS_PROFILE_INSTALLED, ec)) return HIL_DDS_PROFILE_INSTALLED;
   return HIL_DDS_PROFILE_SOURCE;
 }
 
@@ -46,6 +63,7 @@ Participant::Participant(const ParticipantOptions& o) : domain_id_(o.domain_id) 
   auto* factory = DomainParticipantFactory::get_instance();
   const std::string file = o.profile_file.empty() ? default_profile_path() : o.profile_file;
   if (!std::filesystem::exists(file)) throw std::runtime_error("DDS profile file not found: " + file);
+  spdlog::debug("DDS: profile '{}' from {}, domain {}", o.profile_name, file, o.domain_id);
   if (factory->load_XML_profiles_file(file) != ReturnCode_t::RETCODE_OK)
     throw std::runtime_error("DDS profile file could not be loaded (XML error?): " + file);
   DomainParticipantQos qos;

@@ -131,6 +131,9 @@ has "hil demo with a bad HIL_DATA_DIR" "$err" "HIL_DATA_DIR=$WORK/nowhere \\(no 
 mkdir -p "$WORK/moved/$BINDIR" "$WORK/moved/$DATADIR"
 ln "$hil" "$WORK/moved/$BINDIR/hil"
 cp -r "$prefix/$DATADIR/hil" "$WORK/moved/$DATADIR/"
+# ...and its own host-only DDS profile, not the configured prefix's nor the source tree's.
+out=$(env -u HIL_DDS_PROFILE HIL_DDS_DOMAIN=229 "$WORK/moved/$BINDIR/hil" --log-level debug echo pose_wrench --timeout 0.2 2>&1 || true)
+has "moved hil's DDS profile" "$out" "from $WORK/moved/$DATADIR/hil/dds_localhost.xml"
 out=$(env -u HIL_DATA_DIR "$WORK/moved/$BINDIR/hil" demo --help)
 has "moved hil demo --help" "$out" "$WORK/moved/$DATADIR/hil/examples/acu/acu.yaml"
 echo "install: all checks passed"
