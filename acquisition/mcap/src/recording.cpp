@@ -14,6 +14,8 @@
 #include <set>
 #include <stdexcept>
 
+#include "hil/acquisition/ros_msgs.hpp"
+#include "hil/acquisition/sample_msg.hpp"
 #include "hil/format/error.hpp"
 #include "hil_msgs_schemas.hpp"
 
@@ -139,14 +141,6 @@ void decode(const std::string& data, T& m, const std::string& where) {
   }
 }
 
-geometry_msgs::msg::Vector3 vec3(const Eigen::Vector3d& v) {
-  geometry_msgs::msg::Vector3 m;
-  m.x(v.x());
-  m.y(v.y());
-  m.z(v.z());
-  return m;
-}
-
 /// The ros2 profile's required channel metadata: the publisher's QoS as rosbag2 records it
 /// (YAML, Humble's numeric enums, which later distributions still read): reliable, and
 /// transient_local for /tf_static so that `ros2 bag play` latches it as tf2 expects.
@@ -189,51 +183,23 @@ void from_cdr(const std::string& d, geometry_msgs::msg::WrenchStamped& m, const 
 void from_cdr(const std::string& d, sensor_msgs::msg::JointState& m, const std::string& w) { decode(d, m, w); }
 
 std::string tf_message_cdr(const std::vector<format::StaticFrame>& frames, std::int64_t stamp_ns) {
-  // tf2_msgs/TFMessage is a sequence of TransformStamped: written field by field with fastcdr
-  // (alignment included), so this module needs no generated type for it.
-  const auto stamp = to_ros_time(stamp_ns);
-  eprosima::fastcdr::FastBuffer buf;
-  eprosima::fastcdr::Cdr cdr(buf, eprosima::fastcdr::Cdr::LITTLE_ENDIANNESS, eprosima::fastcdr::Cdr::DDS_CDR);
-  cdr.serialize_encapsulation();
-  cdr.serialize(static_cast<std::uint32_t>(frames.size()));
-  for (const auto& f : frames) {
-    cdr.serialize(stamp.sec());
-    cdr.serialize(stamp.nanosec());
-    cdr.serialize(f.parent);
-    cdr.serialize(f.child);
-    const auto& t = f.T_parent_child.translation_m;
-    const auto& q = f.T_parent_child.rotation;
-    for (double v : {t.x(), t.y(), t.z(), q.x(), q.y(), q.z(), q.w()}) cdr.serialize(v);
-  }
-  return std::string(buf.getBuffer(), cdr.getSerializedDataLength());
+  return encode(acquisition::to_tf_message(frames, to_ros_time(stamp_ns)));  // the tree /tf_static carries on DDS
 }
 
 std::vector<format::StaticFrame> tf_message_from_cdr(const std::string& data, const std::string& where) {
-  std::string copy = data;
-  eprosima::fastcdr::FastBuffer buf(copy.data(), copy.size());
-  eprosima::fastcdr::Cdr cdr(buf, eprosima::fastcdr::Cdr::DEFAULT_ENDIAN, eprosima::fastcdr::Cdr::DDS_CDR);
+  tf2_msgs::msg::TFMessage m;
+  decode(data, m, where);
   std::vector<format::StaticFrame> out;
-  try {
-    cdr.read_encapsulation();
-    std::uint32_t n = 0;
-    cdr.deserialize(n);
-    if (n > data.size()) throw format::FormatError({where, 0, 0, ""}, fmt::format("TFMessage claims {} transforms in {} bytes", n, data.size()));
-    for (std::uint32_t i = 0; i < n; ++i) {
-      format::StaticFrame f;
-      std::int32_t sec = 0;
-      std::uint32_t nsec = 0;
-      cdr.deserialize(sec);
-      cdr.deserialize(nsec);
-      cdr.deserialize(f.parent);
-      cdr.deserialize(f.child);
-      double v[7];
-      for (double& x : v) cdr.deserialize(x);
-      f.T_parent_child.translation_m = {v[0], v[1], v[2]};
-      f.T_parent_child.rotation = Eigen::Quaterniond(v[6], v[3], v[4], v[5]);
-      out.push_back(std::move(f));
-    }
-  } catch (const eprosima::fastcdr::exception::Exception& e) {
-    throw format::FormatError({where, 0, 0, ""}, fmt::format("TFMessage payload of {} bytes does not decode: {}", data.size(), e.what()));
+  out.reserve(m.transforms().size());
+  for (const auto& t : m.transforms()) {
+    format::StaticFrame f;
+    f.parent = t.header().frame_id();
+    f.child = t.child_frame_id();
+    const auto& p = t.transform().translation();
+    const auto& q = t.transform().rotation();
+    f.T_parent_child.translation_m = {p.x(), p.y(), p.z()};
+    f.T_parent_child.rotation = Eigen::Quaterniond(q.w(), q.x(), q.y(), q.z());
+    out.push_back(std::move(f));
   }
   return out;
 }
@@ -305,54 +271,29 @@ void RunMcapWriter::write_sample(const format::Sample& s, std::uint64_t index, c
   const auto t_ns = stamp_ns(s.t_s);
   const auto stamp = to_ros_time(t_ns);
   const auto t = static_cast<std::uint64_t>(t_ns);
-
-  geometry_msgs::msg::Pose pose;
-  pose.position().x(s.p_world_ee_m.x());
-  pose.position().y(s.p_world_ee_m.y());
-  pose.position().z(s.p_world_ee_m.z());
-  pose.orientation().x(s.q_world_ee.x());
-  pose.orientation().y(s.q_world_ee.y());
-  pose.orientation().z(s.q_world_ee.z());
-  pose.orientation().w(s.q_world_ee.w());
-  geometry_msgs::msg::Wrench wrench;
-  wrench.force(vec3(s.f_fp_n));
-  wrench.torque(vec3(s.m_fp_nm));
-
-  geometry_msgs::msg::WrenchStamped ws;
-  ws.header().stamp(stamp);
-  ws.header().frame_id("force_plate");
-  ws.wrench(wrench);
-  w_->write({ch_wrench_, seq_++, t, t, to_cdr(ws)});
-
-  geometry_msgs::msg::PoseStamped ps;
-  ps.header().stamp(stamp);
-  ps.header().frame_id("world");
-  ps.pose(pose);
-  w_->write({ch_pose_, seq_++, t, t, to_cdr(ps)});
-
-  if (!joint_names_.empty() && joints_rad) {
-    sensor_msgs::msg::JointState js;
-    js.header().stamp(stamp);
-    js.name(joint_names_);
-    js.position().assign(joints_rad, joints_rad + joint_names_.size());
-    w_->write({ch_joints_, seq_++, t, t, to_cdr(js)});
-  }
-
-  hil_msgs::msg::PoseWrenchSample m;
+  // The same messages the rig service publishes on DDS (acquisition's conversions), stamped with
+  // the sample's absolute time.
+  const Eigen::Index n_joints = joints_rad ? static_cast<Eigen::Index>(joint_names_.size()) : 0;
+  auto m = acquisition::to_message(s, index, Eigen::Map<const Eigen::RowVectorXd>(joints_rad, n_joints));
   m.header().stamp(stamp);
-  m.header().frame_id("world");
-  m.sample_index(index);
-  m.t_s(s.t_s);
-  m.pose_world_ee(pose);
-  m.twist_world_ee().linear(vec3(s.v_world_ee_m_per_s));
-  m.twist_world_ee().angular(vec3(s.w_world_ee_rad_per_s));
-  m.wrench_fp(wrench);
-  if (joints_rad) m.joint_positions_rad().assign(joints_rad, joints_rad + joint_names_.size());
   m.wrench_seq(x.wrench_seq);
   m.pose_seq(x.pose_seq);
   m.wrench_age_s(x.wrench_age_s);
   m.pose_age_s(x.pose_age_s);
   m.quality_flags(x.quality);
+
+  geometry_msgs::msg::WrenchStamped ws;
+  ws.header().stamp(stamp);
+  ws.header().frame_id("force_plate");
+  ws.wrench(m.wrench_fp());
+  w_->write({ch_wrench_, seq_++, t, t, to_cdr(ws)});
+
+  geometry_msgs::msg::PoseStamped ps;
+  ps.header(m.header());
+  ps.pose(m.pose_world_ee());
+  w_->write({ch_pose_, seq_++, t, t, to_cdr(ps)});
+
+  if (n_joints > 0) w_->write({ch_joints_, seq_++, t, t, to_cdr(acquisition::to_joint_state(m, joint_names_))});
   w_->write({ch_sample_, seq_++, t, t, to_cdr(m)});
 }
 
