@@ -30,10 +30,17 @@ expect "gzip" "$hil" export "$src/examples/runs/press_slide" --mcap "$work/x.mca
 "$hil" acquire --rig "$src/examples/rigs/press_bench.yaml" --out "$work/killed" --play "$src/examples/runs/press_slide" \
   --duration 60 --mcap > /dev/null 2>&1 &
 pid=$!
-sleep 3.5
+# Killed once the MCAP holds flushed chunks (~1 s of samples; chunks are flushed every second):
+# waiting for that, not for a fixed time, keeps the test independent of the machine's load.
+for _ in $(seq 300); do
+  [[ $(stat -c %s "$work/killed/run.mcap" 2> /dev/null || echo 0) -gt 20000 &&
+     $(wc -l < "$work/killed/samples.csv" 2> /dev/null || echo 0) -gt 10 ]] && break
+  sleep 0.1
+done
+sleep 0.3  # and mid-way through the next second's chunk
 kill -9 "$pid"
 wait "$pid" 2> /dev/null
 "$hil" validate "$work/killed" > /dev/null || { echo "FAIL: the CSV run of a killed --mcap acquisition does not validate" >&2; fail=1; }
-[[ $(stat -c %s "$work/killed/run.mcap") -gt 20000 ]] || { echo "FAIL: run.mcap of the killed acquisition holds less than ~1 s of chunks" >&2; fail=1; }
+[[ $(stat -c %s "$work/killed/run.mcap") -gt 20000 ]] || { echo "FAIL: run.mcap of the killed acquisition holds less than ~1 s of chunks after 30 s" >&2; fail=1; }
 expect "truncated" "$hil" replay "$work/killed/run.mcap" --speed 0  # at a chunk boundary or within one
 exit $fail
