@@ -44,19 +44,12 @@ struct Fit {
 
 Fit fit_arrays(const cid::ContactProblem& p, const Eigen::VectorXd& x, const cid::LinearEstimate& e) {
   Fit f;
-  Eigen::MatrixX2d A;
-  p.regressor(x, A, &f.contacts);
-  Eigen::Vector2d theta = e.theta;
-  if (!std::isfinite(theta[1])) theta[1] = 0.0;  // μ not identifiable: all contacts stick, the column is zero
-  const Eigen::VectorXd w_o1 = (A * theta).cwiseQuotient(p.weights());
-  for (std::size_t a = 0; a < p.used().size(); ++a) {
-    const auto k = static_cast<std::size_t>(p.used()[a]);
-    const auto& m = p.data()[k];
-    const Eigen::Isometry3d T_world_o1 = cid::body_pose(p.scene().bodies[0], m.kin.T_world_ee);
+  f.model_fp = cli::contact::model_plate_wrenches(p, x, e.theta, f.contacts);  // as the command's report draws it
+  for (const int k : p.used()) {
+    const auto& m = p.data()[static_cast<std::size_t>(k)];
     f.t.push_back(m.t_s);
-    f.sample.push_back(static_cast<int>(k));
+    f.sample.push_back(k);
     f.measured_fp.push_back(m.w_fp);
-    f.model_fp.push_back(cid::object1_to_plate(w_o1.segment<6>(static_cast<Eigen::Index>(6 * a)), p.scene().T_world_fp, T_world_o1));
   }
   return f;
 }

@@ -37,13 +37,16 @@ double parse_lambda(const std::string& s) {
 
 std::string unit_of(const cid::Uncertainty& u) { return u.kind == cid::Uncertainty::Kind::translation ? "m" : "rad"; }
 
-/// Reconstructed plate wrench (Φ θ) for every used sample at x, with the contact counts.
-std::vector<cid::Vec6> reconstruct(const cid::ContactProblem& p, const Eigen::VectorXd& x, const Eigen::Vector2d& theta,
-                                   std::vector<int>& counts) {
+nlohmann::json num_or_null(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(); }
+
+}  // namespace
+
+std::vector<cid::Vec6> model_plate_wrenches(const cid::ContactProblem& p, const Eigen::VectorXd& x, const Eigen::Vector2d& theta,
+                                             std::vector<int>& counts) {
   Eigen::MatrixX2d A;
   p.regressor(x, A, &counts);
   Eigen::Vector2d th = theta;
-  if (!std::isfinite(th[1])) th[1] = 0.0;
+  if (!std::isfinite(th[1])) th[1] = 0.0;  // μ not identifiable: all contacts stick, the column is zero
   const Eigen::VectorXd w = (A * th).cwiseQuotient(p.weights());
   std::vector<cid::Vec6> out;
   for (std::size_t a = 0; a < p.used().size(); ++a) {
@@ -53,10 +56,6 @@ std::vector<cid::Vec6> reconstruct(const cid::ContactProblem& p, const Eigen::Ve
   }
   return out;
 }
-
-nlohmann::json num_or_null(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(); }
-
-}  // namespace
 
 cid::ContactProblem problem_from_run(const format::Run& run) {
   if (!run.rig) throw format::FormatError({run.dir, 0, 0, ""}, "no rig: pass --rig or put rig.yaml in the run folder");
@@ -257,9 +256,9 @@ void write_report(const std::string& dir, const std::string& run_name, const cid
   std::vector<double> t;
   for (int k : p.used()) t.push_back(p.data()[static_cast<std::size_t>(k)].t_s);
   std::vector<int> n_nom, n_geo;
-  const auto w_nom = reconstruct(p, p.scene().design(), r.nominal.theta, n_nom);
+  const auto w_nom = model_plate_wrenches(p, p.scene().design(), r.nominal.theta, n_nom);
   std::vector<cid::Vec6> w_geo;
-  if (r.geometric) w_geo = reconstruct(p, r.geometric->x, r.geometric->theta.theta, n_geo);
+  if (r.geometric) w_geo = model_plate_wrenches(p, r.geometric->x, r.geometric->theta.theta, n_geo);
 
   std::ostringstream summary;
   print(summary, p, r);

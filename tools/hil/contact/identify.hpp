@@ -37,6 +37,10 @@ IdentifyResult identify(const contact_id::ContactProblem& p, const IdentifyOptio
 /// The identification problem of a run against its rig (the run's rig.yaml or the one given).
 /// \throws format::FormatError or std::runtime_error naming the run on bad input.
 contact_id::ContactProblem problem_from_run(const format::Run& run);
+/// The model's plate wrench (Φ θ at geometry x, mapped to the force-plate frame; N, N m) for every
+/// sample the problem uses, with each sample's contact count in `counts`.
+std::vector<contact_id::Vec6> model_plate_wrenches(const contact_id::ContactProblem& p, const Eigen::VectorXd& x,
+                                                   const Eigen::Vector2d& theta, std::vector<int>& counts);
 void print(std::ostream& out, const contact_id::ContactProblem& p, const IdentifyResult& r);
 nlohmann::json to_json(const contact_id::ContactProblem& p, const IdentifyResult& r);
 /// Writes DIR/index.html with the paper-like figures.
