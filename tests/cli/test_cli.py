@@ -120,6 +120,30 @@ class Cli(unittest.TestCase):
         self.assertTrue(lines[0].startswith("#0 t=0.0000"))
         self.assertTrue(lines[-1].startswith("#%d " % (rows - 1)))
 
+    def test_echo_tf_static_and_diagnostics_of_an_acquisition(self):
+        import time
+        env = dict(os.environ)
+        env["HIL_DDS_DOMAIN"] = str(44 + os.getpid() % 5)  # 44-48: no other test uses them
+        out = tempfile.mkdtemp()
+        acq = subprocess.Popen([HIL, "acquire", "--rig", EXAMPLE_RIG, "--out", os.path.join(out, "run"), "--play", EXAMPLE_RUN,
+                                "--duration", "8"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
+        try:
+            time.sleep(2.0)  # /tf_static was sent at start: the echo joins late and still gets it (latched)
+            tf = subprocess.run([HIL, "echo", "tf_static", "-n", "1", "--timeout", "20"], capture_output=True, text=True,
+                                timeout=60, env=env)
+            diag = subprocess.run([HIL, "echo", "/diagnostics", "-n", "1", "--timeout", "20"], capture_output=True, text=True,
+                                  timeout=60, env=env)
+        finally:
+            acq.communicate(timeout=60)
+            shutil.rmtree(out)
+        self.assertEqual(tf.returncode, 0, tf.stderr)
+        self.assertIn("world -> force_plate", tf.stdout)
+        self.assertIn("force_plate -> object2 p=[0 0 0.05]", tf.stdout)
+        self.assertIn("world -> robot_base p=[-0.45 0 0]", tf.stdout)
+        self.assertEqual(diag.returncode, 0, diag.stderr)
+        self.assertRegex(diag.stdout, r"hil/force_plate (OK|WARN) ")
+        self.assertIn("FT-FAKE1", diag.stdout)  # the plate's hardware id carries its serial
+
     def test_demo_runs_the_chain(self):
         out = tempfile.mkdtemp()
         try:

@@ -60,15 +60,41 @@ std::string fmt_measurement(const hil_msgs::msg::StiffnessMeasurement& m) {
   return fmt::format("config={} joints={} d=[{:.6g} {:.6g} {:.6g}]", m.config(), m.joints_rad().size(), d.x(), d.y(), d.z());
 }
 
+std::string fmt_tf(const tf2_msgs::msg::TFMessage& m) {
+  std::string s = fmt::format("{} transforms", m.transforms().size());
+  for (const auto& t : m.transforms()) {
+    const auto& p = t.transform().translation();
+    const auto& q = t.transform().rotation();
+    s += fmt::format("\n  {} -> {} p=[{:.6g} {:.6g} {:.6g}] q=[{:.6g} {:.6g} {:.6g} {:.6g}]", t.header().frame_id(), t.child_frame_id(),
+                     p.x(), p.y(), p.z(), q.w(), q.x(), q.y(), q.z());
+  }
+  return s;
+}
+
+std::string fmt_diagnostics(const diagnostic_msgs::msg::DiagnosticArray& m) {
+  static const char* levels[] = {"OK", "WARN", "ERROR", "STALE"};
+  std::string s;
+  for (const auto& d : m.status()) {
+    s += fmt::format("{}{} {} '{}' ({})", s.empty() ? "" : "\n", d.name(), d.level() < 4 ? levels[d.level()] : "?", d.message(),
+                     d.hardware_id());
+    for (const auto& kv : d.values()) s += fmt::format(" {}={}", kv.key(), kv.value());
+  }
+  return s;
+}
+
 template <class Msg>
-int echo(dds::Participant& p, const std::string& topic, std::string (*show)(const Msg&), const EchoOptions& o) {
+int echo(dds::Participant& p, const std::string& topic, std::string (*show)(const Msg&), const EchoOptions& o,
+         const dds::StreamQos& qos = {}) {
   std::atomic<long> n{0};
   std::mutex out;
-  dds::Reader<Msg> reader(p, topic, [&](const Msg& m, const auto&) {
-    std::lock_guard<std::mutex> lock(out);
-    std::cout << show(m) << '\n' << std::flush;
-    ++n;
-  });
+  dds::Reader<Msg> reader(
+      p, topic,
+      [&](const Msg& m, const auto&) {
+        std::lock_guard<std::mutex> lock(out);
+        std::cout << show(m) << '\n' << std::flush;
+        ++n;
+      },
+      qos);
   const auto start = std::chrono::steady_clock::now();
   while (!g_stop && (o.count == 0 || n < o.count)) {
     if (o.timeout_s > 0 && std::chrono::steady_clock::now() - start > std::chrono::duration<double>(o.timeout_s)) {
@@ -87,6 +113,8 @@ std::string resolve(const std::string& t) {
   if (t == "contact_estimate") return dds::topics::kContactEstimate;
   if (t == "stiffness_estimate") return dds::topics::kStiffnessEstimate;
   if (t == "stiffness_measurement") return dds::topics::kStiffnessMeasurement;
+  if (t == "tf_static") return dds::topics::kTfStatic;
+  if (t == "diagnostics") return dds::topics::kDiagnostics;
   return "rt/" + (t.front() == '/' ? t.substr(1) : t);
 }
 
@@ -94,7 +122,7 @@ std::string resolve(const std::string& t) {
 
 void add_echo(CLI::App& app) {
   auto* cmd = app.add_subcommand("echo", "Print a bus topic live: pose_wrench, device_status, contact_estimate, "
-                                         "stiffness_estimate, stiffness_measurement (or its rt/... name)");
+                                         "stiffness_estimate, stiffness_measurement, tf_static, diagnostics (or its rt/... name)");
   static EchoOptions o;
   cmd->add_option("TOPIC", o.topic, "topic")->required();
   cmd->add_option("-n,--count", o.count, "stop after this many messages (0: until Ctrl-C)");
@@ -111,9 +139,12 @@ void add_echo(CLI::App& app) {
       if (topic == dds::topics::kContactEstimate) return echo<hil_msgs::msg::ContactEstimate>(p, topic, fmt_contact, o);
       if (topic == dds::topics::kStiffnessEstimate) return echo<hil_msgs::msg::StiffnessEstimate>(p, topic, fmt_stiffness, o);
       if (topic == dds::topics::kStiffnessMeasurement) return echo<hil_msgs::msg::StiffnessMeasurement>(p, topic, fmt_measurement, o);
+      // /tf_static is latched (transient local): a late echo still gets the tree.
+      if (topic == dds::topics::kTfStatic) return echo<tf2_msgs::msg::TFMessage>(p, topic, fmt_tf, o, dds::StreamQos{true, 1, 1});
+      if (topic == dds::topics::kDiagnostics) return echo<diagnostic_msgs::msg::DiagnosticArray>(p, topic, fmt_diagnostics, o);
       throw format::FormatError({"command line", 0, 0, "TOPIC"}, "unknown topic '" + o.topic +
                                     "' (known: pose_wrench, device_status, contact_estimate, stiffness_estimate, "
-                                    "stiffness_measurement)");
+                                    "stiffness_measurement, tf_static, diagnostics)");
     });
   });
 }
