@@ -163,6 +163,8 @@ std::string parse_candump_line(std::string_view line, CanFrame& out, std::string
     if (++digits > 12) return at(i, "timestamp: too many digits in the seconds");
   }
   if (digits == 0 || i >= line.size() || line[i] != '.') return at(i, "timestamp: expected (seconds.microseconds)");
+  // Found by fuzzing: 12 digits fit in sec but not in t_ns (int64 ns), which wrapped silently.
+  if (sec > 9223372035) return at(i, "timestamp: seconds beyond 2262-04-11 (int64 nanoseconds)");
   ++i;
   std::uint64_t usec = 0;
   digits = 0;

@@ -230,21 +230,27 @@ void encode_entry(const RegisterEntry& e, double value, std::uint16_t* regs, std
 std::vector<ReadBlock> plan_reads(const RegisterMap& map, unsigned max_gap, unsigned max_count) {
   std::vector<ReadBlock> out;
   for (const RegisterTable table : {RegisterTable::holding, RegisterTable::input}) {
-    std::set<unsigned> regs;
+    // Each value is planned whole (first -> last register): found by fuzzing, a 32-bit value at
+    // a block's max_count boundary was split over two reads, so its words could come from two
+    // different instants (a torn float).
+    std::map<unsigned, unsigned> units;
     for (const auto& e : map.entries) {
       if (e.table != table) continue;
-      for (unsigned k = 0; k < register_count(e.type); ++k) regs.insert(e.address + k);
-      if (e.turns_address >= 0) regs.insert(static_cast<unsigned>(e.turns_address));
+      const unsigned last = e.address + register_count(e.type) - 1;
+      auto [it, fresh] = units.try_emplace(e.address, last);
+      if (!fresh) it->second = std::max(it->second, last);
+      if (e.turns_address >= 0) units.try_emplace(static_cast<unsigned>(e.turns_address), static_cast<unsigned>(e.turns_address));
     }
     ReadBlock cur;
     bool open = false;
-    for (const unsigned r : regs) {
-      if (open && r - (cur.address + cur.count) <= max_gap && r + 1 - cur.address <= max_count) {
-        cur.count = r + 1 - cur.address;
+    for (const auto& [first, last] : units) {
+      const unsigned end = cur.address + cur.count;
+      if (open && (first < end || (first - end <= max_gap && last + 1 - cur.address <= max_count))) {
+        cur.count = std::max(cur.count, last + 1 - cur.address);
         continue;
       }
       if (open) out.push_back(cur);
-      cur = ReadBlock{table, r, 1};
+      cur = ReadBlock{table, first, last + 1 - first};
       open = true;
     }
     if (open) out.push_back(cur);
