@@ -1,0 +1,20 @@
+// samples.csv reader (acquisition/runformat): parse_samples, then the summary `hil validate` prints.
+#include "fuzz_common.hpp"
+#include "hil/format/error.hpp"
+#include "hil/format/run.hpp"
+#include "hil/format/samples.hpp"
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  const std::string text(reinterpret_cast<const char*>(data), size);
+  try {
+    const auto t = hil::format::parse_samples(text, "fuzz.samples.csv");
+    if (t.line.size() != t.samples.size()) hil::fuzz::violated("fuzz_samples", "one source line per sample");
+    (void)hil::format::summarize(t);
+  } catch (const hil::format::FormatError&) {
+  } catch (const std::exception& e) {
+    hil::fuzz::unexpected("fuzz_samples", &e);
+  } catch (...) {
+    hil::fuzz::unexpected("fuzz_samples", nullptr);
+  }
+  return 0;
+}
