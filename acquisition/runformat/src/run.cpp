@@ -47,6 +47,7 @@ RunInfo parse_run_info(const std::string& text, const std::string& display_name)
         const YNode id = s.child("identity");
         id.expect_map();
         for (const auto& kv : id.raw()) {
+          if (!kv.first.IsScalar()) id.fail("identity keys are names (letters, digits, _), found a null, list or mapping");
           const auto key = kv.first.as<std::string>();
           if (key.empty() || key.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_") != std::string::npos)
             id.fail("identity keys are names (letters, digits, _), found '" + key + "'");

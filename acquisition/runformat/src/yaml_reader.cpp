@@ -35,6 +35,13 @@ void YNode::expect_map() const {
 void YNode::only(std::initializer_list<const char*> allowed) const {
   expect_map();
   for (const auto& kv : n_) {
+    // Found by fuzzing: a null, list or mapping key (`? [a]: 1`, `&x : 1`) made as<string>()
+    // throw yaml-cpp's bare "bad conversion".
+    if (!kv.first.IsScalar()) {
+      const auto m = kv.first.Mark();
+      throw FormatError(Location{*file_, static_cast<std::size_t>(m.line + 1), static_cast<std::size_t>(m.column + 1), path_},
+                        "a field name must be plain text");
+    }
     const auto key = kv.first.as<std::string>();
     bool ok = false;
     std::string best;
