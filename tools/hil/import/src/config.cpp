@@ -39,11 +39,19 @@ class Node {
     throw FormatError(loc, "required field is missing");
   }
 
+  // Found by fuzzing: a null, list or mapping key made as<string>() throw yaml-cpp's bare
+  // "bad conversion".
+  std::string key_text(const YAML::Node& k) const {
+    if (k.IsScalar()) return k.as<std::string>();
+    const auto m = k.Mark();
+    throw FormatError({*file_, static_cast<std::size_t>(m.line + 1), static_cast<std::size_t>(m.column + 1), path_},
+                      "a field name must be plain text");
+  }
   bool is_map() const { return n_.IsMap(); }
   std::vector<std::string> keys() const {
     map();
     std::vector<std::string> out;
-    for (const auto& kv : n_) out.push_back(kv.first.as<std::string>());
+    for (const auto& kv : n_) out.push_back(key_text(kv.first));
     return out;
   }
   bool is_scalar() const { return n_.IsScalar(); }
@@ -60,7 +68,7 @@ class Node {
   void only(std::initializer_list<const char*> allowed) const {
     map();
     for (const auto& kv : n_) {
-      const auto key = kv.first.as<std::string>();
+      const auto key = key_text(kv.first);
       bool ok = false;
       std::string best;
       std::size_t best_d = 4;
