@@ -2,7 +2,8 @@
 # Stage 2 of the hil vcan guest: run by busybox sh from the initramfs' /init, from the per-run
 # 9p share /job that run-in-vm.sh filled (this file, config, cmd.sh). Not meant to run on a host.
 #
-# It mounts the host root read-only at /host, the --rw directories read-write over it, makes
+# It mounts the host root read-only at /host, the --rw directories read-write over it, keeps the
+# --ro directories that the guest's tmpfs would hide (bound back read-only), makes
 # lo, vcan0 and vcan1, runs the command chrooted in /host and writes its exit status to
 # /job/status, then powers the guest off.
 
@@ -21,6 +22,14 @@ fail() { say "$*"; echo "hil-vm guest: $*" >> /job/stderr; finish 125; }
 
 mount -t 9p -o trans=virtio,version=9p2000.L,ro,msize=262144,cache=loose hostroot /host \
   || fail "cannot mount the host root (9p tag hostroot)"
+# Directories under /tmp, /run, ... that the command needs (run-in-vm.sh --ro, its working
+# directory, a script under /tmp): bound aside now, put back once the tmpfs hide the host's.
+i=0
+while [ "$i" -lt "${HIL_RO_COUNT:-0}" ]; do
+  dir=; eval "dir=\$HIL_RO_$i"
+  mkdir -p "/keep/$i" && mount -o bind "/host$dir" "/keep/$i" || fail "cannot keep $dir visible"
+  i=$((i + 1))
+done
 mount -t proc proc /host/proc || fail "mount /proc"
 mount -t sysfs sysfs /host/sys || fail "mount /sys"
 mount -t devtmpfs devtmpfs /host/dev || fail "mount /dev"
@@ -30,6 +39,14 @@ mount -t tmpfs -o mode=1777 tmpfs /host/dev/shm
 mount -t tmpfs -o mode=1777 tmpfs /host/tmp || fail "mount /tmp"
 mount -t tmpfs -o mode=755 tmpfs /host/run
 mount -t tmpfs -o mode=1777 tmpfs /host/var/tmp
+
+i=0
+while [ "$i" -lt "${HIL_RO_COUNT:-0}" ]; do
+  dir=; eval "dir=\$HIL_RO_$i"
+  mkdir -p "/host$dir" 2> /dev/null # on the fresh tmpfs; before the --rw shares, which may lie inside
+  mount -o bind "/keep/$i" "/host$dir" || fail "cannot bind $dir back (read-only)"
+  i=$((i + 1))
+done
 
 i=0
 while [ "$i" -lt "$HIL_RW_COUNT" ]; do

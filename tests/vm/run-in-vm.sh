@@ -12,6 +12,9 @@
 #   --timeout SECONDS  hard limit for the whole run, boot included (default 300); on expiry
 #                      QEMU (or the host command) is killed and the exit status is 124
 #   --rw DIR           share DIR read-write at the same path in the guest (repeatable)
+#   --ro DIR           keep DIR visible (read-only) although it lies under /tmp, /var/tmp or
+#                      /run, which the guest replaces by fresh tmpfs (repeatable). Done by itself
+#                      for the working directory and for COMMAND and arguments naming such paths.
 #   --shell            interactive: a bash in the guest on this terminal (COMMAND optional)
 #   --vm | --host      force the VM, or force running on the host (default: auto)
 #   --smp N            guest CPUs (default 1, or HIL_VM_SMP)
@@ -34,6 +37,7 @@ SMP=${HIL_VM_SMP:-1}
 SHELL_MODE=0
 VERBOSE=0
 RW=()
+RO=()
 
 msg() { printf 'run-in-vm: %s\n' "$*" >&2; }
 die() { msg "error: $*"; exit 125; }
@@ -45,6 +49,8 @@ while (($#)); do
     --timeout=*) TIMEOUT=${1#*=}; shift ;;
     --rw) RW+=("${2:?--rw needs a directory}"); shift 2 ;;
     --rw=*) RW+=("${1#*=}"); shift ;;
+    --ro) RO+=("${2:?--ro needs a directory}"); shift 2 ;;
+    --ro=*) RO+=("${1#*=}"); shift ;;
     --shell) SHELL_MODE=1; shift ;;
     --vm) MODE=vm; shift ;;
     --host) MODE=host; shift ;;
@@ -63,6 +69,10 @@ case $MODE in auto|vm|host) ;; *) die "HIL_VM_MODE must be auto, vm or host" ;; 
 for i in "${!RW[@]}"; do
   [[ -d ${RW[$i]} ]] || die "--rw ${RW[$i]}: not a directory"
   RW[$i]=$(readlink -f "${RW[$i]}")
+done
+for i in "${!RO[@]}"; do
+  [[ -d ${RO[$i]} ]] || die "--ro ${RO[$i]}: not a directory"
+  RO[$i]=$(readlink -f "${RO[$i]}")
 done
 CWD=$(pwd -P)
 
@@ -124,11 +134,40 @@ trap 'msg "terminated"; exit 143' TERM HUP
 
 sq() { printf "'%s'" "${1//\'/\'\\\'\'}"; }   # single-quote for busybox sh
 
+# The guest mounts fresh tmpfs on these (guest-init.sh); what the command needs from under them
+# is bound back read-only from the host root before (a checkout or build under /tmp works so).
+under() { local d=$1; shift; local p; for p; do [[ $d == "$p" || $d == "$p"/* ]] && return 0; done; return 1; }
+HIDDEN=(/tmp /var/tmp /run /dev/shm)
+keep_visible() {   # keep_visible PATH: its directory (itself if a directory) becomes an --ro dir
+  local p
+  p=$(readlink -f -- "$1" 2> /dev/null) || return 0
+  [[ -e $p ]] || return 0
+  [[ -d $p ]] || p=$(dirname -- "$p")
+  under "$p" "${HIDDEN[@]}" && ! under "$p" "${RW[@]}" && RO+=("$p")
+  return 0
+}
+if ((SHELL_MODE == 0)); then
+  keep_visible "$CWD"
+  if [[ $1 == */* ]]; then keep_visible "$1"; else keep_visible "$(command -v -- "$1" || true)"; fi
+  for a in "${@:2}"; do [[ $a == /* || $a == ./* || $a == ../* ]] && keep_visible "$a"; done
+else
+  keep_visible "$CWD"
+fi
+# Outermost first, each once (a directory inside another one is visible with it).
+ro_kept=()
+while IFS= read -r d; do
+  [[ -n $d ]] && ! under "$d" "${ro_kept[@]}" && ro_kept+=("$d")
+done < <(printf '%s\n' "${RO[@]}" | sort -u)
+RO=("${ro_kept[@]}")
+((${#RO[@]} && VERBOSE)) && msg "kept visible (read-only) in the guest: ${RO[*]}"
+
 # config for guest-init.sh (busybox sh)
 {
   echo "HIL_MODE=$( ((SHELL_MODE)) && echo shell || echo run)"
   echo "HIL_RW_COUNT=${#RW[@]}"
   for i in "${!RW[@]}"; do echo "HIL_RW_$i=$(sq "${RW[$i]}")"; done
+  echo "HIL_RO_COUNT=${#RO[@]}"
+  for i in "${!RO[@]}"; do echo "HIL_RO_$i=$(sq "${RO[$i]}")"; done
 } > "$job/config"
 cp "$SELF_DIR/guest-init.sh" "$job/guest-init.sh"
 
@@ -153,7 +192,7 @@ under_rw() { local d; for d in "${RW[@]}"; do [[ $1 == "$d" || $1 == "$d"/* ]] &
   else echo 'export TMPDIR=/tmp'; fi
   if ((SHELL_MODE)); then echo "export TERM=$(printf %q "${TERM:-vt100}")"; else echo 'export TERM=dumb'; fi
   echo 'export HIL_VCAN_MODE=vm'
-  printf 'cd -- %q || { echo "run-in-vm: cannot enter %q in the guest (under /tmp? pass it with --rw)" >&2; exit 126; }\n' "$CWD" "$CWD"
+  printf 'cd -- %q || { echo "run-in-vm: cannot enter %q in the guest (pass it with --rw or --ro)" >&2; exit 126; }\n' "$CWD" "$CWD"
   if (($# == 0)); then echo 'exec /bin/bash -l'
   else printf 'exec'; printf ' %q' "$@"; printf '\n'; fi
 } > "$job/cmd.sh"
