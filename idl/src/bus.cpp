@@ -6,6 +6,9 @@
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
 #include <cstdlib>
 #include <filesystem>
 #include <stdexcept>
@@ -59,6 +62,55 @@ int domain_from_env(int fallback) { return domain_from(std::getenv("HIL_DDS_DOMA
 
 int resolve_domain(int command_line, int fallback) { return command_line >= 0 ? command_line : domain_from_env(fallback); }
 
+namespace {
+// Fast DDS reads the files itself and only logs why it failed: check here, so the error names the file.
+void check_readable(const std::string& path, const char* what) {
+  std::error_code ec;
+  if (path.empty() || !std::filesystem::is_regular_file(path, ec))
+    throw format::FormatError({path.empty() ? std::string("DDS Security") : path, 0, 0, ""}, std::string(what) + " not found");
+  if (std::FILE* f = std::fopen(path.c_str(), "rb")) {
+    std::fclose(f);
+  } else {
+    throw format::FormatError({path, 0, 0, ""}, std::string(what) + " not readable: " + std::strerror(errno));
+  }
+}
+
+std::string file_uri(const std::string& path) { return "file://" + std::filesystem::absolute(path).lexically_normal().string(); }
+
+void apply_security(const SecurityFiles& s, DomainParticipantQos& qos) {
+  check_readable(s.identity_ca, "identity CA certificate");
+  check_readable(s.identity_certificate, "participant certificate");
+  check_readable(s.private_key, "participant private key");
+  check_readable(s.permissions_ca, "permissions CA certificate");
+  check_readable(s.governance, "governance document");
+  check_readable(s.permissions, "permissions document");
+  auto& props = qos.properties().properties();
+  const auto set = [&](const std::string& name, const std::string& value) {
+    for (auto& p : props)
+      if (p.name() == name) {
+        p.value() = value;
+        return;
+      }
+    props.emplace_back(name, value);
+  };
+  set("dds.sec.auth.plugin", "builtin.PKI-DH");
+  set("dds.sec.auth.builtin.PKI-DH.identity_ca", file_uri(s.identity_ca));
+  set("dds.sec.auth.builtin.PKI-DH.identity_certificate", file_uri(s.identity_certificate));
+  set("dds.sec.auth.builtin.PKI-DH.private_key", file_uri(s.private_key));
+  set("dds.sec.access.plugin", "builtin.Access-Permissions");
+  set("dds.sec.access.builtin.Access-Permissions.permissions_ca", file_uri(s.permissions_ca));
+  set("dds.sec.access.builtin.Access-Permissions.governance", file_uri(s.governance));
+  set("dds.sec.access.builtin.Access-Permissions.permissions", file_uri(s.permissions));
+  set("dds.sec.crypto.plugin", "builtin.AES-GCM-GMAC");
+}
+
+bool has_security(const DomainParticipantQos& qos) {
+  for (const auto& p : qos.properties().properties())
+    if (p.name() == "dds.sec.auth.plugin") return true;
+  return false;
+}
+}  // namespace
+
 Participant::Participant(const ParticipantOptions& o) : domain_id_(o.domain_id) {
   auto* factory = DomainParticipantFactory::get_instance();
   const std::string file = o.profile_file.empty() ? default_profile_path() : o.profile_file;
@@ -70,11 +122,19 @@ Participant::Participant(const ParticipantOptions& o) : domain_id_(o.domain_id) 
   if (factory->get_participant_qos_from_profile(o.profile_name, qos) != ReturnCode_t::RETCODE_OK)
     throw std::runtime_error("DDS profile '" + o.profile_name + "' not found in " + file);
   qos.name(o.name);
+  if (o.security.enabled()) apply_security(o.security, qos);
+  secure_ = has_security(qos);
   // The participant listener must not take data events: with them in its mask Fast DDS routes
   // data to the participant's (empty) on_data_on_readers and the readers' callbacks never run.
   StatusMask mask = StatusMask::all();
   mask >> StatusMask::data_on_readers() >> StatusMask::data_available();
   participant_ = factory->create_participant(static_cast<DomainId_t>(o.domain_id), qos, o.listener, mask);
+  if (!participant_ && secure_)
+    throw std::runtime_error("DDS Security refused to create the participant in domain " + std::to_string(o.domain_id) +
+                             (o.security.enabled() ? " with certificate " + o.security.identity_certificate + " and permissions " +
+                                                         o.security.permissions
+                                                   : std::string(" (security properties of profile '") + o.profile_name + "')") +
+                             " (Fast DDS logs why)");
   if (!participant_) throw std::runtime_error("DDS: cannot create a participant in domain " + std::to_string(o.domain_id));
   publisher_ = participant_->create_publisher(PUBLISHER_QOS_DEFAULT);
   subscriber_ = participant_->create_subscriber(SUBSCRIBER_QOS_DEFAULT);
@@ -138,6 +198,14 @@ DataReaderQos reader_qos(const Participant& p, const StreamQos& q) {
   }
   if (q.durable_depth > 0) qos.durability().kind = TRANSIENT_LOCAL_DURABILITY_QOS;
   return qos;
+}
+
+std::string refused(const Participant& p, const char* what, const std::string& topic) {
+  std::string m = std::string("DDS: cannot create a ") + what + " on " + topic;
+  if (p.secure())
+    m += std::string(" (DDS Security: this participant's permissions do not allow ") +
+         (std::string(what) == "writer" ? "publishing" : "subscribing to") + " it)";
+  return m;
 }
 
 bool wait_matched(const std::function<int()>& count, int n, std::chrono::milliseconds timeout) {

@@ -23,6 +23,18 @@
 
 namespace hil::dds {
 
+/// DDS Security (docs/security.md): one participant's identity and permissions, as file paths.
+/// All empty: no security beyond what the profile sets.
+struct SecurityFiles {
+  std::string identity_ca;           ///< CA that signed every participant's certificate
+  std::string identity_certificate;  ///< this participant's certificate (PEM)
+  std::string private_key;           ///< its private key (PEM)
+  std::string permissions_ca;        ///< CA that signed governance and permissions
+  std::string governance;            ///< signed governance document (S/MIME)
+  std::string permissions;           ///< this participant's signed permissions (S/MIME)
+  bool enabled() const { return !identity_certificate.empty(); }
+};
+
 struct ParticipantOptions {
   int domain_id = 0;
   /// XML profile file; empty = hil's host-only profile (default_profile_path()).
@@ -32,6 +44,8 @@ struct ParticipantOptions {
   std::string name = "hil";
   /// Not owned; must outlive the participant. Sees discovery of other participants.
   eprosima::fastdds::dds::DomainParticipantListener* listener = nullptr;
+  /// When enabled: authentication, access control and encryption with these files.
+  SecurityFiles security;
 };
 
 /// The host-only profile: $HIL_DDS_PROFILE if set, else the installed copy, else the source tree's.
@@ -59,6 +73,8 @@ class Participant {
   eprosima::fastdds::dds::Publisher* publisher() const { return publisher_; }
   eprosima::fastdds::dds::Subscriber* subscriber() const { return subscriber_; }
   int domain_id() const { return domain_id_; }
+  /// True when this participant runs with DDS Security (its permissions decide what it may do).
+  bool secure() const { return secure_; }
 
   /// Registers the type if needed and returns the topic (one per name).
   eprosima::fastdds::dds::Topic* topic(const std::string& name, eprosima::fastdds::dds::TypeSupport type);
@@ -70,6 +86,7 @@ class Participant {
   std::map<std::string, eprosima::fastdds::dds::Topic*> topics_;
   std::mutex mutex_;
   int domain_id_ = 0;
+  bool secure_ = false;
 };
 
 /// Quality of service for a stream.
@@ -85,6 +102,8 @@ namespace detail {
 eprosima::fastdds::dds::DataWriterQos writer_qos(const Participant& p, const StreamQos& q);
 eprosima::fastdds::dds::DataReaderQos reader_qos(const Participant& p, const StreamQos& q);
 bool wait_matched(const std::function<int()>& count, int n, std::chrono::milliseconds timeout);
+/// Why a writer or reader could not be made: with security, most likely its permissions.
+std::string refused(const Participant& p, const char* what, const std::string& topic);
 }  // namespace detail
 
 /// Publishes messages of type Msg on one topic.
@@ -94,7 +113,7 @@ class Writer {
   Writer(Participant& p, const std::string& topic, const StreamQos& qos = {}) : p_(p) {
     eprosima::fastdds::dds::TypeSupport ts(new typename TypeSupportOf<Msg>::type());
     writer_ = p.publisher()->create_datawriter(p.topic(topic, ts), detail::writer_qos(p, qos));
-    if (!writer_) throw std::runtime_error("DDS: cannot create a writer on " + topic);
+    if (!writer_) throw std::runtime_error(detail::refused(p, "writer", topic));
   }
   ~Writer() { p_.publisher()->delete_datawriter(writer_); }
   Writer(const Writer&) = delete;
@@ -131,7 +150,7 @@ class Reader : private eprosima::fastdds::dds::DataReaderListener {
   Reader(Participant& p, const std::string& topic, Callback cb, const StreamQos& qos = {}) : p_(p), cb_(std::move(cb)) {
     eprosima::fastdds::dds::TypeSupport ts(new typename TypeSupportOf<Msg>::type());
     reader_ = p.subscriber()->create_datareader(p.topic(topic, ts), detail::reader_qos(p, qos), this);
-    if (!reader_) throw std::runtime_error("DDS: cannot create a reader on " + topic);
+    if (!reader_) throw std::runtime_error(detail::refused(p, "reader", topic));
   }
   ~Reader() override {
     reader_->set_listener(nullptr);
