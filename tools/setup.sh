@@ -18,6 +18,7 @@ deps() {
     can-utils iproute2 libgtest-dev libgmock-dev libbenchmark-dev zlib1g-dev libzstd-dev liblz4-dev
     python3-can python3-pymodbus python3-serial-asyncio python3-numpy python3-jsonschema
     pybind11-dev python3-dev python3-pytest
+    openssl
     clang libclang-rt-14-dev lld  # libFuzzer targets (tests/fuzz)
   )
   # Node and npm for the independent MCAP reader's tests (tests/mcap); kept when already there (Node 20).

@@ -21,6 +21,7 @@
 #include "contact/worker.hpp"
 #include "run_diagnosis.hpp"
 #include "commands.hpp"
+#include "keystore/participant.hpp"
 #include "data_dir.hpp"
 #include "hil/acquisition/recorder.hpp"
 #include "hil/dds/bus.hpp"
@@ -81,9 +82,7 @@ int demo(const DemoOptions& o) {
   simulate_run(sa);
   const auto played = format::load_run(played_dir);
 
-  auto& g = globals();
-  dds::Participant participant({g.dds_domain >= 0 ? g.dds_domain : dds::domain_from_env(), g.dds_profile, g.dds_profile_name,
-                                "hil-demo-monitor"});
+  dds::Participant participant(participant_options("hil-demo-monitor"));
   std::atomic<std::uint64_t> bus_samples{0}, bus_status{0}, bus_estimates{0};
   dds::Reader<hil_msgs::msg::PoseWrenchSample> samples(participant, dds::topics::kPoseWrenchSample,
                                                        [&](const auto&, const auto&) { ++bus_samples; });

@@ -14,6 +14,8 @@ struct GlobalOptions {
   std::string dds_profile;
   std::string dds_profile_name = "hil_localhost";
   int dds_domain = -1;  ///< -1: $HIL_DDS_DOMAIN, else $ROS_DOMAIN_ID, else 0
+  std::string secure;       ///< --secure KEYSTORE[:NAME]: DDS Security (keystore/participant.hpp)
+  std::string secure_name;  ///< --secure-name: keystore participant (default: the command's role)
 };
 GlobalOptions& globals();
 
@@ -32,5 +34,6 @@ void add_acquire(CLI::App& app);    // the rig service
 void add_import(CLI::App& app);     // marker + force-plate CSV -> run (issue 6)
 void add_diagnose(CLI::App& app);   // the diagnosis (issue 6)
 void add_export(CLI::App& app);     // run -> MCAP (issue 13)
+void add_keystore(CLI::App& app);   // DDS Security keystore (issue 15)
 
 }  // namespace hil::cli

@@ -14,6 +14,7 @@
 #include <thread>
 
 #include "../commands.hpp"
+#include "../keystore/participant.hpp"
 #include "acquire.hpp"
 #include "hil/acquisition/acquirer.hpp"
 #include "hil/acquisition/identity.hpp"
@@ -139,11 +140,9 @@ AcquireResult run_acquisition(const AcquireOptions& o, const std::function<void(
   std::unique_ptr<drivers::RobotControllerDriver> robot;
   if (with_robot) robot = std::make_unique<drivers::RobotControllerDriver>(mcfg);
 
-  auto& g = globals();
   std::unique_ptr<dds::Participant> bus;
   if (!o.no_bus)
-    bus = std::make_unique<dds::Participant>(dds::ParticipantOptions{g.dds_domain >= 0 ? g.dds_domain : dds::domain_from_env(),
-                                                                     g.dds_profile, g.dds_profile_name, "hil-acquire"});
+    bus = std::make_unique<dds::Participant>(participant_options("hil-acquire"));
   acquisition::AcquirerOptions ao;
   ao.sync.wrench_rate_hz = pcfg.rate_hz;
   ao.sync.output_rate_hz = o.output_rate_hz;

@@ -10,6 +10,7 @@
 #include <thread>
 
 #include "../commands.hpp"
+#include "../keystore/participant.hpp"
 #include "hil/acquisition/sample_msg.hpp"
 #include "hil/dds/bus.hpp"
 #include "hil/dds/topics.hpp"
@@ -131,8 +132,7 @@ void add_echo(CLI::App& app) {
     set_action([] {
       std::signal(SIGINT, on_echo_signal);
       std::signal(SIGTERM, on_echo_signal);
-      auto& g = globals();
-      dds::Participant p({g.dds_domain >= 0 ? g.dds_domain : dds::domain_from_env(), g.dds_profile, g.dds_profile_name, "hil-echo"});
+      dds::Participant p(participant_options("hil-echo"));
       const auto topic = resolve(o.topic);
       if (topic == dds::topics::kPoseWrenchSample) return echo<hil_msgs::msg::PoseWrenchSample>(p, topic, fmt_pws, o);
       if (topic == dds::topics::kDeviceStatus) return echo<hil_msgs::msg::DeviceStatus>(p, topic, fmt_status, o);

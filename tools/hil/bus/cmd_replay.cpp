@@ -9,6 +9,7 @@
 #include <thread>
 
 #include "../commands.hpp"
+#include "../keystore/participant.hpp"
 #include "hil/acquisition/sample_msg.hpp"
 #include "hil/dds/bus.hpp"
 #include "hil/dds/topics.hpp"
@@ -45,8 +46,7 @@ std::vector<hil_msgs::msg::PoseWrenchSample> load_samples(const std::string& pat
 
 int replay(const ReplayOptions& o) {
   const auto samples = load_samples(o.run);
-  auto& g = globals();
-  dds::Participant p({g.dds_domain >= 0 ? g.dds_domain : dds::domain_from_env(), g.dds_profile, g.dds_profile_name, "hil-replay"});
+  dds::Participant p(participant_options("hil-replay"));
   dds::Writer<hil_msgs::msg::PoseWrenchSample> w(p, dds::topics::kPoseWrenchSample);
   if (o.wait_readers > 0 && !w.wait_for_readers(o.wait_readers, std::chrono::milliseconds(static_cast<long>(o.wait_s * 1e3))))
     throw std::runtime_error(fmt::format("replay: fewer than {} subscribers after {} s", o.wait_readers, o.wait_s));

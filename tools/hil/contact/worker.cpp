@@ -11,6 +11,7 @@
 #include <thread>
 
 #include "../commands.hpp"
+#include "../keystore/participant.hpp"
 #include "hil/acquisition/sample_msg.hpp"
 #include "hil/dds/bus.hpp"
 #include "hil/dds/topics.hpp"
@@ -35,9 +36,7 @@ struct WorkerArgs {
 
 int worker(const WorkerArgs& a) {
   const auto rig = format::load_rig(a.rig);
-  auto& g = globals();
-  dds::Participant participant({g.dds_domain >= 0 ? g.dds_domain : dds::domain_from_env(), g.dds_profile,
-                                g.dds_profile_name, "hil-contact-worker"});
+  dds::Participant participant(participant_options("hil-contact-worker"));
   ContactWorker w(participant, rig);
   std::signal(SIGINT, on_signal);
   std::signal(SIGTERM, on_signal);

@@ -9,6 +9,7 @@
 #include <thread>
 
 #include "../commands.hpp"
+#include "../keystore/participant.hpp"
 #include "../output.hpp"
 #include "hil/calibration/experiment.hpp"
 #include "hil/calibration/online.hpp"
@@ -289,6 +290,7 @@ dds::ParticipantOptions participant_options(const char* name) {
   o.profile_file = g.dds_profile;
   o.profile_name = g.dds_profile_name;
   o.name = name;
+  o.security = security_files(name);  // --secure
   return o;
 }
 
