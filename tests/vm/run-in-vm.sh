@@ -143,6 +143,8 @@ keep_visible() {   # keep_visible PATH: its directory (itself if a directory) be
   p=$(readlink -f -- "$1" 2> /dev/null) || return 0
   [[ -e $p ]] || return 0
   [[ -d $p ]] || p=$(dirname -- "$p")
+  # Strictly below: /tmp itself stays the guest's writable tmpfs (an empty one is fine as cwd).
+  [[ " ${HIDDEN[*]} " == *" $p "* ]] && return 0
   under "$p" "${HIDDEN[@]}" && ! under "$p" "${RW[@]}" && RO+=("$p")
   return 0
 }
@@ -156,6 +158,7 @@ fi
 # Outermost first, each once (a directory inside another one is visible with it).
 ro_kept=()
 while IFS= read -r d; do
+  [[ " ${HIDDEN[*]} " == *" $d "* ]] && die "--ro $d: the guest needs its own writable $d; name a directory below it"
   [[ -n $d ]] && ! under "$d" "${ro_kept[@]}" && ro_kept+=("$d")
 done < <(printf '%s\n' "${RO[@]}" | sort -u)
 RO=("${ro_kept[@]}")

@@ -2,8 +2,8 @@
 # vcan harness test (d), run on the host: the harness from a checkout under /tmp, which the guest
 # hides behind its own tmpfs. A copy of run-in-vm.sh and guest-init.sh under /tmp/hil-vm-anypath.*
 # runs a script living there, from a working directory there, with a build directory there shared
-# read-write (--rw inside a kept directory); then a command from / whose argument is a file
-# under /tmp. Checks: exit statuses propagate, the files are visible, the kept directory is
+# read-write (--rw inside a kept directory); then a command run from /tmp whose argument is a
+# file under /tmp. Checks: exit statuses propagate, the files are visible, the kept directory is
 # read-only in the guest and the --rw one writable.
 # Usage: test-any-path.sh [path/to/tests/vm]
 set -uo pipefail
@@ -45,11 +45,12 @@ if [[ $mode == vm ]]; then
     || fail "the kept directory was writable from the guest"
 fi
 
-# 2. absolute command under /tmp run from /, a file argument in another /tmp directory
-(cd / && "$co/tests/vm/run-in-vm.sh" --timeout 120 -- /bin/bash -c 'cat "$1"; exit 3' _ "$d/data/in.txt") \
-  > "$d/out" 2> "$d/err"
+# 2. absolute harness path, working directory /tmp itself (stays the guest's writable tmpfs),
+#    a file argument in another /tmp directory
+(cd /tmp && "$co/tests/vm/run-in-vm.sh" --timeout 120 -- \
+  /bin/bash -c 'cat "$1"; touch "/tmp/.w$$" || exit 9; exit 3' _ "$d/data/in.txt") > "$d/out" 2> "$d/err"
 rc=$?
-((rc == 3)) && grep -qxF "an argument under /tmp" "$d/out" && ok "file argument under /tmp visible, status 3" \
+((rc == 3)) && grep -qxF "an argument under /tmp" "$d/out" && ok "file argument under /tmp visible, /tmp writable, status 3" \
   || { cat "$d/err"; fail "argument under /tmp: status $rc, output $(cat "$d/out")"; }
 
 if ((failures)); then echo "$failures check(s) failed"; exit 1; fi
