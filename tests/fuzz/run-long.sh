@@ -22,8 +22,8 @@ for t in "${targets[@]}"; do
   "$here/run-target.sh" "$bin" "$t" "$seconds" > "$bin/work/$t.long" 2>&1
   rc=$?
   log=$bin/work/$t.log
-  done_line=$(grep -E '^#[0-9]+ +DONE' "$log" | tail -1)
-  [[ -n $done_line ]] || done_line=$(grep -E '^#[0-9]+ ' "$log" | tail -1)
+  done_line=$(grep -E '^#[0-9]+[[:space:]]+DONE' "$log" | tail -1)
+  [[ -n $done_line ]] || done_line=$(grep -E '^#[0-9]+[[:space:]]' "$log" | tail -1)
   execs=$(sed -n 's/^stat::number_of_executed_units: *//p' "$log")
   rate=$(sed -n 's/^stat::average_exec_per_sec: *//p' "$log")
   cov=$(grep -oE 'cov: [0-9]+' <<< "$done_line" | cut -d' ' -f2)

@@ -17,8 +17,9 @@ exe=$bin/$target
 regressions=("$here/regressions/$target"/*)
 if [[ -e ${regressions[0]} ]]; then
   echo "run-target: $target: replaying ${#regressions[@]} regression input(s)"
-  "$exe" -rss_limit_mb=2048 "${regressions[@]}" 2>&1 | grep -vE '^(Running|Executed) ' || true
-  rc=${PIPESTATUS[0]}
+  "$exe" -rss_limit_mb=2048 "${regressions[@]}" > "$bin/$target.replay.log" 2>&1
+  rc=$?
+  grep -vE '^(Running|Executed) ' "$bin/$target.replay.log"
   ((rc == 0)) || { echo "run-target: $target: a regression input fails again (exit $rc)" >&2; exit 1; }
 fi
 
@@ -32,7 +33,7 @@ mkdir -p "$bin/work/$target" "$bin/artifacts"
   "${dict[@]}" -artifact_prefix="$bin/artifacts/$target-" "$bin/work/$target" "$here/corpus/$target" \
   > "$bin/work/$target.log" 2>&1
 rc=$?
-grep -E '^#[0-9]+ +(INITED|DONE)|^stat::(number_of_executed_units|average_exec_per_sec|peak_rss_mb)' "$bin/work/$target.log"
+grep -E '^#[0-9]+[[:space:]]+(INITED|DONE)|^stat::(number_of_executed_units|average_exec_per_sec|peak_rss_mb)' "$bin/work/$target.log"
 if ((rc != 0)); then
   tail -n 60 "$bin/work/$target.log" >&2
   echo "run-target: $target: FINDING (exit $rc); input saved as $(ls -t "$bin/artifacts/$target-"* 2> /dev/null | head -1)" >&2
