@@ -163,11 +163,12 @@ class Unauthorised(unittest.TestCase):
     def test_no_certificate_receives_nothing(self):
         ks, domain = Keystore(self), "38"
         good = start("--dds-domain", domain, *ks.secure("echo"), "echo", "pose_wrench", "-n", str(N), "--timeout", "20")
-        outsider = start("--dds-domain", domain, "echo", "pose_wrench", "-n", "1", "--timeout", "6")
+        outsider = start("--dds-domain", domain, "echo", "pose_wrench", "-n", "1", "--timeout", "8")
         time.sleep(0.3)
         replay = hil("--dds-domain", domain, *ks.secure("replay"), "replay", RUN, "--speed", "4", "--wait-subscribers", "1",
                      "--wait-timeout", "15")
         self.assertEqual(replay.returncode, 0, replay.stderr)
+        self.assertIsNone(outsider.poll(), "the outsider stopped listening before the replay ended")
         rc, out, err = finish(good)
         self.assertEqual(samples(out), list(range(N)), err)
         rc, out, err = finish(outsider)
@@ -177,14 +178,15 @@ class Unauthorised(unittest.TestCase):
     def test_no_certificate_injects_nothing(self):
         ks, domain = Keystore(self), "39"
         # Count everything for 6 s: the authorised replay's N samples, and the outsider's if it got through.
-        victim = start("--dds-domain", domain, *ks.secure("echo"), "echo", "pose_wrench", "--timeout", "6")
+        victim = start("--dds-domain", domain, *ks.secure("echo"), "echo", "pose_wrench", "--timeout", "8")
         time.sleep(0.3)
         intruder = start("--dds-domain", domain, "replay", RUN, "--speed", "3")
         replay = hil("--dds-domain", domain, *ks.secure("replay"), "replay", RUN, "--speed", "3", "--wait-subscribers", "1",
                      "--wait-timeout", "15")
         self.assertEqual(replay.returncode, 0, replay.stderr)
+        self.assertEqual(finish(intruder)[0], 0)  # it did publish, unmatched
+        self.assertIsNone(victim.poll(), "the subscriber stopped before both replays ended")
         rc, out, err = finish(victim)
-        finish(intruder)
         self.assertEqual(rc, 0, err)
         self.assertEqual(samples(out), list(range(N)))  # once each: nothing from the intruder
 
@@ -193,14 +195,15 @@ class Unauthorised(unittest.TestCase):
         # two of them so that they cannot talk to each other either.
         ks, rogue1, rogue2, domain = Keystore(self), Keystore(self), Keystore(self), "41"
         good = start("--dds-domain", domain, *ks.secure("echo"), "echo", "pose_wrench", "-n", str(N), "--timeout", "20")
-        spy = start("--dds-domain", domain, *rogue1.secure("echo"), "echo", "pose_wrench", "-n", "1", "--timeout", "6")
+        spy = start("--dds-domain", domain, *rogue1.secure("echo"), "echo", "pose_wrench", "-n", "1", "--timeout", "8")
         time.sleep(0.3)
         intruder = start("--dds-domain", domain, *rogue2.secure("replay"), "replay", RUN, "--speed", "3")
         replay = hil("--dds-domain", domain, *ks.secure("replay"), "replay", RUN, "--speed", "3", "--wait-subscribers", "1",
                      "--wait-timeout", "15")
         self.assertEqual(replay.returncode, 0, replay.stderr)
+        self.assertEqual(finish(intruder)[0], 0)  # it did publish, unmatched
+        self.assertIsNone(spy.poll(), "the spy stopped listening before the replays ended")
         rc, out, err = finish(good)
-        finish(intruder)
         self.assertEqual(samples(out), list(range(N)), err)  # once each: nothing from the rogue replay
         rc, out, err = finish(spy)
         self.assertEqual(samples(out), [])
