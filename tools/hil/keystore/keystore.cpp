@@ -228,6 +228,7 @@ struct Layout {
 void need(const fs::path& p, const std::string& what, const std::string& hint) {
   std::error_code ec;
   if (!fs::is_regular_file(p, ec)) throw format::FormatError({p.string(), 0, 0, ""}, what + " not found" + hint);
+  if (!std::ifstream(p)) throw format::FormatError({p.string(), 0, 0, ""}, what + " not readable: " + std::strerror(errno));
 }
 
 void sign(const Layout& k, const fs::path& xml, const fs::path& p7s) {
