@@ -45,7 +45,7 @@ struct ParticipantOptions {
   /// Not owned; must outlive the participant. Sees discovery of other participants.
   eprosima::fastdds::dds::DomainParticipantListener* listener = nullptr;
   /// When enabled: authentication, access control and encryption with these files.
-  SecurityFiles security;
+  SecurityFiles security{};
 };
 
 /// The host-only profile: $HIL_DDS_PROFILE if set, else the installed copy, else the source tree's.
