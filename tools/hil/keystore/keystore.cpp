@@ -31,6 +31,11 @@ struct Result {
 
 // Runs openssl with `args`, no shell; its output is captured, never printed.
 Result openssl(const std::vector<std::string>& args) {
+  // argv before fork: other threads (Fast DDS's, in hil demo) may exist, so the child only execs.
+  std::vector<char*> argv;
+  argv.push_back(const_cast<char*>("openssl"));
+  for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+  argv.push_back(nullptr);
   int fds[2];
   if (pipe(fds) != 0) throw std::runtime_error(std::string("keystore: pipe: ") + std::strerror(errno));
   const pid_t pid = fork();
@@ -40,10 +45,6 @@ Result openssl(const std::vector<std::string>& args) {
     dup2(fds[1], 2);
     close(fds[0]);
     close(fds[1]);
-    std::vector<char*> argv;
-    argv.push_back(const_cast<char*>("openssl"));
-    for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
-    argv.push_back(nullptr);
     execvp("openssl", argv.data());
     _exit(127);
   }
