@@ -96,6 +96,24 @@ TEST(RegisterMapTest, ReadPlansGroupRegisters) {
   EXPECT_EQ(plan_reads(m, 1000, 125).size(), 3U);  // 0..201 exceeds 125 registers
 }
 
+TEST(RegisterMapTest, ReadPlansNeverSplitAValue) {
+  // A float32 at 124-125 straddles the 125-register limit of a read starting at 0: planned whole,
+  // in one read, it cannot be torn between two polls (found by fuzz_register_map).
+  RegisterMap m;
+  m.entries = {{"j1", 0, RegisterTable::holding, RegisterType::int16, WordOrder::big, 1, 0, -1},
+               {"j2", 124, RegisterTable::holding, RegisterType::float32, WordOrder::big, 1, 0, -1}};
+  for (unsigned max_count : {125U, 10U, 2U}) {
+    const auto plan = plan_reads(m, 1000, max_count);
+    for (const auto& e : m.entries) {
+      bool whole = false;
+      for (const auto& b : plan)
+        whole = whole || (b.table == e.table && b.address <= e.address && e.address + 2 <= b.address + b.count);
+      EXPECT_TRUE(whole || e.type == RegisterType::int16) << e.quantity << " split with max_count " << max_count;
+    }
+    for (const auto& b : plan) EXPECT_LE(b.count, max_count);
+  }
+}
+
 TEST(RegisterMapTest, ValidationNamesTheEntry) {
   using hil::test::config_error;
   RegisterMap m = float32_register_map();
