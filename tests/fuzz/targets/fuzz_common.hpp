@@ -23,6 +23,20 @@ namespace hil::fuzz {
   std::abort();
 }
 
+/// Runs `parse`: returning, or throwing the project's error type `Expected`, is an answer; any other
+/// exception is a finding.
+template <class Expected, class Parse>
+void answers_or(const char* target, Parse&& parse) {
+  try {
+    parse();
+  } catch (const Expected&) {
+  } catch (const std::exception& e) {
+    unexpected(target, &e);
+  } catch (...) {
+    unexpected(target, nullptr);
+  }
+}
+
 /// Input bytes consumed from the front (for targets whose first bytes choose a configuration).
 class Bytes {
  public:

@@ -5,15 +5,10 @@
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const std::string text(reinterpret_cast<const char*>(data), size);
-  try {
+  hil::fuzz::answers_or<hil::format::FormatError>("fuzz_rig", [&] {
     const auto rig = hil::format::parse_rig(text, "fuzz.rig.yaml");
     (void)hil::format::total_polyhedra(rig);
     (void)hil::format::total_features(rig);
-  } catch (const hil::format::FormatError&) {
-  } catch (const std::exception& e) {
-    hil::fuzz::unexpected("fuzz_rig", &e);
-  } catch (...) {
-    hil::fuzz::unexpected("fuzz_rig", nullptr);
-  }
+  });
   return 0;
 }

@@ -5,13 +5,8 @@
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const std::string text(reinterpret_cast<const char*>(data), size);
-  try {
+  hil::fuzz::answers_or<hil::format::FormatError>("fuzz_run_info", [&] {
     (void)hil::format::parse_run_info(text, "fuzz.run.yaml");
-  } catch (const hil::format::FormatError&) {
-  } catch (const std::exception& e) {
-    hil::fuzz::unexpected("fuzz_run_info", &e);
-  } catch (...) {
-    hil::fuzz::unexpected("fuzz_run_info", nullptr);
-  }
+  });
   return 0;
 }

@@ -6,15 +6,10 @@
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const std::string text(reinterpret_cast<const char*>(data), size);
-  try {
+  hil::fuzz::answers_or<hil::format::FormatError>("fuzz_samples", [&] {
     const auto t = hil::format::parse_samples(text, "fuzz.samples.csv");
     if (t.line.size() != t.samples.size()) hil::fuzz::violated("fuzz_samples", "one source line per sample");
     (void)hil::format::summarize(t);
-  } catch (const hil::format::FormatError&) {
-  } catch (const std::exception& e) {
-    hil::fuzz::unexpected("fuzz_samples", &e);
-  } catch (...) {
-    hil::fuzz::unexpected("fuzz_samples", nullptr);
-  }
+  });
   return 0;
 }

@@ -11,16 +11,11 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   const int dof = 1 + head % 8;
   const bool require_measured = head & 0x10;
   const std::string text = in.rest();
-  try {
+  hil::fuzz::answers_or<hil::format::FormatError>("fuzz_stiffness_table", [&] {
     const auto t = hil::cli::stiffness::parse_stiffness_table(text, "fuzz.table.csv", dof, require_measured);
     if (t.lines.size() != t.rows.size()) hil::fuzz::violated("fuzz_stiffness_table", "one line per row");
     if (require_measured && !t.rows.empty() && !t.has_measured)
       hil::fuzz::violated("fuzz_stiffness_table", "measured columns required but absent");
-  } catch (const hil::format::FormatError&) {
-  } catch (const std::exception& e) {
-    hil::fuzz::unexpected("fuzz_stiffness_table", &e);
-  } catch (...) {
-    hil::fuzz::unexpected("fuzz_stiffness_table", nullptr);
-  }
+  });
   return 0;
 }
