@@ -99,6 +99,9 @@ class Capture(unittest.TestCase):
     def capture(self, ks_echo, ks_replay):
         base = 7400 + 250 * self.DOMAIN  # this domain's RTPS ports: base .. base + 249
         sock = socket.socket(socket.AF_PACKET, socket.SOCK_RAW, socket.ntohs(0x0003))
+        # A large receive buffer: under load (ctest -j2 on 2 cores) this Python thread can fall
+        # behind a replay at full speed, and the kernel drops what does not fit (drops are checked).
+        sock.setsockopt(socket.SOL_SOCKET, getattr(socket, "SO_RCVBUFFORCE", 33), 64 << 20)
         sock.bind(("lo", 0))
         sock.settimeout(0.2)
         payloads, stop = [], threading.Event()
@@ -129,7 +132,10 @@ class Capture(unittest.TestCase):
         finally:
             stop.set()
             t.join()
+            # struct tpacket_stats {packets, drops}: a capture with drops proves nothing either way.
+            received, dropped = struct.unpack("II", sock.getsockopt(263, 6, 8))  # SOL_PACKET, PACKET_STATISTICS
             sock.close()
+        self.assertEqual(dropped, 0, "the capture lost %d of %d packets" % (dropped, received))
         self.assertEqual(replay.returncode, 0, replay.stderr)
         self.assertEqual(rc, 0, err)
         self.assertEqual(samples(out), list(range(N)))
