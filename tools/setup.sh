@@ -2,7 +2,8 @@
 # One entry point for a fresh Debian 12 machine (run as root):
 #   bash tools/setup.sh demo   install dependencies, build, run `hil demo`
 #   bash tools/setup.sh test   install dependencies (and the vcan VM), build, run every test
-#   bash tools/setup.sh deps | build
+#   bash tools/setup.sh deps | vm | build
+# Sanitizer runs (ASan+UBSan, TSan): tools/sanitize.sh.
 # Everything comes from Debian's archive (apt-get); nothing else is downloaded.
 set -euo pipefail
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -44,8 +45,9 @@ build() {
 
 case "${1:-}" in
   deps) deps ;;
+  vm) vm ;;
   build) deps; build ;;
   demo) deps; build; "$build/tools/hil/hil" demo ;;
   test) deps; vm; build; cd "$build" && ctest -j "$jobs" --output-on-failure --timeout 900 ;;
-  *) echo "usage: bash tools/setup.sh demo|test|deps|build" >&2; exit 2 ;;
+  *) echo "usage: bash tools/setup.sh demo|test|deps|vm|build" >&2; exit 2 ;;
 esac

@@ -2,6 +2,8 @@
 
 #include <fcntl.h>
 #include <fmt/format.h>
+#include <pthread.h>
+#include <sched.h>
 #include <spdlog/spdlog.h>
 #include <unistd.h>
 
@@ -193,7 +195,23 @@ std::vector<DeviceHealth> Acquirer::health() const {
   return out;
 }
 
+void Acquirer::enter_rt(const char* device) {
+  if (opt_.rt_priority <= 0) return;
+  sched_param sp{};
+  sp.sched_priority = opt_.rt_priority;
+  const int e = pthread_setschedparam(pthread_self(), SCHED_FIFO, &sp);
+  if (e == 0) {
+    ++rt_threads_;
+    spdlog::info("{}: device thread at real-time priority {} (SCHED_FIFO)", device, opt_.rt_priority);
+  } else {
+    spdlog::warn("{}: real-time priority {} not permitted ({}); the device thread runs at normal priority{}", device,
+                 opt_.rt_priority, std::strerror(e),
+                 e == EPERM ? " (needs CAP_SYS_NICE or an RLIMIT_RTPRIO of at least the priority)" : "");
+  }
+}
+
 void Acquirer::plate_loop() {
+  enter_rt(opt_.force_plate_name.c_str());
   drivers::RatePacer pacer(plate_->config().rate_hz);
   drivers::WrenchSample s;
   while (running_) {
@@ -248,6 +266,7 @@ void Acquirer::plate_loop() {
 }
 
 void Acquirer::robot_loop() {
+  enter_rt(opt_.robot_name.c_str());
   drivers::RatePacer pacer(robot_->config().rate_hz);
   drivers::RobotSample s;
   Eigen::VectorXd q;
@@ -355,16 +374,16 @@ void Acquirer::check_health(std::int64_t now_ns, bool periodic) {
   int held_back = 0;
   if (plate_changed) {
     const auto h = merged(plate_mon_.health(now_ns), plate_->counters());
-    if (plate_log_.change(plate_mon_.state(), now_ns, held_back)) log_state(plate_mon_, h.device, held_back);
+    if (plate_log_.change(plate_mon_.state(), now_ns, held_back, plate_mon_.reason())) log_state(plate_mon_, h.device, held_back);
     publish_status({h}, now_ns);
-  } else if (periodic && plate_log_.flush(now_ns, held_back)) {
+  } else if (periodic && plate_log_.flush(now_ns, held_back, plate_mon_.state(), plate_mon_.reason())) {
     log_state(plate_mon_, opt_.force_plate_name, held_back);
   }
   if (robot_changed) {
     const auto h = robot_mon_.health(now_ns);
-    if (robot_log_.change(robot_mon_.state(), now_ns, held_back)) log_state(robot_mon_, h.device, held_back);
+    if (robot_log_.change(robot_mon_.state(), now_ns, held_back, robot_mon_.reason())) log_state(robot_mon_, h.device, held_back);
     publish_status({h}, now_ns);
-  } else if (robot_ && periodic && robot_log_.flush(now_ns, held_back)) {
+  } else if (robot_ && periodic && robot_log_.flush(now_ns, held_back, robot_mon_.state(), robot_mon_.reason())) {
     log_state(robot_mon_, opt_.robot_name, held_back);
   }
   if (periodic && now_ns - last_status_ns_ >= static_cast<std::int64_t>(opt_.status_period_s * 1e9)) {

@@ -98,9 +98,11 @@ DeviceHealth DeviceMonitor::health(std::int64_t now_ns) const {
   return h;
 }
 
-bool StateLog::change(DeviceState s, std::int64_t t_ns, int& held_back) {
+bool StateLog::change(DeviceState s, std::int64_t t_ns, int& held_back, const std::string& reason) {
   const bool serious = s == DeviceState::fault || s == DeviceState::disconnected;
-  if (!serious && logged_ && t_ns - last_ns_ < quiet_ns_) {
+  const bool in_window = logged_ && t_ns - last_ns_ < quiet_ns_;
+  const bool repeated = s == last_state_ && reason == last_reason_;
+  if (in_window && (!serious || repeated)) {
     ++held_;
     return false;
   }
@@ -108,14 +110,18 @@ bool StateLog::change(DeviceState s, std::int64_t t_ns, int& held_back) {
   held_ = 0;
   last_ns_ = t_ns;
   logged_ = true;
+  last_state_ = s;
+  last_reason_ = reason;
   return true;
 }
 
-bool StateLog::flush(std::int64_t t_ns, int& held_back) {
+bool StateLog::flush(std::int64_t t_ns, int& held_back, DeviceState s, const std::string& reason) {
   if (held_ == 0 || t_ns - last_ns_ < quiet_ns_) return false;
   held_back = held_;
   held_ = 0;
   last_ns_ = t_ns;
+  last_state_ = s;
+  last_reason_ = reason;
   return true;
 }
 

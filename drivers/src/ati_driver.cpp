@@ -176,6 +176,9 @@ PollStatus AtiFtCanDriver::poll(WrenchSample& out) noexcept {
     if (st != PollStatus::ok) return st;
     if (!is_plain(f)) continue;
     if (f.id == id_a && f.len != 0) {
+      // A second first frame: the one before was an earlier answer's, late (the plate answers in
+      // order, so the newest is ours).
+      if (have_a) ++counters_.late_frames;
       if (!ati::decode_gauges_first(f, out.status_word, out.gauges)) {
         ++counters_.bad_frames;
         ++counters_.consecutive_failures;
@@ -187,6 +190,12 @@ PollStatus AtiFtCanDriver::poll(WrenchSample& out) noexcept {
       out.t_ns = f.t_ns;
       out.stamp = f.stamp;
     } else if (f.id == id_b) {
+      // A second frame before this poll's first one belongs to an earlier answer whose poll gave up
+      // between its frames: late. Taking it would tear the reading across two answers.
+      if (!have_a) {
+        ++counters_.late_frames;
+        continue;
+      }
       if (!ati::decode_gauges_second(f, out.gauges)) {
         ++counters_.bad_frames;
         ++counters_.consecutive_failures;

@@ -70,7 +70,12 @@ struct FakeAtiForcePlate::Impl {
   std::atomic<bool> stop{false};
   std::chrono::steady_clock::time_point start;
   std::mt19937_64 rng;
-  std::deque<std::pair<std::chrono::steady_clock::time_point, CanFrame>> pending;
+  struct Pending {
+    std::chrono::steady_clock::time_point due;
+    CanFrame frame;
+    bool completes_answer;  ///< the last frame of an intact gauge answer
+  };
+  std::deque<Pending> pending;
   Impl(FakeAtiConfig c, std::unique_ptr<CanChannel> ch, std::shared_ptr<const Scenario> s)
       : cfg(std::move(c)), channel(std::move(ch)), scenario(std::move(s)), model(cfg), faults(cfg.faults), rng(cfg.seed) {}
 };
@@ -120,11 +125,16 @@ void FakeAtiForcePlate::run() noexcept {
   Clock::time_point next_error = Clock::now();
   ScenarioPoint point;
   std::uniform_real_distribution<double> uni(0.0, 1.0);
-  auto send_now = [&](const CanFrame& f) {
+  // Sends one frame; `completes_answer`: it is the last frame of an intact gauge answer, which is
+  // then counted as delivered (the fault soak reconciles that count with what was recorded).
+  auto send_now = [&](const CanFrame& f, bool completes_answer) {
     if (I.channel->send(f, std::chrono::milliseconds(5)) == IoStatus::ok) {
       std::lock_guard lk(I.m);
       ++I.stats.frames_sent;
+      if (completes_answer) ++I.stats.gauge_answers_delivered;
+      return true;
     }
+    return false;
   };
   while (!I.stop.load()) {
     const auto now = Clock::now();
@@ -139,29 +149,30 @@ void FakeAtiForcePlate::run() noexcept {
     bool bus_off = false;
     for (const auto& w : f.bus_off) bus_off = bus_off || w.contains(t);
     if (bus_off && !in_bus_off) {
-      send_now(make_error_frame(kErrBusOff));
+      send_now(make_error_frame(kErrBusOff), false);
       std::lock_guard lk(I.m);
       ++I.stats.error_frames_sent;
     } else if (!bus_off && in_bus_off) {
-      send_now(make_error_frame(kErrRestarted));
+      send_now(make_error_frame(kErrRestarted), false);
       std::lock_guard lk(I.m);
       ++I.stats.error_frames_sent;
     }
     in_bus_off = bus_off;
     if (f.error_frame_rate_hz > 0.0 && now >= next_error) {
-      send_now(make_error_frame(kErrCrtl | kErrCnt, {0, kErrCrtlRxPassive, 0, 0, 0, 0, 0, 130}));
+      send_now(make_error_frame(kErrCrtl | kErrCnt, {0, kErrCrtlRxPassive, 0, 0, 0, 0, 0, 130}), false);
       {
         std::lock_guard lk(I.m);
         ++I.stats.error_frames_sent;
       }
       next_error = now + std::chrono::nanoseconds(static_cast<std::int64_t>(1e9 / f.error_frame_rate_hz));
     }
-    while (!I.pending.empty() && I.pending.front().first <= now) {
-      send_now(I.pending.front().second);
+    while (!I.pending.empty() && I.pending.front().due <= now) {
+      const auto& p = I.pending.front();
+      send_now(p.frame, p.completes_answer);
       I.pending.pop_front();
     }
     auto wait = std::chrono::nanoseconds(std::chrono::milliseconds(10));
-    if (!I.pending.empty()) wait = std::min<std::chrono::nanoseconds>(wait, I.pending.front().first - now);
+    if (!I.pending.empty()) wait = std::min<std::chrono::nanoseconds>(wait, I.pending.front().due - now);
     if (f.error_frame_rate_hz > 0.0) wait = std::min<std::chrono::nanoseconds>(wait, next_error - now);
     if (wait.count() < 0) wait = std::chrono::nanoseconds(0);
     CanFrame req;
@@ -229,6 +240,7 @@ void FakeAtiForcePlate::run() noexcept {
         break;
       default: continue;
     }
+    bool intact = true;  // no frame of the answer corrupted, dropped or refused by the channel
     {
       std::lock_guard lk(I.m);
       ++I.stats.requests;
@@ -240,6 +252,7 @@ void FakeAtiForcePlate::run() noexcept {
       if (f.corrupt_fraction > 0.0 && uni(I.rng) < f.corrupt_fraction) {
         ++I.stats.answers_corrupted;
         answer[0].len = static_cast<std::uint8_t>(answer[0].len >= 4 ? answer[0].len - 3 : answer[0].len + 1);
+        intact = false;
       }
     }
     const auto due = Clock::now() + std::chrono::nanoseconds(static_cast<std::int64_t>(f.extra_delay_s * 1e9));
@@ -251,12 +264,16 @@ void FakeAtiForcePlate::run() noexcept {
           drop = uni(I.rng) < f.drop_fraction;
           if (drop) ++I.stats.frames_dropped;
         }
-        if (drop) continue;
+        if (drop) {
+          intact = false;
+          continue;
+        }
       }
+      const bool completes = intact && op == ati::kOpReadGauges && k + 1 == n;
       if (f.extra_delay_s > 0.0)
-        I.pending.emplace_back(due, answer[k]);
+        I.pending.push_back({due, answer[k], completes});
       else
-        send_now(answer[k]);
+        intact = send_now(answer[k], completes) && intact;
     }
   }
 }

@@ -95,3 +95,21 @@ TEST(StateLog, AFlappingDeviceIsLoggedOncePerWindowAndEndsOnItsState) {
   EXPECT_TRUE(log.change(DeviceState::degraded, 3100 * ms, held));  // a new window
   EXPECT_EQ(held, 0);
 }
+
+TEST(StateLog, TheSameFaultRepeatedIsLoggedOncePerWindowAnotherAtOnce) {
+  StateLog log(1.0);
+  int held = -1;
+  const std::string corrupt = "bad frame: gauge frame 1 (id 0x000) has length 5, expected 8";
+  EXPECT_TRUE(log.change(DeviceState::fault, 0, held, corrupt));
+  // The plate recovers and fails again for the same reason, many times a second: held back.
+  for (int k = 1; k <= 20; ++k) {
+    EXPECT_FALSE(log.change(DeviceState::ok, (10 * k - 5) * ms, held, ""));
+    EXPECT_FALSE(log.change(DeviceState::fault, 10 * k * ms, held, corrupt)) << k;
+  }
+  // Another fault is news: logged at once, with what was held back.
+  EXPECT_TRUE(log.change(DeviceState::fault, 250 * ms, held, "bus error: bus-off"));
+  EXPECT_EQ(held, 40);
+  EXPECT_TRUE(log.change(DeviceState::disconnected, 260 * ms, held, "not connected"));
+  // The same fault again after the window: logged.
+  EXPECT_TRUE(log.change(DeviceState::fault, 1300 * ms, held, corrupt));
+}

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <numbers>
+#include <thread>
 
 #include "hil/drivers/ati_protocol.hpp"
 #include "hil/drivers/error.hpp"
@@ -390,4 +391,63 @@ TEST(ScenarioTest, InterpolatesAndLoops) {
   EXPECT_TRUE(hil::test::config_error([&] { Scenario x(bad); }, "scenario[1].t_s", "strictly increasing"));
   const DeviceClock clock{0.5, 100.0, 2.0};
   EXPECT_NEAR(clock.scenario_time(10.0), (10.0 * 1.0001 + 0.5) * 2.0, 1e-12);
+}
+
+// The fake's count of intact answers is what the fault soak reconciles with the recording: only
+// answers with every frame sent whole count, late ones once they are out.
+TEST_F(AtiFaults, OnlyIntactAnswersCountAsDelivered) {
+  WrenchSample s;
+  const auto delivered0 = b.fake->stats().gauge_answers_delivered;
+  ASSERT_EQ(b.plate->poll(s), PollStatus::ok);
+  // The fake counts after its send returns, possibly after the driver has its answer.
+  auto delivered_becomes = [&](std::uint64_t n) {
+    return hil::test::eventually([&] { return b.fake->stats().gauge_answers_delivered == n; });
+  };
+  EXPECT_TRUE(delivered_becomes(delivered0 + 1));
+  CanFaults dropped;
+  dropped.drop_fraction = 1.0;
+  b.fake->set_faults(dropped);
+  EXPECT_EQ(b.plate->poll(s), PollStatus::timeout);
+  CanFaults corrupt;
+  corrupt.corrupt_fraction = 1.0;
+  b.fake->set_faults(corrupt);
+  EXPECT_EQ(b.plate->poll(s), PollStatus::bad_frame);
+  EXPECT_EQ(b.fake->stats().gauge_answers_delivered, delivered0 + 1) << "a dropped or corrupted answer counted";
+  CanFaults late;
+  late.extra_delay_s = 0.002;  // inside the 50 ms timeout
+  b.fake->set_faults(late);
+  ASSERT_TRUE(hil::test::eventually([&] { return b.plate->poll(s) == PollStatus::ok; }));
+  b.fake->stop();  // its counts are final
+  // Every intact answer became a reading, or left a frame reported as late.
+  const auto delivered = b.fake->stats().gauge_answers_delivered - delivered0;
+  EXPECT_GE(delivered, 2U);
+  EXPECT_LE(b.plate->counters().samples, delivered);
+  EXPECT_LE(delivered, b.plate->counters().samples + b.plate->counters().late_frames);
+}
+
+// A second gauge frame left over from an earlier answer (its poll gave up between the two frames)
+// must not complete this poll's reading: that would tear it across two answers.
+TEST(AtiDriver, StaleSecondFrameNeverTearsAReading) {
+  Bench b;
+  b.start_fake();
+  b.start_driver();
+  b.fake->stop();  // from here the test answers by hand
+  auto plate_side = b.bus->open();
+  const ati::Gauges stale{1, 2, 3, 4, 555, 666}, ours{10, 20, 30, 40, 50, 60};
+  std::thread device([&] {
+    CanFrame req;
+    ASSERT_EQ(plate_side->receive(req, std::chrono::seconds(2)), IoStatus::ok);
+    const auto old_answer = ati::encode_gauges(b.drv_cfg.base_id, 0, stale);
+    const auto new_answer = ati::encode_gauges(b.drv_cfg.base_id, 0, ours);
+    ASSERT_EQ(plate_side->send(old_answer[1], std::chrono::milliseconds(100)), IoStatus::ok);
+    ASSERT_EQ(plate_side->send(new_answer[0], std::chrono::milliseconds(100)), IoStatus::ok);
+    ASSERT_EQ(plate_side->send(new_answer[1], std::chrono::milliseconds(100)), IoStatus::ok);
+  });
+  WrenchSample s;
+  const auto late0 = b.plate->counters().late_frames;
+  const auto st = b.plate->poll(s);
+  device.join();
+  ASSERT_EQ(st, PollStatus::ok);
+  EXPECT_EQ(s.gauges, ours) << "gauges 4-5 came from the stale frame";
+  EXPECT_EQ(b.plate->counters().late_frames, late0 + 1);
 }

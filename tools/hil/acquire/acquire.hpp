@@ -24,6 +24,7 @@ struct AcquireOptions {
   bool no_bus = false;
   bool progress = true;
   int wait_subscribers = 0;
+  int rt_priority = 0;  ///< SCHED_FIFO priority of the device threads (0: normal)
   std::string play;  ///< run folder for the in-process fake rig
   double play_speed = 1.0;
   bool play_over_socketcan = false;  ///< the fake plate talks on the SocketCAN interface instead of loopback

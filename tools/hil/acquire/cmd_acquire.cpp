@@ -151,6 +151,7 @@ AcquireResult run_acquisition(const AcquireOptions& o, const std::function<void(
   ao.static_frames = format::static_frames(rig);  // rt/tf_static
   ao.joint_names = format::joint_names(rig, with_robot ? mcfg.map.joint_count() : 0);
   ao.wait_for_subscribers = o.wait_subscribers;
+  ao.rt_priority = o.rt_priority;
   // --mcap: run.mcap beside the CSV, from the same samples (docs/mcap.md). Made before the
   // acquirer so that it outlives it: the acquirer's last samples reach a sink still there.
   std::unique_ptr<McapSink> mcap_sink;
@@ -306,6 +307,10 @@ void add_acquire(CLI::App& app) {
   cmd->add_flag("--no-robot", o.no_robot, "acquire the force plate only");
   cmd->add_flag("--tare", o.tare, "tare the force plate at start");
   cmd->add_option("--wait-subscribers", o.wait_subscribers, "wait (up to 10 s) for this many PoseWrenchSample subscribers before starting");
+  cmd->add_option("--rt-priority", o.rt_priority,
+                  "run the device threads at this SCHED_FIFO priority (1-99) where permitted; 0: normal scheduling")
+      ->check(CLI::Range(0, 99))
+      ->capture_default_str();
   cmd->add_flag("!--no-ros-topics", o.ros_topics, "do not publish rt/hil/wrench, rt/hil/pose, rt/hil/joint_states, rt/tf_static, rt/diagnostics");
   cmd->add_option("--play", o.play, "start the fake rig in-process playing this run (no hardware, no SocketCAN)")
       ->check(CLI::ExistingDirectory);

@@ -39,6 +39,10 @@ struct AcquirerOptions {
   std::vector<format::StaticFrame> static_frames;
   /// JointState names (format::joint_names(rig, n)); joints beyond these are named jK.
   std::vector<std::string> joint_names;
+  /// SCHED_FIFO priority (1-99) for the two device threads; 0 = the normal scheduler. Where the
+  /// process may not (no CAP_SYS_NICE, no RLIMIT_RTPRIO) the threads stay normal and a warning
+  /// says why: acquisition never fails for it.
+  int rt_priority = 0;
   std::string force_plate_name = "force_plate";
   std::string robot_name = "robot";
 };
@@ -73,8 +77,11 @@ class Acquirer {
   const drivers::ControllerIdentity& robot_identity() const { return robot_identity_; }
   /// CPU time (s) the two device threads used, pipeline work included; valid after stop().
   double device_threads_cpu_s() const { return cpu_ns_.load() * 1e-9; }
+  /// How many device threads run at options.rt_priority (0 when not asked or not permitted).
+  int rt_threads() const { return rt_threads_.load(); }
 
  private:
+  void enter_rt(const char* device);
   void plate_loop();
   void robot_loop();
   void emit(const SyncedSample& s);
@@ -111,6 +118,7 @@ class Acquirer {
   std::atomic<bool> running_{false};
   std::atomic<std::uint64_t> emitted_{0}, status_sent_{0};
   std::atomic<std::int64_t> cpu_ns_{0};
+  std::atomic<int> rt_threads_{0};
   std::thread plate_thread_, robot_thread_;
 };
 

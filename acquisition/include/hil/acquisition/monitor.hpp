@@ -65,7 +65,9 @@ class DeviceMonitor {
 };
 
 /// Which of a device's state changes to write to the log. Every change into fault or disconnected
-/// is logged, and the first change in any `quiet_s` window; the others (a device flapping between
+/// is logged, unless the same fault for the same reason was logged within `quiet_s` (a plate whose
+/// every fifth answer is corrupt would otherwise write hundreds of identical lines a second), and
+/// the first change in any `quiet_s` window; the others (a device flapping between
 /// degraded and ok on a busy machine, several times a second) are counted, and the next logged line
 /// says how many were held back. flush() logs the current state once the window has passed with
 /// changes held back, so the log always ends on the state the device is in. The status topic
@@ -75,15 +77,18 @@ class StateLog {
   explicit StateLog(double quiet_s = 1.0) : quiet_ns_(static_cast<std::int64_t>(quiet_s * 1e9)) {}
   /// A change into `s` at t_ns: true when it is to be logged now, with `held_back` the changes
   /// not logged since the last line.
-  bool change(DeviceState s, std::int64_t t_ns, int& held_back);
+  bool change(DeviceState s, std::int64_t t_ns, int& held_back, const std::string& reason = {});
   /// Called periodically: true when changes were held back and the window has passed.
-  bool flush(std::int64_t t_ns, int& held_back);
+  /// `s`, `reason`: the state that line will log.
+  bool flush(std::int64_t t_ns, int& held_back, DeviceState s = DeviceState::ok, const std::string& reason = {});
 
  private:
   std::int64_t quiet_ns_;
   std::int64_t last_ns_ = 0;
   bool logged_ = false;
   int held_ = 0;
+  DeviceState last_state_ = DeviceState::ok;  ///< the state and reason of the last line logged
+  std::string last_reason_;
 };
 
 }  // namespace hil::acquisition

@@ -131,6 +131,9 @@ class FakeAtiForcePlate {
   struct Stats {
     std::uint64_t requests = 0, gauge_answers = 0, frames_sent = 0, frames_dropped = 0, answers_corrupted = 0,
                   error_frames_sent = 0, ignored_silent = 0;
+    /// Gauge answers whose frames all went out intact (none dropped, corrupted or refused by the
+    /// channel): the readings a driver could have received.
+    std::uint64_t gauge_answers_delivered = 0;
   };
   Stats stats() const;
 
