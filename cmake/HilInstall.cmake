@@ -37,7 +37,11 @@ while(_hil_exports)
   set_target_properties(${target} PROPERTIES EXPORT_NAME ${name})
   target_compile_features(${target} INTERFACE cxx_std_20)  # the headers use C++20
   if(HIL_SANITIZE)
-    # Instrumented archives need the sanitizer runtime in whatever links them.
+    # Instrumented archives need the runtime in whatever links them, and consumers compiled the
+    # same way: Eigen allocates differently under ASan (it does not trust malloc's alignment), so
+    # an uninstrumented consumer would free a library's vector with the wrong call (found by the
+    # ASan run of install.package).
+    target_compile_options(${target} INTERFACE $<INSTALL_INTERFACE:-fsanitize=${HIL_SANITIZE}>)
     target_link_options(${target} INTERFACE $<INSTALL_INTERFACE:-fsanitize=${HIL_SANITIZE}>)
   endif()
   list(APPEND HIL_EXPORTED_TARGETS ${target})
@@ -100,8 +104,10 @@ foreach(target IN LISTS HIL_EXPORTED_TARGETS)
 endforeach()
 get_property(_hil_order GLOBAL PROPERTY _hil_link_order)
 set(HIL_PC_LIBS "")
+set(HIL_PC_CFLAGS "")
 if(HIL_SANITIZE)
   set(HIL_PC_LIBS " -fsanitize=${HIL_SANITIZE}")
+  set(HIL_PC_CFLAGS " -fsanitize=${HIL_SANITIZE}")
 endif()
 foreach(target IN LISTS _hil_order)
   get_target_property(out ${target} OUTPUT_NAME)
