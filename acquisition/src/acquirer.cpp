@@ -176,7 +176,7 @@ void Acquirer::stop() {
   if (raw_) raw_->flush();
   if (recorder_) recorder_->flush();
   const auto now = realtime_ns();
-  std::vector<DeviceHealth> last{merged(plate_mon_.health(now), plate_->counters())};
+  std::vector<DeviceHealth> last{merged(plate_mon_.health(now), plate_counters_)};
   if (robot_) last.push_back(robot_mon_.health(now));
   publish_status(last, now);
   // Subscribers get the last samples before the writers go away with this object.
@@ -190,7 +190,7 @@ void Acquirer::tare() { plate_->tare(); }
 std::vector<DeviceHealth> Acquirer::health() const {
   std::lock_guard<std::mutex> lock(mutex_);
   const auto now = realtime_ns();
-  std::vector<DeviceHealth> out{merged(plate_mon_.health(now), plate_->counters())};
+  std::vector<DeviceHealth> out{merged(plate_mon_.health(now), plate_counters_)};
   if (robot_) out.push_back(robot_mon_.health(now));
   return out;
 }
@@ -254,7 +254,10 @@ void Acquirer::plate_loop() {
           plate_mon_.link(false, now);
           break;
       }
-      const auto drops = plate_->counters().dropped_frames;
+      // The driver's counters change in poll(), outside the lock: the other threads read this
+      // copy, taken under it (TSan found health() and the robot thread reading them mid-poll).
+      plate_counters_ = plate_->counters();
+      const auto drops = plate_counters_.dropped_frames;
       if (drops > last_plate_drops_) plate_mon_.dropped(drops - last_plate_drops_, now);
       last_plate_drops_ = drops;
       check_health(now, true);
@@ -373,7 +376,7 @@ void Acquirer::check_health(std::int64_t now_ns, bool periodic) {
   };
   int held_back = 0;
   if (plate_changed) {
-    const auto h = merged(plate_mon_.health(now_ns), plate_->counters());
+    const auto h = merged(plate_mon_.health(now_ns), plate_counters_);
     if (plate_log_.change(plate_mon_.state(), now_ns, held_back, plate_mon_.reason())) log_state(plate_mon_, h.device, held_back);
     publish_status({h}, now_ns);
   } else if (periodic && plate_log_.flush(now_ns, held_back, plate_mon_.state(), plate_mon_.reason())) {
@@ -388,7 +391,7 @@ void Acquirer::check_health(std::int64_t now_ns, bool periodic) {
   }
   if (periodic && now_ns - last_status_ns_ >= static_cast<std::int64_t>(opt_.status_period_s * 1e9)) {
     last_status_ns_ = now_ns;
-    std::vector<DeviceHealth> all{merged(plate_mon_.health(now_ns), plate_->counters())};
+    std::vector<DeviceHealth> all{merged(plate_mon_.health(now_ns), plate_counters_)};
     if (robot_) all.push_back(robot_mon_.health(now_ns));
     publish_status(all, now_ns);
     if (recorder_) recorder_->flush();
