@@ -217,17 +217,23 @@ void Acquirer::plate_loop() {
   while (running_) {
     const auto st = plate_->poll(s);
     const auto now = realtime_ns();
+    WrenchReading r;
+    if (st == drivers::PollStatus::ok) {
+      r.t_ns = s.t_ns != 0 ? s.t_ns : now;
+      r.seq = s.sequence;
+      r.wrench_fp = s.w_fp;
+      if (s.saturated_axes || s.gauge_saturated) r.quality |= kWrenchSaturated;
+      if (s.can_bus_error || s.error_frames > 0) r.quality |= kDeviceFault;
+      // The live stream goes out first, outside the lock: the robot thread holds the lock while it
+      // synchronises, records and publishes samples (a CSV flush among them), and a monitor's
+      // wrench must not wait behind that. Only this thread uses the wrench writer.
+      if (w_wrench_) publish_wrench(r);
+    }
     {
       std::lock_guard<std::mutex> lock(mutex_);
       switch (st) {
         case drivers::PollStatus::ok: {
-          WrenchReading r;
-          r.t_ns = s.t_ns != 0 ? s.t_ns : now;
-          r.seq = s.sequence;
-          r.wrench_fp = s.w_fp;
-          if (s.saturated_axes || s.gauge_saturated) r.quality |= kWrenchSaturated;
           if (s.can_bus_error || s.error_frames > 0) {
-            r.quality |= kDeviceFault;
             plate_mon_.error(s.error_frames > 0 ? fmt::format("{} CAN error frame(s): {}", s.error_frames,
                                                               drivers::describe(plate_->last_bus_error()))
                                                 : std::string("force plate reports a CAN bus error (status 0x4000)"),
@@ -235,7 +241,6 @@ void Acquirer::plate_loop() {
           }
           plate_mon_.sample(r.t_ns);
           if (raw_) raw_->plate(s);
-          if (w_wrench_) publish_wrench(r);
           sync_.push_wrench(r);
           break;
         }

@@ -17,6 +17,8 @@
 //
 // Usage: bench_rig [--seconds N] [--output-rate HZ] [--rt-priority P] [--faults] [--fault-s S]
 //   --faults runs whole cycles of the fault list: at least one, as many as fit in --seconds.
+#include <pthread.h>
+#include <sched.h>
 #include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -148,7 +150,18 @@ std::shared_ptr<const hil::drivers::Scenario> scenario() {
   return std::make_shared<const hil::drivers::Scenario>(hil::rig::scenario_from_run(run, Eigen::Isometry3d::Identity(), true));
 }
 
-int subscriber(int domain, int done_fd, int result_fd) {
+// SCHED_FIFO at `priority` for the calling thread and the threads it starts from now on (they
+// inherit it); SCHED_OTHER when 0. False when not permitted.
+bool set_fifo(int priority) {
+  sched_param sp{};
+  sp.sched_priority = priority;
+  return pthread_setschedparam(pthread_self(), priority > 0 ? SCHED_FIFO : SCHED_OTHER, &sp) == 0;
+}
+
+int subscriber(int domain, int done_fd, int result_fd, int rt_priority) {
+  // With --rt-priority the monitor is real-time too (its Fast DDS threads inherit the policy): the
+  // measured path ends in this process's shared-memory listener.
+  if (rt_priority > 0 && !set_fifo(rt_priority)) std::fprintf(stderr, "bench_rig: subscriber: real-time priority not permitted\n");
   hil::dds::Participant p({domain, "", "hil_localhost", "bench-subscriber"});
   std::mutex m;
   std::vector<double> latency_us;
@@ -214,7 +227,7 @@ int main(int argc, char** argv) {
   if (child == 0) {
     close(done[1]);
     close(result[0]);
-    _exit(subscriber(domain, done[0], result[1]));
+    _exit(subscriber(domain, done[0], result[1], rt_priority));
   }
   close(done[0]);
   close(result[1]);
@@ -255,8 +268,14 @@ int main(int argc, char** argv) {
     const drivers::RobotControllerDriver* robot_driver = robot.get();
     acquisition::Acquirer acq(ao, std::move(plate), std::move(robot), &participant, &rec);
     const auto fakes_t0 = std::chrono::steady_clock::now();
+    // With --rt-priority the fakes answer at a priority above the device threads: they stand for
+    // hardware, which answers on its own, and a device thread woken by the first frame of an answer
+    // must not preempt the plate before it sends the second.
+    if (rt_priority > 0 && !set_fifo(std::min(99, rt_priority + 1)))
+      std::fprintf(stderr, "bench_rig: real-time priority not permitted for the fakes\n");
     fake_plate.start();
     fake_robot.start();
+    if (rt_priority > 0) set_fifo(0);
     std::this_thread::sleep_for(std::chrono::seconds(2));  // let the subscriber match first
     rusage ru0{};
     getrusage(RUSAGE_SELF, &ru0);
