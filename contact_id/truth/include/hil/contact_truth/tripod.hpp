@@ -1,0 +1,153 @@
+#pragma once
+/// \file An independent ground truth for the contact diagnosis (issue 12): a rigid tripod whose
+/// three point feet press on and slide over a plate, and the sensor chain of a 6-axis force plate.
+///
+/// Written from the equations below and from nothing in hil::contact_id or hil::diagnose (no
+/// polyhedra, no mindist, no candidate code), so that a test that hides an effect with it does not
+/// generate the effect with the code that then has to find it. Eigen only.
+///
+/// Frames: W world; P plate (origin on the top surface, z along the outward normal); B the tripod's
+/// body (its feet at fixed points of B). Per foot i at p_i (W), with n the plate normal (W):
+///   penetration   δ_i  = max(0, -n·(p_i - o_P))                        (m)
+///   its rate      δ̇_i  = -n·v_i, v_i = v_B + ω_B × (p_i - o_B)          (m/s)
+///   normal force  N_i  = max(0, K δ_ref (δ_i/δ_ref)^p + D δ̇_i)  while δ_i > 0   (N)
+///   friction      F_i  = -μ N'_i u_i / sqrt(|u_i|² + ε²) - c_v u_i,  u_i the tangential velocity
+///                 N'_i = N_i (friction on the total normal force, Kelvin-Voigt / Hunt-Crossley)
+///                      or max(0, K δ_ref (δ_i/δ_ref)^p) (friction on the elastic force only)
+/// The plate feels -(N_i n + F_i) at p_i; the reported wrench is that sum's force and moment about
+/// o_P, in P (fx fy fz in N, mx my mz in N m).
+///
+/// Sensor chain per output sample k at t_k = k / rate: the ADC averages the true wrench at
+/// `adc_subsamples` instants evenly spread over the period (t_k - τ - T, t_k - τ] (τ a delay of the
+/// wrench stream), then w = (1 + γ) ∘ w̄ + b + ḃ t_k + e (gain, bias, drifting offset, white
+/// Gaussian noise e), then quantisation to multiples of the resolution. The pose the robot reports
+/// is the commanded one; a slip event moves the true tripod against it from its time on.
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <array>
+#include <string>
+#include <vector>
+
+namespace hil::contact_truth {
+
+using Vector6d = Eigen::Matrix<double, 6, 1>;
+
+/// The plate: its top surface's origin and orientation in W.
+struct Plate {
+  Eigen::Vector3d origin_world_m = Eigen::Vector3d::Zero();
+  double yaw_rad = 0.0;     ///< about W z, applied last
+  double tilt_x_rad = 0.0;  ///< about the plate's x, then
+  double tilt_y_rad = 0.0;  ///< about its y
+  Eigen::Isometry3d T_world_plate() const;
+};
+
+/// A rigid tripod: the feet's tips in its body frame B (m). Any number of feet >= 1 works; three
+/// make the usual statically determinate stand.
+struct Tripod {
+  std::vector<Eigen::Vector3d> feet_body_m{{0.05, 0.0, 0.0}, {-0.025, 0.0433, 0.0}, {-0.025, -0.0433, 0.0}};
+};
+
+/// The point-contact law (see the file comment).
+struct ContactLaw {
+  double stiffness_n_per_m = 2e5;       ///< K
+  double exponent = 1.0;                ///< p (1: linear)
+  double delta_ref_m = 1e-4;            ///< δ_ref of the power law
+  double damping_n_s_per_m = 0.0;       ///< D
+  bool friction_on_total_normal = true; ///< N' = N (true) or the elastic part only (false)
+  double mu = 0.3;                      ///< Coulomb coefficient
+  double slip_regularisation_m_per_s = 1e-4;  ///< ε: below it friction grows linearly with speed
+  double viscous_n_s_per_m = 0.0;       ///< c_v
+};
+
+/// The tripod's true motion at one instant (all in W).
+struct BodyState {
+  Eigen::Isometry3d T_world_body = Eigen::Isometry3d::Identity();
+  Eigen::Vector3d v_world_m_per_s = Eigen::Vector3d::Zero();     ///< velocity of B's origin
+  Eigen::Vector3d w_world_rad_per_s = Eigen::Vector3d::Zero();   ///< angular velocity
+};
+
+/// Per foot, what the law computed (for tests and plots).
+struct FootContact {
+  double penetration_m = 0.0, penetration_rate_m_per_s = 0.0;
+  double normal_n = 0.0;               ///< N_i
+  Eigen::Vector3d friction_world_n = Eigen::Vector3d::Zero();  ///< F_i
+  Eigen::Vector3d point_world_m = Eigen::Vector3d::Zero();
+  bool in_contact = false;
+};
+
+/// The wrench the plate feels (P frame, about o_P), and the feet's contacts if `feet` is given.
+/// \throws std::invalid_argument on a law that is not physical (names the field).
+Vector6d plate_wrench(const Plate& plate, const Tripod& tripod, const ContactLaw& law, const BodyState& s,
+                      std::vector<FootContact>* feet = nullptr);
+
+/// A closed-form trajectory relative to the plate: the body origin circles in the plate plane,
+/// presses in and out, and turns about the plate normal. In P:
+///   x = cx + r cos(ω t), y = cy + r sin(ω t), z = -(d0 + d1 sin(ω_d t)) (d > 0: the feet penetrate),
+///   yaw ψ = ψ0 + ψ1 sin(ω_ψ t); the body's z stays along the plate normal.
+struct PlateTrajectory {
+  double centre_x_m = 0.0, centre_y_m = 0.0;
+  double radius_m = 5e-3;
+  double angular_rate_rad_per_s = 0.5;     ///< ω
+  double depth_m = 1e-4;                   ///< d0
+  double depth_amplitude_m = 5e-5;         ///< d1
+  double depth_rate_rad_per_s = 1.3;       ///< ω_d
+  double yaw_rad = 0.0;                    ///< ψ0
+  double yaw_amplitude_rad = 0.05;         ///< ψ1
+  double yaw_rate_rad_per_s = 0.7;         ///< ω_ψ
+  /// The body state at time t (W), with its analytic velocities.
+  BodyState at(const Plate& plate, double t_s) const;
+};
+
+/// A slip of the tripod against the commanded pose: from t on, the true body is displaced by
+/// (dx, dy) in the plate plane and turned by dyaw about the plate normal (at its origin), while the
+/// robot keeps reporting the commanded pose.
+struct SlipEvent {
+  double t_s = 0.0;
+  double dx_m = 0.0, dy_m = 0.0, dyaw_rad = 0.0;
+};
+
+/// The force plate's sensor chain (see the file comment). Components in the order fx fy fz mx my mz.
+struct SensorChain {
+  double rate_hz = 100.0;
+  int adc_subsamples = 10;                    ///< instants the ADC averages per output sample
+  double delay_s = 0.0;                       ///< τ: the wrench stream lags the poses
+  Vector6d gain = Vector6d::Zero();           ///< γ: relative gain error per component
+  Vector6d bias = Vector6d::Zero();           ///< b: constant offset (N, N m)
+  Vector6d drift_per_s = Vector6d::Zero();    ///< ḃ: slowly drifting offset (N/s, N m/s)
+  Vector6d noise_std = Vector6d::Zero();      ///< std of e (N, N m)
+  Vector6d resolution = Vector6d::Zero();     ///< quantisation step (0: none)
+  unsigned seed = 1;
+};
+
+/// One output sample: what the rig reports (commanded pose and twist, measured wrench) and the
+/// truth behind it.
+struct Sample {
+  double t_s = 0.0;
+  BodyState reported;            ///< the commanded state the robot reports
+  Vector6d wrench_measured = Vector6d::Zero();  ///< plate frame, about o_P
+  Vector6d wrench_true = Vector6d::Zero();      ///< the true wrench at t_s (no sensor chain)
+  int feet_in_contact = 0;       ///< at t_s, true pose
+};
+
+/// A whole scene: plate, tripod, law, motion, sensor and events.
+struct Scenario {
+  Plate plate;
+  Tripod tripod;
+  ContactLaw law;
+  PlateTrajectory trajectory;
+  SensorChain sensor;
+  std::vector<SlipEvent> slips;
+  double duration_s = 40.0;
+};
+
+/// The true body state at t (the commanded one moved by the slips that happened by t).
+BodyState true_state(const Scenario& s, double t_s);
+
+/// Simulates `duration_s * rate_hz` samples from t = 0.
+/// \throws std::invalid_argument on a scenario that is not physical or not simulable (names the field).
+std::vector<Sample> simulate(const Scenario& s);
+
+/// Checks a scenario; empty when valid, else every problem, each naming its field.
+std::string validate(const Scenario& s);
+
+}  // namespace hil::contact_truth

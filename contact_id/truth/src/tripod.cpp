@@ -1,0 +1,200 @@
+#include "hil/contact_truth/tripod.hpp"
+
+#include <cmath>
+#include <random>
+#include <sstream>
+#include <stdexcept>
+
+namespace hil::contact_truth {
+namespace {
+
+using Eigen::Vector3d;
+
+bool finite_positive(double v) { return std::isfinite(v) && v > 0.0; }
+bool finite_non_negative(double v) { return std::isfinite(v) && v >= 0.0; }
+
+std::string law_problems(const ContactLaw& l) {
+  std::ostringstream o;
+  if (!finite_positive(l.stiffness_n_per_m)) o << "law.stiffness_n_per_m must be > 0 (got " << l.stiffness_n_per_m << "); ";
+  if (!finite_positive(l.exponent)) o << "law.exponent must be > 0 (got " << l.exponent << "); ";
+  if (!finite_positive(l.delta_ref_m)) o << "law.delta_ref_m must be > 0 (got " << l.delta_ref_m << "); ";
+  if (!finite_non_negative(l.damping_n_s_per_m)) o << "law.damping_n_s_per_m must be >= 0 (got " << l.damping_n_s_per_m << "); ";
+  if (!finite_non_negative(l.mu)) o << "law.mu must be >= 0 (got " << l.mu << "); ";
+  if (!finite_positive(l.slip_regularisation_m_per_s))
+    o << "law.slip_regularisation_m_per_s must be > 0 (got " << l.slip_regularisation_m_per_s << "); ";
+  if (!finite_non_negative(l.viscous_n_s_per_m)) o << "law.viscous_n_s_per_m must be >= 0 (got " << l.viscous_n_s_per_m << "); ";
+  return o.str();
+}
+
+void throw_if(const std::string& problems) {
+  if (problems.empty()) return;
+  throw std::invalid_argument("contact_truth: " + problems.substr(0, problems.size() - 2));
+}
+
+Eigen::Matrix3d rot_z(double a) { return Eigen::AngleAxisd(a, Vector3d::UnitZ()).toRotationMatrix(); }
+
+// The body state relative to the plate (P): position, yaw and their rates.
+struct PlanarState {
+  Vector3d p_plate_m, v_plate_m_per_s;
+  double yaw_rad = 0.0, yaw_rate_rad_per_s = 0.0;
+};
+
+PlanarState planar(const PlateTrajectory& tr, double t) {
+  PlanarState s;
+  const double w = tr.angular_rate_rad_per_s, wd = tr.depth_rate_rad_per_s, wy = tr.yaw_rate_rad_per_s;
+  s.p_plate_m = {tr.centre_x_m + tr.radius_m * std::cos(w * t), tr.centre_y_m + tr.radius_m * std::sin(w * t),
+                 -(tr.depth_m + tr.depth_amplitude_m * std::sin(wd * t))};
+  s.v_plate_m_per_s = {-tr.radius_m * w * std::sin(w * t), tr.radius_m * w * std::cos(w * t),
+                       -tr.depth_amplitude_m * wd * std::cos(wd * t)};
+  s.yaw_rad = tr.yaw_rad + tr.yaw_amplitude_rad * std::sin(wy * t);
+  s.yaw_rate_rad_per_s = tr.yaw_amplitude_rad * wy * std::cos(wy * t);
+  return s;
+}
+
+BodyState to_world(const Plate& plate, const PlanarState& s) {
+  const Eigen::Isometry3d T_wp = plate.T_world_plate();
+  const Eigen::Matrix3d R_wp = T_wp.linear();
+  BodyState b;
+  b.T_world_body.linear() = R_wp * rot_z(s.yaw_rad);
+  b.T_world_body.translation() = T_wp * s.p_plate_m;
+  b.v_world_m_per_s = R_wp * s.v_plate_m_per_s;
+  b.w_world_rad_per_s = R_wp * Vector3d(0.0, 0.0, s.yaw_rate_rad_per_s);
+  return b;
+}
+
+// A zero-mean Gaussian from the engine by Box-Muller: std::normal_distribution's algorithm is
+// implementation-defined, this is the same sequence on every standard library.
+double gaussian(std::mt19937_64& rng) {
+  constexpr double two_pi = 6.283185307179586;
+  const double u1 = (static_cast<double>(rng() >> 11) + 1.0) * 0x1.0p-53;  // (0, 1]
+  const double u2 = static_cast<double>(rng() >> 11) * 0x1.0p-53;          // [0, 1)
+  return std::sqrt(-2.0 * std::log(u1)) * std::cos(two_pi * u2);
+}
+
+}  // namespace
+
+Eigen::Isometry3d Plate::T_world_plate() const {
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear() = (rot_z(yaw_rad) * Eigen::AngleAxisd(tilt_x_rad, Vector3d::UnitX()) * Eigen::AngleAxisd(tilt_y_rad, Vector3d::UnitY()))
+                   .toRotationMatrix();
+  T.translation() = origin_world_m;
+  return T;
+}
+
+Vector6d plate_wrench(const Plate& plate, const Tripod& tripod, const ContactLaw& law, const BodyState& s,
+                      std::vector<FootContact>* feet) {
+  throw_if(law_problems(law));
+  const Eigen::Isometry3d T_wp = plate.T_world_plate();
+  const Vector3d n = T_wp.linear().col(2);
+  const Vector3d o = T_wp.translation();
+  Vector3d force_w = Vector3d::Zero(), moment_w = Vector3d::Zero();  // on the plate, about o_P
+  if (feet) feet->assign(tripod.feet_body_m.size(), FootContact{});
+  for (std::size_t i = 0; i < tripod.feet_body_m.size(); ++i) {
+    FootContact c;
+    c.point_world_m = s.T_world_body * tripod.feet_body_m[i];
+    c.penetration_m = -n.dot(c.point_world_m - o);
+    const Vector3d v = s.v_world_m_per_s + s.w_world_rad_per_s.cross(c.point_world_m - s.T_world_body.translation());
+    c.penetration_rate_m_per_s = -n.dot(v);
+    if (c.penetration_m > 0.0) {
+      const double elastic = law.stiffness_n_per_m * law.delta_ref_m * std::pow(c.penetration_m / law.delta_ref_m, law.exponent);
+      c.normal_n = std::max(0.0, elastic + law.damping_n_s_per_m * c.penetration_rate_m_per_s);
+      c.in_contact = c.normal_n > 0.0;
+      const double bound = law.friction_on_total_normal ? c.normal_n : (c.in_contact ? elastic : 0.0);
+      const Vector3d u = v - n.dot(v) * n;
+      const double eps = law.slip_regularisation_m_per_s;
+      if (c.in_contact)
+        c.friction_world_n = -law.mu * bound * u / std::sqrt(u.squaredNorm() + eps * eps) - law.viscous_n_s_per_m * u;
+      // Newton's third law: the plate feels the opposite of what the foot feels.
+      const Vector3d on_plate = -(c.normal_n * n + c.friction_world_n);
+      force_w += on_plate;
+      moment_w += (c.point_world_m - o).cross(on_plate);
+    }
+    if (feet) (*feet)[i] = c;
+  }
+  Vector6d w;
+  w.head<3>() = T_wp.linear().transpose() * force_w;
+  w.tail<3>() = T_wp.linear().transpose() * moment_w;
+  return w;
+}
+
+BodyState PlateTrajectory::at(const Plate& plate, double t_s) const { return to_world(plate, planar(*this, t_s)); }
+
+BodyState true_state(const Scenario& sc, double t_s) {
+  PlanarState s = planar(sc.trajectory, t_s);
+  for (const auto& e : sc.slips)
+    if (t_s >= e.t_s) {
+      s.p_plate_m.x() += e.dx_m;
+      s.p_plate_m.y() += e.dy_m;
+      s.yaw_rad += e.dyaw_rad;
+    }
+  return to_world(sc.plate, s);
+}
+
+std::string validate(const Scenario& s) {
+  std::ostringstream o;
+  o << law_problems(s.law);
+  if (s.tripod.feet_body_m.empty()) o << "tripod.feet_body_m must list at least one foot; ";
+  for (std::size_t i = 0; i < s.tripod.feet_body_m.size(); ++i)
+    if (!s.tripod.feet_body_m[i].allFinite()) o << "tripod.feet_body_m[" << i << "] is not finite; ";
+  const auto& sen = s.sensor;
+  if (!finite_positive(sen.rate_hz)) o << "sensor.rate_hz must be > 0 (got " << sen.rate_hz << "); ";
+  if (sen.adc_subsamples < 1) o << "sensor.adc_subsamples must be >= 1 (got " << sen.adc_subsamples << "); ";
+  if (!std::isfinite(sen.delay_s)) o << "sensor.delay_s is not finite; ";
+  if (!(sen.gain.array() > -1.0).all() || !sen.gain.allFinite()) o << "sensor.gain must be finite and > -1 per component; ";
+  if (!sen.bias.allFinite()) o << "sensor.bias is not finite; ";
+  if (!sen.drift_per_s.allFinite()) o << "sensor.drift_per_s is not finite; ";
+  if (!sen.noise_std.allFinite() || (sen.noise_std.array() < 0.0).any()) o << "sensor.noise_std must be finite and >= 0; ";
+  if (!sen.resolution.allFinite() || (sen.resolution.array() < 0.0).any()) o << "sensor.resolution must be finite and >= 0; ";
+  if (!finite_positive(s.duration_s)) o << "duration_s must be > 0 (got " << s.duration_s << "); ";
+  else if (std::isfinite(sen.rate_hz) && s.duration_s * sen.rate_hz > 1e8) o << "duration_s * sensor.rate_hz exceeds 1e8 samples; ";
+  const auto& tr = s.trajectory;
+  for (double v : {tr.centre_x_m, tr.centre_y_m, tr.radius_m, tr.angular_rate_rad_per_s, tr.depth_m, tr.depth_amplitude_m,
+                   tr.depth_rate_rad_per_s, tr.yaw_rad, tr.yaw_amplitude_rad, tr.yaw_rate_rad_per_s})
+    if (!std::isfinite(v)) {
+      o << "trajectory has a parameter that is not finite; ";
+      break;
+    }
+  if (!s.plate.origin_world_m.allFinite() || !std::isfinite(s.plate.yaw_rad) || !std::isfinite(s.plate.tilt_x_rad) ||
+      !std::isfinite(s.plate.tilt_y_rad))
+    o << "plate has a parameter that is not finite; ";
+  for (std::size_t i = 0; i < s.slips.size(); ++i) {
+    const auto& e = s.slips[i];
+    if (!std::isfinite(e.t_s) || !std::isfinite(e.dx_m) || !std::isfinite(e.dy_m) || !std::isfinite(e.dyaw_rad))
+      o << "slips[" << i << "] has a field that is not finite; ";
+  }
+  std::string r = o.str();
+  return r.empty() ? r : r.substr(0, r.size() - 2);
+}
+
+std::vector<Sample> simulate(const Scenario& s) {
+  if (const auto problems = validate(s); !problems.empty()) throw std::invalid_argument("contact_truth: " + problems);
+  const auto& sen = s.sensor;
+  const double period = 1.0 / sen.rate_hz;
+  const auto n = static_cast<std::size_t>(std::floor(s.duration_s * sen.rate_hz + 1e-9));
+  std::mt19937_64 rng(sen.seed);
+  std::vector<Sample> out(n);
+  for (std::size_t k = 0; k < n; ++k) {
+    Sample& o = out[k];
+    o.t_s = static_cast<double>(k) * period;
+    o.reported = s.trajectory.at(s.plate, o.t_s);
+    std::vector<FootContact> feet;
+    o.wrench_true = plate_wrench(s.plate, s.tripod, s.law, true_state(s, o.t_s), &feet);
+    for (const auto& f : feet) o.feet_in_contact += f.in_contact ? 1 : 0;
+    // The ADC's average over the period that ends at t - τ (the wrench stream lags).
+    Vector6d mean = Vector6d::Zero();
+    for (int j = 0; j < sen.adc_subsamples; ++j) {
+      const double t = o.t_s - sen.delay_s - period * static_cast<double>(j) / sen.adc_subsamples;
+      mean += plate_wrench(s.plate, s.tripod, s.law, true_state(s, t));
+    }
+    mean /= sen.adc_subsamples;
+    Vector6d w = (Vector6d::Ones() + sen.gain).cwiseProduct(mean) + sen.bias + sen.drift_per_s * o.t_s;
+    for (int c = 0; c < 6; ++c) {
+      if (sen.noise_std(c) > 0.0) w(c) += sen.noise_std(c) * gaussian(rng);
+      if (sen.resolution(c) > 0.0) w(c) = sen.resolution(c) * std::round(w(c) / sen.resolution(c));
+    }
+    o.wrench_measured = w;
+  }
+  return out;
+}
+
+}  // namespace hil::contact_truth

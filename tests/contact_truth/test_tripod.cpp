@@ -1,0 +1,335 @@
+// The independent contact truth (issue 12) against closed-form physics: every expected value below
+// is worked out by hand from the law in tripod.hpp, not computed by the module.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <numeric>
+
+#include "hil/contact_truth/tripod.hpp"
+
+namespace hil::contact_truth {
+namespace {
+
+using Eigen::Vector3d;
+
+// A tripod standing still, its body origin at (x0, y0) in the plate plane pressed to depth d.
+BodyState pressed(const Plate& plate, double x0, double y0, double d, double yaw = 0.0) {
+  PlateTrajectory tr;
+  tr.centre_x_m = x0;
+  tr.centre_y_m = y0;
+  tr.radius_m = 0.0;
+  tr.depth_m = d;
+  tr.depth_amplitude_m = 0.0;
+  tr.yaw_rad = yaw;
+  tr.yaw_amplitude_rad = 0.0;
+  return tr.at(plate, 0.0);
+}
+
+TEST(TripodLaw, StandingStillOnALevelPlateCarriesThreeTimesKDelta) {
+  const Plate plate;
+  Tripod tri;
+  ContactLaw law;
+  law.stiffness_n_per_m = 2e5;
+  const double d = 1e-4;
+  std::vector<FootContact> feet;
+  const Vector6d w = plate_wrench(plate, tri, law, pressed(plate, 0.0, 0.0, d), &feet);
+  // Each foot carries K d upwards; the plate feels 3 K d downwards.
+  EXPECT_NEAR(w(2), -3.0 * 2e5 * d, 1e-9);
+  EXPECT_NEAR(w(0), 0.0, 1e-12);
+  EXPECT_NEAR(w(1), 0.0, 1e-12);
+  // The default feet are symmetric about the body origin at the plate origin: no moment.
+  EXPECT_NEAR(w.tail<3>().norm(), 0.0, 1e-9);
+  for (const auto& f : feet) {
+    EXPECT_TRUE(f.in_contact);
+    EXPECT_NEAR(f.penetration_m, d, 1e-15);
+    EXPECT_NEAR(f.normal_n, 2e5 * d, 1e-9);
+  }
+}
+
+TEST(TripodLaw, AnOffCentreStandMakesTheLeverArmMoment) {
+  const Plate plate;
+  const Tripod tri;
+  const ContactLaw law;
+  const double x0 = 0.1, y0 = -0.04, d = 2e-4;
+  const Vector6d w = plate_wrench(plate, tri, law, pressed(plate, x0, y0, d));
+  const double fz = -3.0 * law.stiffness_n_per_m * d;
+  EXPECT_NEAR(w(2), fz, 1e-9);
+  // m = r x f with f = (0, 0, fz) at the feet's centroid (x0, y0, 0): (y0 fz, -x0 fz, 0).
+  EXPECT_NEAR(w(3), y0 * fz, 1e-9);
+  EXPECT_NEAR(w(4), -x0 * fz, 1e-9);
+  EXPECT_NEAR(w(5), 0.0, 1e-9);
+}
+
+TEST(TripodLaw, TheWrenchInPlateFrameDoesNotDependOnHowThePlateLies) {
+  Plate level;
+  Plate yawed;
+  yawed.yaw_rad = 0.7;
+  yawed.tilt_x_rad = 0.02;
+  yawed.tilt_y_rad = -0.03;
+  yawed.origin_world_m = {0.3, -0.2, 0.05};
+  const Tripod tri;
+  const ContactLaw law;
+  PlateTrajectory tr;  // moving: friction, a yaw rate and a changing depth
+  for (double t : {0.3, 1.7, 4.2}) {
+    const Vector6d a = plate_wrench(level, tri, law, tr.at(level, t));
+    const Vector6d b = plate_wrench(yawed, tri, law, tr.at(yawed, t));
+    EXPECT_LT((a - b).norm(), 1e-9 * (1.0 + a.norm())) << "t = " << t;
+  }
+}
+
+TEST(TripodLaw, FastSlidingFrictionIsMuTimesTheNormalForceAgainstTheMotion) {
+  const Plate plate;
+  Tripod tri;
+  tri.feet_body_m = {Vector3d::Zero()};  // one foot at the body origin
+  ContactLaw law;
+  law.mu = 0.4;
+  law.slip_regularisation_m_per_s = 1e-6;
+  BodyState s = pressed(plate, 0.0, 0.0, 1e-4);
+  s.v_world_m_per_s = {0.03, -0.04, 0.0};  // 5 cm/s, far above ε
+  const Vector6d w = plate_wrench(plate, tri, law, s);
+  const double N = law.stiffness_n_per_m * 1e-4;
+  // The foot is pushed against its motion; the plate is dragged along it.
+  EXPECT_NEAR(w(0), 0.4 * N * 0.6, 1e-6 * N);
+  EXPECT_NEAR(w(1), 0.4 * N * -0.8, 1e-6 * N);
+  EXPECT_NEAR(w(2), -N, 1e-9);
+}
+
+TEST(TripodLaw, SlowSlidingFrictionIsRegularisedLinearInSpeed) {
+  const Plate plate;
+  Tripod tri;
+  tri.feet_body_m = {Vector3d::Zero()};
+  ContactLaw law;
+  law.mu = 0.5;
+  law.slip_regularisation_m_per_s = 1e-3;
+  BodyState s = pressed(plate, 0.0, 0.0, 1e-4);
+  const double N = law.stiffness_n_per_m * 1e-4;
+  for (double v : {1e-6, 2e-6}) {
+    s.v_world_m_per_s = {v, 0.0, 0.0};
+    // μ N v / sqrt(v² + ε²) ≈ μ N v / ε for v << ε.
+    EXPECT_NEAR(plate_wrench(plate, tri, law, s)(0), 0.5 * N * v / 1e-3, 1e-5 * 0.5 * N * v / 1e-3);
+  }
+}
+
+TEST(TripodLaw, DampingAddsToTheNormalForceAndFrictionFollowsTheChosenBound) {
+  const Plate plate;
+  Tripod tri;
+  tri.feet_body_m = {Vector3d::Zero()};
+  ContactLaw law;
+  law.damping_n_s_per_m = 3000.0;
+  law.mu = 0.3;
+  law.slip_regularisation_m_per_s = 1e-7;
+  BodyState s = pressed(plate, 0.0, 0.0, 1e-4);
+  s.v_world_m_per_s = {0.01, 0.0, -2e-3};  // sliding along x and pressing in at 2 mm/s
+  const double elastic = law.stiffness_n_per_m * 1e-4;
+  const double total = elastic + 3000.0 * 2e-3;
+  std::vector<FootContact> feet;
+  Vector6d w = plate_wrench(plate, tri, law, s, &feet);
+  EXPECT_NEAR(feet[0].penetration_rate_m_per_s, 2e-3, 1e-15);
+  EXPECT_NEAR(w(2), -total, 1e-9);
+  EXPECT_NEAR(w(0), 0.3 * total, 1e-6 * total);
+  law.friction_on_total_normal = false;
+  w = plate_wrench(plate, tri, law, s);
+  EXPECT_NEAR(w(2), -total, 1e-9);
+  EXPECT_NEAR(w(0), 0.3 * elastic, 1e-6 * total);
+  // Pulling out faster than the spring pushes: no tension, no contact.
+  s.v_world_m_per_s = {0.0, 0.0, 1.0};
+  w = plate_wrench(plate, tri, law, s, &feet);
+  EXPECT_FALSE(feet[0].in_contact);
+  EXPECT_EQ(w.norm(), 0.0);
+}
+
+TEST(TripodLaw, ViscousFrictionAndThePowerLaw) {
+  const Plate plate;
+  Tripod tri;
+  tri.feet_body_m = {Vector3d::Zero()};
+  ContactLaw law;
+  law.mu = 0.0;
+  law.viscous_n_s_per_m = 5000.0;
+  law.exponent = 1.5;
+  law.delta_ref_m = 1e-4;
+  BodyState s = pressed(plate, 0.0, 0.0, 4e-4);
+  s.v_world_m_per_s = {0.0, 0.002, 0.0};
+  const Vector6d w = plate_wrench(plate, tri, law, s);
+  EXPECT_NEAR(w(1), 5000.0 * 0.002, 1e-9);
+  EXPECT_NEAR(w(2), -law.stiffness_n_per_m * 1e-4 * 8.0, 1e-6);  // (4e-4 / 1e-4)^1.5 = 8
+}
+
+TEST(TripodLaw, FeetAboveThePlateCarryNothing) {
+  const Plate plate;
+  const Tripod tri;
+  const ContactLaw law;
+  std::vector<FootContact> feet;
+  const Vector6d w = plate_wrench(plate, tri, law, pressed(plate, 0.0, 0.0, -1e-3), &feet);
+  EXPECT_EQ(w.norm(), 0.0);
+  for (const auto& f : feet) EXPECT_FALSE(f.in_contact);
+}
+
+TEST(TripodLaw, AYawRateMakesATwistingFrictionMoment) {
+  const Plate plate;
+  const Tripod tri;  // three feet at 5 cm from the origin
+  ContactLaw law;
+  law.slip_regularisation_m_per_s = 1e-8;
+  BodyState s = pressed(plate, 0.0, 0.0, 1e-4);
+  s.w_world_rad_per_s = {0.0, 0.0, 0.2};  // each foot slides at 1 cm/s tangentially
+  const Vector6d w = plate_wrench(plate, tri, law, s);
+  const double N = law.stiffness_n_per_m * 1e-4;
+  // Each foot drags the plate along its motion with μ N at 5 cm: mz = 3 μ N r (counter-clockwise).
+  EXPECT_NEAR(w(5), 3.0 * law.mu * N * 0.05, 1e-6);
+  EXPECT_NEAR(w.head<2>().norm(), 0.0, 1e-6);
+}
+
+TEST(Trajectory, VelocitiesAreTheDerivativesOfThePoses) {
+  Plate plate;
+  plate.yaw_rad = 0.4;
+  plate.tilt_x_rad = 0.01;
+  const PlateTrajectory tr;
+  const double h = 1e-6;
+  for (double t : {0.0, 1.1, 7.3}) {
+    const BodyState a = tr.at(plate, t - h), b = tr.at(plate, t + h), s = tr.at(plate, t);
+    const Vector3d v = (b.T_world_body.translation() - a.T_world_body.translation()) / (2 * h);
+    EXPECT_LT((v - s.v_world_m_per_s).norm(), 1e-8);
+    const Eigen::AngleAxisd d(b.T_world_body.linear() * a.T_world_body.linear().transpose());
+    EXPECT_LT((d.angle() * d.axis() / (2 * h) - s.w_world_rad_per_s).norm(), 1e-6);
+  }
+}
+
+Scenario quiet_scenario() {
+  Scenario sc;
+  sc.duration_s = 5.0;
+  sc.sensor.rate_hz = 100.0;
+  sc.sensor.adc_subsamples = 1;
+  return sc;
+}
+
+TEST(SensorChain, WithoutErrorsItReportsTheTrueWrench) {
+  const Scenario sc = quiet_scenario();
+  const auto samples = simulate(sc);
+  ASSERT_EQ(samples.size(), 500u);
+  for (const auto& s : samples) {
+    EXPECT_EQ(s.wrench_measured, s.wrench_true);
+    EXPECT_EQ(s.feet_in_contact, 3);
+  }
+  EXPECT_DOUBLE_EQ(samples[123].t_s, 1.23);
+}
+
+TEST(SensorChain, TheAdcAveragesOverThePeriodThatEndsAtTheSample) {
+  Scenario sc = quiet_scenario();
+  sc.sensor.adc_subsamples = 4;
+  const auto samples = simulate(sc);
+  const double T = 1.0 / sc.sensor.rate_hz;
+  for (std::size_t k : {std::size_t{10}, std::size_t{250}}) {
+    Vector6d mean = Vector6d::Zero();
+    for (int j = 0; j < 4; ++j) mean += plate_wrench(sc.plate, sc.tripod, sc.law, true_state(sc, samples[k].t_s - T * j / 4.0));
+    EXPECT_LT((samples[k].wrench_measured - mean / 4.0).norm(), 1e-9);
+  }
+}
+
+TEST(SensorChain, ADelayShowsTheWrenchOfAnEarlierInstant) {
+  Scenario sc = quiet_scenario();
+  sc.sensor.delay_s = 0.03;  // three samples
+  const auto late = simulate(sc);
+  sc.sensor.delay_s = 0.0;
+  const auto now = simulate(sc);
+  for (std::size_t k = 3; k < now.size(); ++k) EXPECT_LT((late[k].wrench_measured - now[k - 3].wrench_measured).norm(), 1e-9);
+  // The poses are not delayed.
+  EXPECT_TRUE(late[100].reported.T_world_body.isApprox(now[100].reported.T_world_body));
+}
+
+TEST(SensorChain, GainBiasDriftThenQuantisation) {
+  Scenario sc = quiet_scenario();
+  sc.sensor.gain << 0.1, 0, -0.05, 0, 0, 0;
+  sc.sensor.bias << 2.0, 0, 0, 0, 0.3, 0;
+  sc.sensor.drift_per_s << 0, 0.5, 0, 0, 0, 0;
+  sc.sensor.resolution << 0.25, 0.25, 0.25, 0.01, 0.01, 0.01;
+  const auto samples = simulate(sc);
+  for (std::size_t k : {std::size_t{0}, std::size_t{200}, std::size_t{499}}) {
+    const auto& s = samples[k];
+    Vector6d expected = s.wrench_true;
+    expected(0) = 1.1 * expected(0) + 2.0;
+    expected(1) = expected(1) + 0.5 * s.t_s;
+    expected(2) = 0.95 * expected(2);
+    expected(4) += 0.3;
+    for (int c = 0; c < 6; ++c) {
+      const double step = sc.sensor.resolution(c);
+      EXPECT_NEAR(s.wrench_measured(c), expected(c), step / 2 + 1e-12) << "component " << c;
+      EXPECT_NEAR(s.wrench_measured(c) / step, std::round(s.wrench_measured(c) / step), 1e-9);
+    }
+  }
+}
+
+TEST(SensorChain, NoiseHasItsStatedStdAndTheSeedReproducesIt) {
+  Scenario sc = quiet_scenario();
+  sc.duration_s = 100.0;  // 10,000 samples
+  sc.sensor.noise_std << 0.5, 0, 0, 0, 0, 0.02;
+  const auto a = simulate(sc);
+  std::vector<double> e0, e5;
+  for (const auto& s : a) {
+    e0.push_back(s.wrench_measured(0) - s.wrench_true(0));
+    e5.push_back(s.wrench_measured(5) - s.wrench_true(5));
+    EXPECT_EQ(s.wrench_measured(1), s.wrench_true(1));
+  }
+  auto stats = [](const std::vector<double>& v) {
+    const double m = std::accumulate(v.begin(), v.end(), 0.0) / static_cast<double>(v.size());
+    double q = 0.0;
+    for (double x : v) q += (x - m) * (x - m);
+    return std::pair{m, std::sqrt(q / static_cast<double>(v.size() - 1))};
+  };
+  const auto [m0, s0] = stats(e0);
+  const auto [m5, s5] = stats(e5);
+  // 10,000 draws: the sample std is within 3 % of the truth and the mean within 4 std / 100.
+  EXPECT_NEAR(s0, 0.5, 0.015);
+  EXPECT_NEAR(s5, 0.02, 0.0006);
+  EXPECT_NEAR(m0, 0.0, 4 * 0.5 / 100);
+  EXPECT_NEAR(m5, 0.0, 4 * 0.02 / 100);
+  const auto b = simulate(sc);
+  EXPECT_EQ(a[777].wrench_measured, b[777].wrench_measured);
+  sc.sensor.seed = 2;
+  const auto c = simulate(sc);
+  EXPECT_NE(a[777].wrench_measured(0), c[777].wrench_measured(0));
+}
+
+TEST(Slip, TheTrueTripodMovesWhileTheReportedPoseDoesNot) {
+  Scenario sc = quiet_scenario();
+  sc.trajectory.radius_m = 0.0;
+  sc.trajectory.yaw_amplitude_rad = 0.0;
+  sc.trajectory.depth_amplitude_m = 0.0;
+  sc.slips.push_back({2.0, 0.01, -0.02, 0.1});
+  const auto samples = simulate(sc);
+  const auto& before = samples[150];
+  const auto& after = samples[300];
+  EXPECT_TRUE(before.reported.T_world_body.isApprox(after.reported.T_world_body));
+  const BodyState t = true_state(sc, 3.0);
+  EXPECT_LT((t.T_world_body.translation() - after.reported.T_world_body.translation() - Vector3d(0.01, -0.02, 0.0)).norm(), 1e-12);
+  // Standing still, the moment about the plate origin follows the moved feet: m = (y fz, -x fz).
+  const double fz = after.wrench_true(2);
+  EXPECT_NEAR(after.wrench_true(3), -0.02 * fz, 1e-9);
+  EXPECT_NEAR(after.wrench_true(4), -0.01 * fz, 1e-9);
+  EXPECT_NEAR(before.wrench_true.tail<3>().norm(), 0.0, 1e-9);
+}
+
+TEST(BadInput, EveryProblemIsNamed) {
+  Scenario sc;
+  sc.law.stiffness_n_per_m = -1.0;
+  sc.law.mu = -0.1;
+  sc.sensor.adc_subsamples = 0;
+  sc.sensor.rate_hz = std::nan("");
+  sc.sensor.gain(3) = -1.5;
+  sc.slips.push_back({std::numeric_limits<double>::infinity(), 0, 0, 0});
+  const std::string v = validate(sc);
+  for (const char* field : {"law.stiffness_n_per_m", "law.mu", "sensor.adc_subsamples", "sensor.rate_hz", "sensor.gain", "slips[0]"})
+    EXPECT_NE(v.find(field), std::string::npos) << field << " not in: " << v;
+  try {
+    simulate(sc);
+    FAIL() << "simulate accepted a scenario that is not physical";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("law.stiffness_n_per_m must be > 0 (got -1)"), std::string::npos) << e.what();
+  }
+  ContactLaw law;
+  law.slip_regularisation_m_per_s = 0.0;
+  EXPECT_THROW(plate_wrench(Plate{}, Tripod{}, law, BodyState{}), std::invalid_argument);
+  EXPECT_EQ(validate(Scenario{}), "");
+}
+
+}  // namespace
+}  // namespace hil::contact_truth
