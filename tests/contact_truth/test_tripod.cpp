@@ -26,6 +26,21 @@ BodyState pressed(const Plate& plate, double x0, double y0, double d, double yaw
   return tr.at(plate, 0.0);
 }
 
+// The default law with Coulomb coefficient mu, regularised below eps (m/s).
+ContactLaw coulomb(double mu, double eps_m_per_s) {
+  ContactLaw l;
+  l.mu = mu;
+  l.slip_regularisation_m_per_s = eps_m_per_s;
+  return l;
+}
+
+// A stand of one foot at the body origin: the law of one contact, without lever arms.
+Tripod one_foot() {
+  Tripod t;
+  t.feet_body_m = {Vector3d::Zero()};
+  return t;
+}
+
 TEST(TripodLaw, StandingStillOnALevelPlateCarriesThreeTimesKDelta) {
   const Plate plate;
   Tripod tri;
@@ -80,11 +95,8 @@ TEST(TripodLaw, TheWrenchInPlateFrameDoesNotDependOnHowThePlateLies) {
 
 TEST(TripodLaw, FastSlidingFrictionIsMuTimesTheNormalForceAgainstTheMotion) {
   const Plate plate;
-  Tripod tri;
-  tri.feet_body_m = {Vector3d::Zero()};  // one foot at the body origin
-  ContactLaw law;
-  law.mu = 0.4;
-  law.slip_regularisation_m_per_s = 1e-6;
+  const Tripod tri = one_foot();
+  const ContactLaw law = coulomb(0.4, 1e-6);
   BodyState s = pressed(plate, 0.0, 0.0, 1e-4);
   s.v_world_m_per_s = {0.03, -0.04, 0.0};  // 5 cm/s, far above ε
   const Vector6d w = plate_wrench(plate, tri, law, s);
@@ -97,11 +109,8 @@ TEST(TripodLaw, FastSlidingFrictionIsMuTimesTheNormalForceAgainstTheMotion) {
 
 TEST(TripodLaw, SlowSlidingFrictionIsRegularisedLinearInSpeed) {
   const Plate plate;
-  Tripod tri;
-  tri.feet_body_m = {Vector3d::Zero()};
-  ContactLaw law;
-  law.mu = 0.5;
-  law.slip_regularisation_m_per_s = 1e-3;
+  const Tripod tri = one_foot();
+  const ContactLaw law = coulomb(0.5, 1e-3);
   BodyState s = pressed(plate, 0.0, 0.0, 1e-4);
   const double N = law.stiffness_n_per_m * 1e-4;
   for (double v : {1e-6, 2e-6}) {
@@ -113,12 +122,9 @@ TEST(TripodLaw, SlowSlidingFrictionIsRegularisedLinearInSpeed) {
 
 TEST(TripodLaw, DampingAddsToTheNormalForceAndFrictionFollowsTheChosenBound) {
   const Plate plate;
-  Tripod tri;
-  tri.feet_body_m = {Vector3d::Zero()};
-  ContactLaw law;
+  const Tripod tri = one_foot();
+  ContactLaw law = coulomb(0.3, 1e-7);
   law.damping_n_s_per_m = 3000.0;
-  law.mu = 0.3;
-  law.slip_regularisation_m_per_s = 1e-7;
   BodyState s = pressed(plate, 0.0, 0.0, 1e-4);
   s.v_world_m_per_s = {0.01, 0.0, -2e-3};  // sliding along x and pressing in at 2 mm/s
   const double elastic = law.stiffness_n_per_m * 1e-4;
@@ -141,10 +147,8 @@ TEST(TripodLaw, DampingAddsToTheNormalForceAndFrictionFollowsTheChosenBound) {
 
 TEST(TripodLaw, ViscousFrictionAndThePowerLaw) {
   const Plate plate;
-  Tripod tri;
-  tri.feet_body_m = {Vector3d::Zero()};
-  ContactLaw law;
-  law.mu = 0.0;
+  const Tripod tri = one_foot();
+  ContactLaw law = coulomb(0.0, 1e-4);
   law.viscous_n_s_per_m = 5000.0;
   law.exponent = 1.5;
   law.delta_ref_m = 1e-4;

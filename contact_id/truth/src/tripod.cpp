@@ -75,8 +75,8 @@ double gaussian(std::mt19937_64& rng) {
 
 Eigen::Isometry3d Plate::T_world_plate() const {
   Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-  T.linear() = (rot_z(yaw_rad) * Eigen::AngleAxisd(tilt_x_rad, Vector3d::UnitX()) * Eigen::AngleAxisd(tilt_y_rad, Vector3d::UnitY()))
-                   .toRotationMatrix();
+  T.linear() = rot_z(yaw_rad) * Eigen::AngleAxisd(tilt_x_rad, Vector3d::UnitX()).toRotationMatrix() *
+               Eigen::AngleAxisd(tilt_y_rad, Vector3d::UnitY()).toRotationMatrix();
   T.translation() = origin_world_m;
   return T;
 }

@@ -44,7 +44,9 @@ struct Plate {
 /// A rigid tripod: the feet's tips in its body frame B (m). Any number of feet >= 1 works; three
 /// make the usual statically determinate stand.
 struct Tripod {
-  std::vector<Eigen::Vector3d> feet_body_m{{0.05, 0.0, 0.0}, {-0.025, 0.0433, 0.0}, {-0.025, -0.0433, 0.0}};
+  /// Default: three feet 120° apart on a 5 cm circle about the body origin, in its z = 0 plane.
+  std::vector<Eigen::Vector3d> feet_body_m{
+      {0.05, 0.0, 0.0}, {-0.025, 0.04330127018922193, 0.0}, {-0.025, -0.04330127018922193, 0.0}};
 };
 
 /// The point-contact law (see the file comment).
