@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <numeric>
 
@@ -328,6 +329,31 @@ TEST(BadInput, EveryProblemIsNamed) {
     FAIL() << "simulate accepted a scenario that is not physical";
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("law.stiffness_n_per_m must be > 0 (got -1)"), std::string::npos) << e.what();
+  }
+  // Each field alone: the message names it.
+  const std::vector<std::pair<std::string, std::function<void(Scenario&)>>> one_each{
+      {"law.exponent", [](Scenario& x) { x.law.exponent = 0.0; }},
+      {"law.delta_ref_m", [](Scenario& x) { x.law.delta_ref_m = -1e-4; }},
+      {"law.damping_n_s_per_m", [](Scenario& x) { x.law.damping_n_s_per_m = -1.0; }},
+      {"law.viscous_n_s_per_m", [](Scenario& x) { x.law.viscous_n_s_per_m = std::nan(""); }},
+      {"tripod.feet_body_m must list", [](Scenario& x) { x.tripod.feet_body_m.clear(); }},
+      {"tripod.feet_body_m[1]", [](Scenario& x) { x.tripod.feet_body_m[1].x() = std::nan(""); }},
+      {"sensor.delay_s", [](Scenario& x) { x.sensor.delay_s = std::numeric_limits<double>::infinity(); }},
+      {"sensor.bias", [](Scenario& x) { x.sensor.bias(0) = std::nan(""); }},
+      {"sensor.drift_per_s", [](Scenario& x) { x.sensor.drift_per_s(5) = std::nan(""); }},
+      {"sensor.noise_std", [](Scenario& x) { x.sensor.noise_std(2) = -0.1; }},
+      {"sensor.resolution", [](Scenario& x) { x.sensor.resolution(4) = -0.01; }},
+      {"duration_s must be > 0", [](Scenario& x) { x.duration_s = 0.0; }},
+      {"exceeds 1e8 samples", [](Scenario& x) { x.duration_s = 1e7; }},
+      {"trajectory", [](Scenario& x) { x.trajectory.radius_m = std::nan(""); }},
+      {"plate", [](Scenario& x) { x.plate.tilt_y_rad = std::nan(""); }},
+  };
+  for (const auto& [field, spoil] : one_each) {
+    Scenario x;
+    spoil(x);
+    const std::string msg = validate(x);
+    EXPECT_NE(msg.find(field), std::string::npos) << field << " not in: " << msg;
+    EXPECT_THROW(simulate(x), std::invalid_argument) << field;
   }
   ContactLaw law;
   law.slip_regularisation_m_per_s = 0.0;

@@ -81,10 +81,11 @@ Eigen::Isometry3d Plate::T_world_plate() const {
   return T;
 }
 
-Vector6d plate_wrench(const Plate& plate, const Tripod& tripod, const ContactLaw& law, const BodyState& s,
-                      std::vector<FootContact>* feet) {
-  throw_if(law_problems(law));
-  const Eigen::Isometry3d T_wp = plate.T_world_plate();
+namespace {
+
+// plate_wrench without the law's check: simulate() checks the scenario once, not at every instant.
+Vector6d wrench_unchecked(const Eigen::Isometry3d& T_wp, const Tripod& tripod, const ContactLaw& law, const BodyState& s,
+                          std::vector<FootContact>* feet = nullptr) {
   const Vector3d n = T_wp.linear().col(2);
   const Vector3d o = T_wp.translation();
   Vector3d force_w = Vector3d::Zero(), moment_w = Vector3d::Zero();  // on the plate, about o_P
@@ -115,6 +116,14 @@ Vector6d plate_wrench(const Plate& plate, const Tripod& tripod, const ContactLaw
   w.head<3>() = T_wp.linear().transpose() * force_w;
   w.tail<3>() = T_wp.linear().transpose() * moment_w;
   return w;
+}
+
+}  // namespace
+
+Vector6d plate_wrench(const Plate& plate, const Tripod& tripod, const ContactLaw& law, const BodyState& s,
+                      std::vector<FootContact>* feet) {
+  throw_if(law_problems(law));
+  return wrench_unchecked(plate.T_world_plate(), tripod, law, s, feet);
 }
 
 BodyState PlateTrajectory::at(const Plate& plate, double t_s) const { return to_world(plate, planar(*this, t_s)); }
@@ -171,6 +180,7 @@ std::vector<Sample> simulate(const Scenario& s) {
   const auto& sen = s.sensor;
   const double period = 1.0 / sen.rate_hz;
   const auto n = static_cast<std::size_t>(std::floor(s.duration_s * sen.rate_hz + 1e-9));
+  const Eigen::Isometry3d T_wp = s.plate.T_world_plate();
   std::mt19937_64 rng(sen.seed);
   std::vector<Sample> out(n);
   for (std::size_t k = 0; k < n; ++k) {
@@ -178,13 +188,13 @@ std::vector<Sample> simulate(const Scenario& s) {
     o.t_s = static_cast<double>(k) * period;
     o.reported = s.trajectory.at(s.plate, o.t_s);
     std::vector<FootContact> feet;
-    o.wrench_true = plate_wrench(s.plate, s.tripod, s.law, true_state(s, o.t_s), &feet);
+    o.wrench_true = wrench_unchecked(T_wp, s.tripod, s.law, true_state(s, o.t_s), &feet);
     for (const auto& f : feet) o.feet_in_contact += f.in_contact ? 1 : 0;
     // The ADC's average over the period that ends at t - τ (the wrench stream lags).
     Vector6d mean = Vector6d::Zero();
     for (int j = 0; j < sen.adc_subsamples; ++j) {
       const double t = o.t_s - sen.delay_s - period * static_cast<double>(j) / sen.adc_subsamples;
-      mean += plate_wrench(s.plate, s.tripod, s.law, true_state(s, t));
+      mean += wrench_unchecked(T_wp, s.tripod, s.law, true_state(s, t));
     }
     mean /= sen.adc_subsamples;
     Vector6d w = (Vector6d::Ones() + sen.gain).cwiseProduct(mean) + sen.bias + sen.drift_per_s * o.t_s;
