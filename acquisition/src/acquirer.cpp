@@ -233,7 +233,7 @@ void Acquirer::plate_loop() {
       std::lock_guard<std::mutex> lock(mutex_);
       switch (st) {
         case drivers::PollStatus::ok: {
-          if (s.can_bus_error || s.error_frames > 0) {
+          if (r.quality & kDeviceFault) {
             plate_mon_.error(s.error_frames > 0 ? fmt::format("{} CAN error frame(s): {}", s.error_frames,
                                                               drivers::describe(plate_->last_bus_error()))
                                                 : std::string("force plate reports a CAN bus error (status 0x4000)"),
