@@ -158,7 +158,26 @@ std::vector<Mat6> ContactFamily::all_basis() const {
   return b;
 }
 
-ContactFamily::ContactFamily(const ContactData& d, std::set<std::string> extensions) : d_(d), ext_(std::move(extensions)) {
+ContactFamily::ContactFamily(const ContactData& d, std::set<std::string> extensions)
+    : ContactFamily(d, std::move(extensions), std::vector<int>{}) {}
+
+std::unique_ptr<Model> ContactFamily::restricted(const std::vector<int>& train) const {
+  if (!has("robot_compliance") && !has("sensor_gain")) return nullptr;
+  // The pair table depends on the design geometry and the measured poses only: shared.
+  return std::unique_ptr<Model>(new ContactFamily(d_, ext_, train, pairs_));
+}
+
+ContactFamily::ContactFamily(const ContactData& d, std::set<std::string> extensions, const std::vector<int>& samples)
+    : ContactFamily(d, std::move(extensions), samples, nullptr) {}
+
+ContactFamily::ContactFamily(const ContactData& d, std::set<std::string> extensions, const std::vector<int>& samples,
+                             std::shared_ptr<const PairTable> pairs)
+    : d_(d), ext_(std::move(extensions)), pairs_(std::move(pairs)) {
+  std::vector<int> used = samples;
+  if (used.empty()) {
+    used.resize(d.obs.size());
+    for (std::size_t k = 0; k < used.size(); ++k) used[k] = static_cast<int>(k);
+  }
   for (const auto& e : ext_)
     if (std::find(contact_extensions().begin(), contact_extensions().end(), e) == contact_extensions().end())
       throw std::invalid_argument("unknown extension '" + e + "'");
@@ -189,14 +208,12 @@ ContactFamily::ContactFamily(const ContactData& d, std::set<std::string> extensi
       nonlinear_.push_back({u.name, rot ? "rad" : "m", s, true, -50 * s, 50 * s});
     }
   }
-  if (has("geometric_offset") || has("robot_compliance") || has("time_offset")) pairs_ = make_pairs(d);
+  if (!pairs_ && (has("geometric_offset") || has("robot_compliance") || has("time_offset"))) pairs_ = make_pairs(d);
   if (has("robot_compliance")) {
     i_cmp_ = static_cast<int>(nonlinear_.size());
     // Reduce the 21 symmetric coordinates to the directions the data can see: the SVD of the
     // Jacobian of the projected residual at C = 0 (θ projected out, so what K absorbs is dropped).
     basis_ = all_basis();
-    std::vector<int> all(d.obs.size());
-    for (std::size_t k = 0; k < all.size(); ++k) all[k] = static_cast<int>(k);
     auto projected = [&](const Eigen::VectorXd& c) {
       Eigen::MatrixXd A;
       ContactFamily tmp(d, {});
@@ -205,12 +222,14 @@ ContactFamily::ContactFamily(const ContactData& d, std::set<std::string> extensi
       tmp.i_cmp_ = 0;
       tmp.ext_ = {"robot_compliance"};
       tmp.design(c, A);
-      Eigen::VectorXd b(A.rows());
-      Eigen::MatrixXd Aw = A;
-      for (Eigen::Index r = 0; r < A.rows(); ++r) {
-        const double w = d.obs.weight(r % 6);
-        b(r) = w * d.obs.y(r / 6, r % 6);
-        Aw.row(r) *= w;
+      const Eigen::Index m = static_cast<Eigen::Index>(6 * used.size());
+      Eigen::VectorXd b(m);
+      Eigen::MatrixXd Aw(m, A.cols());
+      for (Eigen::Index r = 0; r < m; ++r) {
+        const int k = used[static_cast<std::size_t>(r / 6)], c6 = static_cast<int>(r % 6);
+        const double w = d.obs.weight(c6);
+        b(r) = w * d.obs.y(k, c6);
+        Aw.row(r) = w * A.row(6 * k + c6);
       }
       Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> cod(Aw);
       return Eigen::VectorXd(b - Aw * cod.solve(b));
@@ -249,7 +268,9 @@ ContactFamily::ContactFamily(const ContactData& d, std::set<std::string> extensi
     i_gain_ = static_cast<int>(nonlinear_.size());
     // The reference is the component with the largest measured signal: its gain is absorbed by K.
     Eigen::Index ref = 0;
-    (d.obs.y * d.obs.weight.asDiagonal()).cwiseAbs2().colwise().sum().maxCoeff(&ref);
+    Vec6 energy = Vec6::Zero();
+    for (int k : used) energy += d.obs.y.row(k).transpose().cwiseProduct(d.obs.weight).cwiseAbs2();
+    energy.maxCoeff(&ref);
     gain_ref_ = static_cast<int>(ref);
     for (int c = 0; c < 6; ++c)
       if (c != gain_ref_) nonlinear_.push_back({"gain_" + d.obs.component[static_cast<std::size_t>(c)], "", 0.01, true, -0.5, 0.5});

@@ -239,7 +239,7 @@ Diagnosis diagnose(const ModelFactory& make, const std::vector<std::string>& can
       CandidateResult r;
       r.name = c.name;
       try {
-        r.score = score(*make({d.cause, c.name}), obs, screened_against(first.score), &first.score.full);
+        r.score = score(*make({d.cause, c.name}), obs, screened_against(first.score), &first.score);
         judge(r, first.score, d.noise_relative, obs, o);
       } catch (const std::exception& e) {
         r.score.cv_error = std::numeric_limits<double>::infinity();

@@ -60,8 +60,8 @@ struct Projected {
 };
 
 /// The designs A(φ) already computed, by φ. One cache serves a model's full fit, its folds and
-/// their predictions: the starts and the full fit's optimum with its finite-difference neighbours
-/// (the folds start there) are kept; any other design only while it is among the last few.
+/// their predictions: the starts (every fold evaluates them) are kept; any other design only while
+/// it is among the last few.
 /// A(φ) is deterministic, so a cached design is the one a new evaluation would give.
 class DesignCache {
  public:
@@ -143,8 +143,8 @@ double fd_step(const Param& q, double value) {
   return h;
 }
 
-/// The fit of `m` on `train` with designs from `cache`. `warm`: one more start (a cross-validation
-/// fold starts also from the full fit's optimum, a second-step model from the cause's; the start
+/// The fit of `m` on `train` with designs from `cache`. `warm`: one more start (a second-step model
+/// starts also from the cause's optimum, each of its folds from the cause's fit of that fold; the start
 /// with the lowest training cost wins, so the estimate is still its own training data's optimum). `statistics`: the covariance,
 /// rank, reported parameters and validity (a fold's prediction needs none of them).
 Fit fit_with(const Model& m, const Observations& obs, const std::vector<int>& train, const FitOptions& o, DesignCache& cache,
@@ -254,16 +254,15 @@ Fit fit_with(const Model& m, const Observations& obs, const std::vector<int>& tr
     return f;
   }
 
-  // Statistics from the Jacobian of the unprojected residual in (θ, φ) at the optimum. Its designs
-  // are kept: they are the first Levenberg-Marquardt Jacobian of the folds that start here.
-  const Eigen::MatrixXd A = ev.weighted_design(phi, true);
+  // Statistics from the Jacobian of the unprojected residual in (θ, φ) at the optimum.
+  const Eigen::MatrixXd A = ev.weighted_design(phi);
   Eigen::MatrixXd J(A.rows(), p + q);
   J.leftCols(p) = A;
   for (Eigen::Index j = 0; j < q; ++j) {
     Eigen::VectorXd ph = phi;
     const double h = fd_step(nl[static_cast<std::size_t>(j)], phi(j));
     ph(j) += h;
-    J.col(p + j) = (ev.weighted_design(ph, true) * cur.theta - A * cur.theta) / h;
+    J.col(p + j) = (ev.weighted_design(ph) * cur.theta - A * cur.theta) / h;
   }
   Eigen::VectorXd cs = J.colwise().norm().transpose();
   for (Eigen::Index j = 0; j < cs.size(); ++j)
@@ -347,7 +346,20 @@ std::vector<std::vector<int>> time_blocks(std::size_t samples, int folds) {
   return out;
 }
 
-Score score(const Model& m, const Observations& obs, const CvOptions& o, const Fit* extends) {
+namespace {
+
+/// The φ of `from` (named `names`) mapped onto the nonlinear parameters `nl`, the others at 0.
+Eigen::VectorXd mapped(const std::vector<Param>& nl, const std::vector<std::string>& names, const Eigen::VectorXd& from) {
+  Eigen::VectorXd out = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(nl.size()));
+  for (std::size_t j = 0; j < nl.size(); ++j)
+    for (std::size_t i = 0; i < names.size(); ++i)
+      if (names[i] == nl[j].name) out(static_cast<Eigen::Index>(j)) = from(static_cast<Eigen::Index>(i));
+  return out;
+}
+
+}  // namespace
+
+Score score(const Model& m, const Observations& obs, const CvOptions& o, const Score* extends) {
   const auto t0 = std::chrono::steady_clock::now();
   Score s;
   s.model = m.name();
@@ -355,14 +367,9 @@ Score score(const Model& m, const Observations& obs, const CvOptions& o, const F
   std::vector<int> all(n);
   for (std::size_t k = 0; k < n; ++k) all[k] = static_cast<int>(k);
   DesignCache cache(m, n);
+  const auto nl = m.nonlinear();
   std::optional<Eigen::VectorXd> from;
-  if (extends) {
-    const auto nl = m.nonlinear();
-    from = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(nl.size()));
-    for (std::size_t j = 0; j < nl.size(); ++j)
-      for (std::size_t i = 0; i < extends->phi_names.size(); ++i)
-        if (extends->phi_names[i] == nl[j].name) (*from)(static_cast<Eigen::Index>(j)) = extends->phi(static_cast<Eigen::Index>(i));
-  }
+  if (extends) from = mapped(nl, extends->full.phi_names, extends->full.phi);
   s.full = fit_with(m, obs, all, o.fit, cache, from ? &*from : nullptr, true);
   s.train_error = relative_error(obs, predict_with(cache.get(s.full.phi), s.full, n), all);
   const double rows = static_cast<double>(s.full.rows);
@@ -390,15 +397,26 @@ Score score(const Model& m, const Observations& obs, const CvOptions& o, const F
   FitOptions fold_fit = o.fit;
   fold_fit.noise_tolerance = std::max(fold_fit.noise_tolerance, o.fold_noise_tolerance);
   s.cv_prediction = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(n), 6);
+  std::size_t fold = 0;
   for (const auto& block : time_blocks(n, o.folds)) {
     if (block.empty()) continue;
     std::vector<int> train;
     for (int k : all)
       if (k < block.front() - o.gap_samples || k > block.back() + o.gap_samples) train.push_back(k);
     if (train.empty()) continue;
-    const Fit f = fit_with(m, obs, train, fold_fit, cache, &s.full.phi, false);
-    const Eigen::MatrixXd pr = predict_with(cache.get(f.phi), f, n);
+    // Leak-free: the family's data-derived choices and every start come from `train` alone.
+    const std::unique_ptr<Model> own = m.restricted(train);
+    const Model& fm = own ? *own : m;
+    std::optional<DesignCache> own_cache;
+    if (own) own_cache.emplace(fm, n);
+    DesignCache& fc = own ? *own_cache : cache;
+    std::optional<Eigen::VectorXd> warm;
+    if (extends && fold < extends->fold_phi.size()) warm = mapped(nl, extends->full.phi_names, extends->fold_phi[fold]);
+    const Fit f = fit_with(fm, obs, train, fold_fit, fc, warm ? &*warm : nullptr, false);
+    const Eigen::MatrixXd pr = predict_with(fc.get(f.phi), f, n);
     for (int k : block) s.cv_prediction.row(k) = pr.row(k);
+    s.fold_phi.push_back(f.phi);
+    ++fold;
   }
   s.cv_error = relative_error(obs, s.cv_prediction, all);
   s.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

@@ -68,6 +68,9 @@ ContactData make_contact_data(const cid::Scene& scene, double v_tm, const std::v
 class ContactFamily : public Model {
  public:
   ContactFamily(const ContactData& d, std::set<std::string> extensions);
+  /// \param samples the samples the data-derived choices (robot_compliance's identifiable
+  /// directions, sensor_gain's reference component) are made from (empty: all).
+  ContactFamily(const ContactData& d, std::set<std::string> extensions, const std::vector<int>& samples);
   std::string name() const override;
   std::vector<Param> linear() const override { return linear_; }
   std::vector<Param> nonlinear() const override { return nonlinear_; }
@@ -77,11 +80,16 @@ class ContactFamily : public Model {
   /// K > 0, μ >= 0, c_v >= 0, D >= 0 (each within two standard deviations), p > 0, and a positive
   /// semi-definite compliance.
   std::string check(const Fit& f) const override;
+  /// With robot_compliance or sensor_gain: the family with its basis and reference chosen from `train`.
+  std::unique_ptr<Model> restricted(const std::vector<int>& train) const override;
   const std::set<std::string>& extensions() const { return ext_; }
   /// The compliance directions (21 symmetric coordinates -> 6x6) kept for robot_compliance.
   const std::vector<Mat6>& compliance_basis() const { return basis_; }
 
  private:
+  struct PairTable;
+  ContactFamily(const ContactData& d, std::set<std::string> extensions, const std::vector<int>& samples,
+                std::shared_ptr<const PairTable> pairs);
   bool has(const std::string& e) const { return ext_.count(e) > 0; }
   void columns(const std::vector<cid::ContactPoint>& cs, const cid::Kinematics& k, double p, Eigen::Ref<Eigen::MatrixXd> out) const;
   const ContactData& d_;

@@ -66,6 +66,14 @@ class Model {
   /// Physical validity of fitted parameters (e.g. a compliance must be positive semi-definite):
   /// empty when valid, else why not. Default: valid.
   virtual std::string check(const Fit&) const { return ""; }
+  /// The same family with every choice it derives from the data (a basis of identifiable
+  /// directions, a reference component, event times) made from the samples `train` only: what a
+  /// cross-validation fold fits, so that nothing of its held-out block leaks into its prediction.
+  /// Its parameters must have the same names. Default: nullptr (the family derives nothing).
+  virtual std::unique_ptr<Model> restricted(const std::vector<int>& train) const {
+    (void)train;
+    return nullptr;
+  }
 };
 
 struct Fit {
@@ -110,8 +118,10 @@ struct CvOptions {
   int folds = 5;                ///< contiguous time blocks
   int gap_samples = 5;          ///< samples either side of a test block left out of training
   FitOptions fit;
-  /// A fold's fit only predicts its held-out block: it starts from the full fit's optimum and stops
-  /// when an iteration gains less than this many residual variances (FitOptions::noise_tolerance).
+  /// A fold's fit only predicts its held-out block: it starts from the family's own starts (and, in
+  /// a second step, from the same fold's fit of the model it extends), never from a point computed
+  /// with its held-out block, and stops when an iteration gains less than this many residual
+  /// variances (FitOptions::noise_tolerance).
   double fold_noise_tolerance = 0.1;
   /// Called after the full fit: a non-empty answer (why) skips the folds (Score::screened), for a
   /// model that already fails a criterion needing no held-out data.
@@ -132,12 +142,16 @@ struct Score {
   /// Why the folds were skipped (CvOptions::screen); then cv_error is NaN and cv_prediction empty.
   std::string screened;
   bool held_out() const { return screened.empty(); }
+  /// Per fold (in time_blocks order, empty blocks skipped): φ fitted without the block; a second
+  /// step's folds start from these of the model they extend.
+  std::vector<Eigen::VectorXd> fold_phi;
   double seconds = 0.0;
 };
 
-/// \param extends the fit of a model `m` extends (e.g. the cause, in the second step): its φ, by
-/// name, the others at 0, is one more start of the full fit.
-Score score(const Model& m, const Observations& obs, const CvOptions& o = {}, const Fit* extends = nullptr);
+/// \param extends the score of a model `m` extends (e.g. the cause, in the second step): its full
+/// fit's φ, by name, the others at 0, is one more start of the full fit, and each of its folds' φ
+/// one more start of the same fold.
+Score score(const Model& m, const Observations& obs, const CvOptions& o = {}, const Score* extends = nullptr);
 
 /// The sample indices of the blocked cross-validation folds (contiguous blocks).
 std::vector<std::vector<int>> time_blocks(std::size_t samples, int folds);
