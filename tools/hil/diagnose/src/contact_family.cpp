@@ -60,7 +60,7 @@ std::string describe_extension(const std::string& n) {
   if (n == "sensor_bias") return "the force plate has a constant offset per component";
   if (n == "sensor_gain") return "the force plate's scale differs between components";
   if (n == "viscous_friction") return "the friction force grows with the sliding speed";
-  if (n == "contact_damping") return "the normal force grows with the penetration rate";
+  if (n == "contact_damping") return "the normal force grows with the penetration rate (and the friction of sliding contacts with it)";
   if (n == "nonlinear_stiffness") return "the normal force is a power of the interference (Hertz-like)";
   if (n == "link_compliance") return "the links bend too, not only the joints (link springs' identifiable directions)";
   if (n == "load_offset") return "the robot carried a constant load the table does not list (a tool's weight, a cable)";
@@ -190,6 +190,10 @@ ContactFamily::ContactFamily(const ContactData& d, std::set<std::string> extensi
   if (has("contact_damping")) {
     j_damp_ = static_cast<int>(linear_.size());
     linear_.push_back({"damping_n_s_per_m", "N s/m", 100, true});
+    // In Kelvin-Voigt / Hunt-Crossley contact the friction bound follows the total normal force,
+    // damping included: a sliding contact's friction grows by μ D δ̇. Its own coefficient (linear,
+    // 0 when the friction follows the elastic force only) keeps the family separable.
+    linear_.push_back({"damping_friction_n_s_per_m", "N s/m", 100, true});
   }
   if (has("sensor_bias")) {
     j_bias_ = static_cast<int>(linear_.size());
@@ -318,6 +322,7 @@ void ContactFamily::columns(const std::vector<cid::ContactPoint>& cs, const cid:
     if (j_damp_ >= 0) {
       const double rate = -cid::relative_velocity(d_.scene, k, c.point).dot(c.normal);
       out.col(j_damp_) += plate_wrench_of(T, rate * c.normal, c.point);
+      out.col(j_damp_ + 1) += plate_wrench_of(T, rate * c.tangent, c.point);  // zero while sticking
     }
   }
 }
@@ -525,7 +530,7 @@ std::vector<Reported> ContactFamily::report(const Fit& f) const {
   out.push_back({"K", "N/m", K, std::sqrt(std::max(0.0, f.cov(0, 0))), false});
   const double mu = K != 0 ? muK / K : 0.0;
   const double vmu = (f.cov(1, 1) - 2 * mu * f.cov(0, 1) + mu * mu * f.cov(0, 0)) / (K * K);
-  out.push_back({"mu", "", mu, std::sqrt(std::max(0.0, vmu)), false});
+  if (!f.is_fixed(1)) out.push_back({"mu", "", mu, std::sqrt(std::max(0.0, vmu)), false});  // fixed: nothing slides
   const Eigen::Index p = static_cast<Eigen::Index>(linear_.size());
   for (Eigen::Index j = 2; j < p; ++j) {
     const auto& q = linear_[static_cast<std::size_t>(j)];
@@ -536,6 +541,7 @@ std::vector<Reported> ContactFamily::report(const Fit& f) const {
   for (Eigen::Index j = 0; j < static_cast<Eigen::Index>(nonlinear_.size()); ++j) {
     const auto& q = nonlinear_[static_cast<std::size_t>(j)];
     Reported r{q.name, q.unit, f.phi(j), std::sqrt(std::max(0.0, f.cov(p + j, p + j))), true};
+    if (i_cmp_ >= 0 && j >= i_cmp_ && j < i_cmp_ + static_cast<Eigen::Index>(basis_.size())) r.fold_comparable = false;
     if (j == i_exp_) {
       r.name = "stiffness_exponent";
       r.value += 1.0;
@@ -699,7 +705,9 @@ std::vector<cid::SimulatedSample> simulate_with_effects(const cid::Scene& s, con
       const double de = e.stiffness_exponent == 1.0 ? c.delta
                                                     : e.delta_ref_m * std::pow(c.delta / e.delta_ref_m, e.stiffness_exponent);
       const double rate = -cid::relative_velocity(s, k, c.point).dot(c.normal);
-      const Vec3 f = (m.K * de + e.damping_n_s_per_m * rate) * c.normal + (m.mu * m.K * de + e.viscous_n_s_per_m * c.slip_speed) * c.tangent;
+      const double damping_n = e.damping_n_s_per_m * rate;
+      const double friction_n = m.mu * (m.K * de + (e.damping_friction ? damping_n : 0.0));
+      const Vec3 f = (m.K * de + damping_n) * c.normal + (friction_n + e.viscous_n_s_per_m * c.slip_speed) * c.tangent;
       out += plate_wrench_of(s.T_world_fp, f, c.point);
     }
     return out;

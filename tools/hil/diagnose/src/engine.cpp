@@ -1,5 +1,6 @@
 #include "hil/diagnose/engine.hpp"
 
+#include <Eigen/QR>
 #include <Eigen/SVD>
 #include <algorithm>
 #include <chrono>
@@ -9,6 +10,9 @@
 #include <map>
 #include <optional>
 #include <stdexcept>
+
+#include <fmt/format.h>
+#include <fmt/ranges.h>
 
 namespace hil::diagnose {
 
@@ -108,10 +112,15 @@ class Evaluator {
     for (std::size_t a = 0; a < train.size(); ++a)
       for (int c = 0; c < 6; ++c) b_(static_cast<Eigen::Index>(6 * a) + c) = obs.weight(c) * obs.y(train[a], c);
   }
+  /// The weighted design on the training rows; the columns of fixed θ are 0 (θ_j = 0 then).
   Eigen::MatrixXd weighted_design(const Eigen::VectorXd& phi, bool keep = false) {
     ++evaluations;
-    return rows_of(cache_.get(phi, keep), train_, obs_.weight);
+    Eigen::MatrixXd A = rows_of(cache_.get(phi, keep), train_, obs_.weight);
+    for (std::size_t j = 0; j < fixed_theta.size(); ++j)
+      if (fixed_theta[j]) A.col(static_cast<Eigen::Index>(j)).setZero();
+    return A;
   }
+  std::vector<bool> fixed_theta;
   Projected project(const Eigen::VectorXd& phi, bool keep = false) {
     const Eigen::MatrixXd A = weighted_design(phi, keep);
     Projected p;
@@ -143,19 +152,121 @@ double fd_step(const Param& q, double value) {
   return h;
 }
 
+/// What the model reports, without the parameters that were fixed as not identifiable.
+std::vector<Reported> reported_of(const Model& m, const Fit& f) {
+  std::vector<Reported> out = m.report(f);
+  out.erase(std::remove_if(out.begin(), out.end(),
+                           [&](const Reported& r) {
+                             return std::any_of(f.unidentifiable.begin(), f.unidentifiable.end(),
+                                                [&](const Unidentifiable& u) { return u.name == r.name; });
+                           }),
+            out.end());
+  return out;
+}
+
+/// The Jacobian of the unprojected weighted residual in (θ, φ) at (θ, φ): A(φ) and forward
+/// differences of A(φ) θ. Fixed parameters' columns are 0.
+Eigen::MatrixXd full_jacobian(Evaluator& ev, const std::vector<Param>& nl, const Eigen::VectorXd& theta, const Eigen::VectorXd& phi,
+                              const std::vector<bool>& fixed) {
+  const Eigen::MatrixXd A = ev.weighted_design(phi);
+  const Eigen::Index p = A.cols(), q = phi.size();
+  Eigen::MatrixXd J(A.rows(), p + q);
+  J.leftCols(p) = A;
+  const Eigen::VectorXd At = A * theta;
+  for (Eigen::Index j = 0; j < q; ++j) {
+    if (fixed[static_cast<std::size_t>(p + j)]) {
+      J.col(p + j).setZero();
+      continue;
+    }
+    Eigen::VectorXd ph = phi;
+    const double h = fd_step(nl[static_cast<std::size_t>(j)], phi(j));
+    ph(j) += h;
+    J.col(p + j) = (ev.weighted_design(ph) * theta - At) / h;
+  }
+  return J;
+}
+
+/// Identifiability before (and after) estimation: the columns of J taken in order (nominal
+/// parameters first, then the extension's), each kept when its unit-norm column lies farther than
+/// `sine` from the span of those kept before it (Gram-Schmidt with reorthogonalisation: a
+/// rank-revealing QR whose pivots follow the order). The others are fixed and listed with the kept
+/// parameters they are collinear with (the largest coefficients of their projection). `bounded`:
+/// parameters that ended at a bound, fixed and listed whatever their sine.
+std::vector<Unidentifiable> unidentifiable_columns(const Eigen::MatrixXd& J, const std::vector<Param>& params, double sine,
+                                                   const std::vector<bool>& bounded, std::vector<bool>& fixed) {
+  const Eigen::Index n = J.cols();
+  std::vector<Eigen::Index> order;
+  for (int pass = 0; pass < 2; ++pass)
+    for (Eigen::Index j = 0; j < n; ++j)
+      if (params[static_cast<std::size_t>(j)].extension == (pass == 1)) order.push_back(j);
+  Eigen::MatrixXd Q(J.rows(), 0);
+  std::vector<Eigen::Index> kept;
+  std::vector<Unidentifiable> out;
+  auto partners = [&](const Eigen::VectorXd& c) {
+    std::vector<std::string> names;
+    if (kept.empty()) return names;
+    Eigen::MatrixXd K(J.rows(), static_cast<Eigen::Index>(kept.size()));
+    for (std::size_t i = 0; i < kept.size(); ++i) K.col(static_cast<Eigen::Index>(i)) = J.col(kept[i]).normalized();
+    const Eigen::VectorXd b = K.colPivHouseholderQr().solve(c);
+    std::vector<std::pair<double, std::string>> w;
+    for (Eigen::Index i = 0; i < b.size(); ++i)
+      if (std::abs(b(i)) > 0.1 * b.cwiseAbs().maxCoeff()) w.emplace_back(-std::abs(b(i)), params[static_cast<std::size_t>(kept[static_cast<std::size_t>(i)])].name);
+    std::sort(w.begin(), w.end());
+    for (std::size_t i = 0; i < w.size() && i < 3; ++i) names.push_back(w[i].second);
+    return names;
+  };
+  for (const Eigen::Index j : order) {
+    if (fixed[static_cast<std::size_t>(j)]) continue;
+    const double norm = J.col(j).norm();
+    const auto& name = params[static_cast<std::size_t>(j)].name;
+    if (!(norm > 0)) {
+      fixed[static_cast<std::size_t>(j)] = true;
+      out.push_back({name, "does not change the prediction on this run", {}});
+      continue;
+    }
+    const Eigen::VectorXd c = J.col(j) / norm;
+    Eigen::VectorXd r = c - Q * (Q.transpose() * c);
+    r -= Q * (Q.transpose() * r);
+    const bool at_bound = bounded.size() > static_cast<std::size_t>(j) && bounded[static_cast<std::size_t>(j)];
+    if (r.norm() < sine || at_bound) {
+      fixed[static_cast<std::size_t>(j)] = true;
+      Unidentifiable u{name, "", partners(c)};
+      const std::string with = u.collinear_with.empty() ? "" : fmt::format("collinear with {}", fmt::join(u.collinear_with, ", "));
+      u.reason = at_bound ? fmt::format("ran to its bound{}", with.empty() ? "" : "; " + with) : with;
+      out.push_back(std::move(u));
+      continue;
+    }
+    Q.conservativeResize(Eigen::NoChange, Q.cols() + 1);
+    Q.col(Q.cols() - 1) = r.normalized();
+    kept.push_back(j);
+  }
+  return out;
+}
+
 /// The fit of `m` on `train` with designs from `cache`. `warm`: one more start (a second-step model
-/// starts also from the cause's optimum, each of its folds from the cause's fit of that fold; the start
-/// with the lowest training cost wins, so the estimate is still its own training data's optimum). `statistics`: the covariance,
-/// rank, reported parameters and validity (a fold's prediction needs none of them).
+/// starts also from the cause's optimum, each of its folds from the cause's fit of that fold; the
+/// start with the lowest training cost wins, so the estimate is still its own training data's
+/// optimum). `statistics`: identifiability, covariance, rank, reported parameters and validity (a
+/// fold's prediction needs none of them). `fixed`: parameters held at their nominal value (0).
 Fit fit_with(const Model& m, const Observations& obs, const std::vector<int>& train, const FitOptions& o, DesignCache& cache,
-             const Eigen::VectorXd* warm, bool statistics) {
+             const Eigen::VectorXd* warm, bool statistics, const std::vector<bool>* fixed_in = nullptr) {
   if (train.empty()) throw std::runtime_error(m.name() + ": no samples to fit");
   const auto lin = m.linear();
   const auto nl = m.nonlinear();
   const Eigen::Index p = static_cast<Eigen::Index>(lin.size());
   const Eigen::Index q = static_cast<Eigen::Index>(nl.size());
+  std::vector<Param> params = lin;
+  params.insert(params.end(), nl.begin(), nl.end());
   Evaluator ev(cache, obs, train);
   Fit f;
+  f.fixed.assign(static_cast<std::size_t>(p + q), false);
+  if (fixed_in && fixed_in->size() == f.fixed.size()) f.fixed = *fixed_in;
+  auto hold = [&](Eigen::VectorXd phi) {  // fixed φ at their nominal value
+    for (Eigen::Index j = 0; j < q; ++j)
+      if (f.fixed[static_cast<std::size_t>(p + j)]) phi(j) = 0.0;
+    return phi;
+  };
+  ev.fixed_theta.assign(f.fixed.begin(), f.fixed.begin() + p);
 
   Eigen::VectorXd phi = Eigen::VectorXd::Zero(q);
   Projected cur;
@@ -163,7 +274,7 @@ Fit fit_with(const Model& m, const Observations& obs, const std::vector<int>& tr
   std::vector<Eigen::VectorXd> starts = m.starts();
   if (warm) starts.push_back(*warm);
   for (const auto& s0 : starts) {
-    const Eigen::VectorXd s = clamp(s0, nl);
+    const Eigen::VectorXd s = hold(clamp(s0, nl));
     Projected pr = ev.project(s, true);  // every fold evaluates the same starts
     if (first || pr.cost < cur.cost) {
       cur = pr;
@@ -172,15 +283,26 @@ Fit fit_with(const Model& m, const Observations& obs, const std::vector<int>& tr
     }
   }
   if (!cur.theta.allFinite()) throw std::runtime_error(m.name() + ": the fit is not finite");
+  if (statistics && o.collinearity_sine > 0) {
+    // Before estimation: directions the design cannot separate at the start are fixed, not fitted.
+    auto u = unidentifiable_columns(full_jacobian(ev, nl, cur.theta, phi, f.fixed), params, o.collinearity_sine, {}, f.fixed);
+    f.unidentifiable.insert(f.unidentifiable.end(), u.begin(), u.end());
+    if (!u.empty()) {
+      ev.fixed_theta.assign(f.fixed.begin(), f.fixed.begin() + p);
+      phi = hold(phi);
+      cur = ev.project(phi);
+    }
+  }
 
-  if (q > 0) {
-    // Levenberg-Marquardt on the projected residual in scaled units u = φ / scale. The Jacobian is
-    // by forward differences (q designs); after an accepted step it is updated by Broyden's secant
-    // formula instead (no design), up to o.secant_updates times in a row. A finite-difference Jacobian is
-    // recomputed when a secant one gives no descent within a few trials, and always to confirm
-    // convergence, so the fit stops on the same test as with finite differences throughout. The
-    // contact models' residuals are piecewise smooth and their fits crawl along valleys in small
-    // steps, where the Jacobian hardly changes: most iterations then cost one or two designs, not q + 1.
+  // Levenberg-Marquardt on the projected residual in scaled units u = φ / scale. The Jacobian is
+  // by forward differences (q designs); after an accepted step it is updated by Broyden's secant
+  // formula instead (no design), up to o.secant_updates times in a row. A finite-difference Jacobian is
+  // recomputed when a secant one gives no descent within a few trials, and always to confirm
+  // convergence, so the fit stops on the same test as with finite differences throughout. The
+  // contact models' residuals are piecewise smooth and their fits crawl along valleys in small
+  // steps, where the Jacobian hardly changes: most iterations then cost one or two designs, not q + 1.
+  auto levenberg_marquardt = [&]() {
+    if (q == 0) return;
     Eigen::VectorXd scale(q);
     for (Eigen::Index j = 0; j < q; ++j) scale(j) = nl[static_cast<std::size_t>(j)].scale;
     double mu = -1.0;
@@ -193,6 +315,10 @@ Fit fit_with(const Model& m, const Observations& obs, const std::vector<int>& tr
       if (by_fd) {
         J.resize(cur.r.size(), q);
         for (Eigen::Index j = 0; j < q; ++j) {
+          if (f.fixed[static_cast<std::size_t>(p + j)]) {
+            J.col(j).setZero();
+            continue;
+          }
           Eigen::VectorXd ph = phi;
           const double h = fd_step(nl[static_cast<std::size_t>(j)], phi(j));
           ph(j) += h;
@@ -204,7 +330,7 @@ Fit fit_with(const Model& m, const Observations& obs, const std::vector<int>& tr
       Eigen::JacobiSVD<Eigen::MatrixXd> svd(J, Eigen::ComputeThinU | Eigen::ComputeThinV);
       const Eigen::VectorXd sv = svd.singularValues();
       const Eigen::VectorXd g = svd.matrixU().transpose() * cur.r;
-      if (mu < 0) mu = 1e-3 * (sv.size() > 0 ? sv(0) * sv(0) : 1.0);
+      if (mu < 0) mu = 1e-3 * (sv.size() > 0 && sv(0) > 0 ? sv(0) * sv(0) : 1.0);
       const double mu_before = mu;
       bool accepted = false;
       double decrease = 0.0, step_norm = 0.0;
@@ -212,7 +338,7 @@ Fit fit_with(const Model& m, const Observations& obs, const std::vector<int>& tr
         Eigen::VectorXd d = Eigen::VectorXd::Zero(q);
         for (Eigen::Index i = 0; i < sv.size(); ++i)
           if (sv(i) > 1e-9 * sv(0)) d -= (sv(i) * g(i) / (sv(i) * sv(i) + mu)) * svd.matrixV().col(i);
-        const Eigen::VectorXd trial = clamp(phi + d.cwiseProduct(scale), nl);
+        const Eigen::VectorXd trial = hold(clamp(phi + d.cwiseProduct(scale), nl));
         Projected pr = ev.project(trial);
         if (pr.cost < cur.cost) {
           decrease = (cur.cost - pr.cost) / std::max(cur.cost, 1e-300);
@@ -241,28 +367,45 @@ Fit fit_with(const Model& m, const Observations& obs, const std::vector<int>& tr
         break;
       }
     }
-  }
+  };
+  levenberg_marquardt();
 
-  f.theta = cur.theta;
-  f.phi = phi;
-  for (const auto& q0 : nl) f.phi_names.push_back(q0.name);
-  f.parameters = static_cast<int>(p + q);
-  f.rows = static_cast<long>(cur.r.size());
-  f.rss = cur.cost;
+  auto finish = [&]() {
+    f.theta = cur.theta;
+    f.phi = phi;
+    f.phi_names.clear();
+    for (const auto& q0 : nl) f.phi_names.push_back(q0.name);
+    f.parameters = static_cast<int>(p + q);
+    f.rows = static_cast<long>(cur.r.size());
+    f.rss = cur.cost;
+  };
+  finish();
   if (!statistics) {
     f.evaluations = ev.evaluations;
     return f;
   }
 
-  // Statistics from the Jacobian of the unprojected residual in (θ, φ) at the optimum.
-  const Eigen::MatrixXd A = ev.weighted_design(phi);
-  Eigen::MatrixXd J(A.rows(), p + q);
-  J.leftCols(p) = A;
-  for (Eigen::Index j = 0; j < q; ++j) {
-    Eigen::VectorXd ph = phi;
-    const double h = fd_step(nl[static_cast<std::size_t>(j)], phi(j));
-    ph(j) += h;
-    J.col(p + j) = (ev.weighted_design(ph) * cur.theta - A * cur.theta) / h;
+  // Statistics from the Jacobian of the unprojected residual in (θ, φ) at the optimum. First the
+  // identifiability at the optimum: a direction that became inseparable there, or a nonlinear
+  // parameter that ran to a bound (a bound is no estimate), is fixed and the fit repeated once.
+  Eigen::MatrixXd J = full_jacobian(ev, nl, cur.theta, phi, f.fixed);
+  if (o.collinearity_sine > 0) {
+    std::vector<bool> bounded(static_cast<std::size_t>(p + q), false);
+    for (Eigen::Index j = 0; j < q; ++j) {
+      const auto& b = nl[static_cast<std::size_t>(j)];
+      const double tol = 1e-6 * std::max(b.scale, std::min(b.upper - b.lower, 1e300));
+      bounded[static_cast<std::size_t>(p + j)] = phi(j) <= b.lower + tol || phi(j) >= b.upper - tol;
+    }
+    auto u = unidentifiable_columns(J, params, o.collinearity_sine, bounded, f.fixed);
+    if (!u.empty()) {
+      f.unidentifiable.insert(f.unidentifiable.end(), u.begin(), u.end());
+      ev.fixed_theta.assign(f.fixed.begin(), f.fixed.begin() + p);
+      phi = hold(phi);
+      cur = ev.project(phi);
+      levenberg_marquardt();
+      finish();
+      J = full_jacobian(ev, nl, cur.theta, phi, f.fixed);
+    }
   }
   Eigen::VectorXd cs = J.colwise().norm().transpose();
   for (Eigen::Index j = 0; j < cs.size(); ++j)
@@ -301,7 +444,7 @@ Fit fit_with(const Model& m, const Observations& obs, const std::vector<int>& tr
     f.cov *= f.variance_inflation;
   }
   f.evaluations = ev.evaluations;
-  f.reported = m.report(f);
+  f.reported = reported_of(m, f);
   f.invalid = m.check(f);
   return f;
 }
@@ -357,6 +500,50 @@ Eigen::VectorXd mapped(const std::vector<Param>& nl, const std::vector<std::stri
   return out;
 }
 
+void extension_pnr(Score& s) {
+  s.min_extension_pnr = std::numeric_limits<double>::infinity();
+  s.max_extension_pnr = 0.0;
+  bool any = false;
+  for (const auto& r : s.full.reported)
+    if (r.extension) {
+      any = true;
+      s.min_extension_pnr = std::min(s.min_extension_pnr, r.pnr());
+      s.max_extension_pnr = std::max(s.max_extension_pnr, r.pnr());
+    }
+  if (!any) s.min_extension_pnr = 0.0;
+  s.identifiable = s.max_extension_pnr >= 5.0;
+}
+
+/// Two-sided 97.5 % quantile of Student's t with `dof` degrees of freedom.
+double t975(int dof) {
+  static const double q[] = {12.706, 4.303, 3.182, 2.776, 2.571, 2.447, 2.365, 2.306, 2.262, 2.228,
+                             2.201,  2.179, 2.160, 2.145, 2.131, 2.120, 2.110, 2.101, 2.093, 2.086};
+  if (dof < 1) return std::numeric_limits<double>::infinity();
+  return dof <= 20 ? q[dof - 1] : 1.96 + 2.4 / dof;
+}
+
+/// Intervals that hold when the model is not exactly right or the residuals are not white: the
+/// spread of the folds' estimates (delete-a-block jackknife, g blocks: var = (g-1)/g Σ (x_i - x̄)²)
+/// measures what the asymptotic formula assumes away (misfit, autocorrelation beyond its lags,
+/// a multimodal cost). With g - 1 degrees of freedom its ±1.96 std would cover too rarely, so it
+/// is scaled by t_{0.975, g-1} / 1.96. The reported std is the larger of the two; the PNR keeps
+/// the asymptotic one (Reported::pnr).
+void honest_intervals(Score& s, const std::map<std::string, std::vector<double>>& by_name, std::size_t folds) {
+  if (folds < 3) return;
+  const double g = static_cast<double>(folds);
+  const double widen = t975(static_cast<int>(folds) - 1) / 1.96;
+  for (auto& r : s.full.reported) {
+    const auto it = by_name.find(r.name);
+    if (!r.fold_comparable || it == by_name.end() || it->second.size() != folds) continue;
+    const Eigen::Map<const Eigen::VectorXd> v(it->second.data(), static_cast<Eigen::Index>(folds));
+    if (!v.allFinite()) continue;
+    const double var = (g - 1.0) / g * (v.array() - v.mean()).square().sum();
+    r.std_folds = widen * std::sqrt(var);
+    r.std_asymptotic = r.std;
+    r.std = std::max(r.std, r.std_folds);
+  }
+}
+
 }  // namespace
 
 Score score(const Model& m, const Observations& obs, const CvOptions& o, const Score* extends) {
@@ -377,17 +564,7 @@ Score score(const Model& m, const Observations& obs, const CvOptions& o, const S
   const double ll = rows * std::log(std::max(s.full.rss, 1e-300) / rows);
   s.bic = ll + rank * std::log(rows);
   s.aic = ll + 2.0 * rank;
-  s.min_extension_pnr = std::numeric_limits<double>::infinity();
-  s.max_extension_pnr = 0.0;
-  bool any = false;
-  for (const auto& r : s.full.reported)
-    if (r.extension) {
-      any = true;
-      s.min_extension_pnr = std::min(s.min_extension_pnr, r.pnr());
-      s.max_extension_pnr = std::max(s.max_extension_pnr, r.pnr());
-    }
-  if (!any) s.min_extension_pnr = 0.0;
-  s.identifiable = s.max_extension_pnr >= 5.0;
+  extension_pnr(s);
   if (o.screen) s.screened = o.screen(s);
   if (!s.screened.empty()) {
     s.cv_error = std::numeric_limits<double>::quiet_NaN();
@@ -398,6 +575,7 @@ Score score(const Model& m, const Observations& obs, const CvOptions& o, const S
   fold_fit.noise_tolerance = std::max(fold_fit.noise_tolerance, o.fold_noise_tolerance);
   s.cv_prediction = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(n), 6);
   std::size_t fold = 0;
+  std::map<std::string, std::vector<double>> by_name;
   for (const auto& block : time_blocks(n, o.folds)) {
     if (block.empty()) continue;
     std::vector<int> train;
@@ -412,13 +590,19 @@ Score score(const Model& m, const Observations& obs, const CvOptions& o, const S
     DesignCache& fc = own ? *own_cache : cache;
     std::optional<Eigen::VectorXd> warm;
     if (extends && fold < extends->fold_phi.size()) warm = mapped(nl, extends->full.phi_names, extends->fold_phi[fold]);
-    const Fit f = fit_with(fm, obs, train, fold_fit, fc, warm ? &*warm : nullptr, false);
+    Fit f = fit_with(fm, obs, train, fold_fit, fc, warm ? &*warm : nullptr, false, &s.full.fixed);
     const Eigen::MatrixXd pr = predict_with(fc.get(f.phi), f, n);
     for (int k : block) s.cv_prediction.row(k) = pr.row(k);
     s.fold_phi.push_back(f.phi);
+    // The fold's estimates of what the full fit reports (derived quantities included).
+    f.cov = Eigen::MatrixXd::Zero(f.theta.size() + f.phi.size(), f.theta.size() + f.phi.size());
+    f.unidentifiable = s.full.unidentifiable;
+    for (const auto& r : reported_of(fm, f)) by_name[r.name].push_back(r.value);
     ++fold;
   }
   s.cv_error = relative_error(obs, s.cv_prediction, all);
+  honest_intervals(s, by_name, fold);
+  s.full.invalid = m.check(s.full);
   s.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return s;
 }

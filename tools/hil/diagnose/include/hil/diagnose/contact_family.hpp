@@ -14,7 +14,10 @@
 ///   sensor_gain         φ: γ_c, w_meas,c = (1 + γ_c) w_c for the 5 components other than the
 ///                          reference (the largest; its gain is absorbed by K)
 ///   viscous_friction    θ: c_v (N s/m), per sliding contact a tangential force c_v |v_t| e_t
-///   contact_damping     θ: D (N s/m), per contact a normal force D δ̇ e_n (δ̇ the penetration rate)
+///   contact_damping     θ: D, μ_D D (N s/m), per contact a normal force D δ̇ e_n (δ̇ the penetration
+///                          rate) and a friction force μ_D D δ̇ e_t: μ_D = μ when the friction
+///                          bound follows the total normal force (Kelvin-Voigt, Hunt-Crossley),
+///                          0 when it follows the elastic force only
 ///   nonlinear_stiffness φ: p - 1, normal force K δ_ref (δ/δ_ref)^p (friction scales with it)
 /// Pure numerics on hil::contact_id: no I/O.
 #include <Eigen/Geometry>
@@ -175,6 +178,7 @@ struct Effects {
   Vec6 sensor_gain = Vec6::Zero();           ///< γ per component
   double viscous_n_s_per_m = 0.0;
   double damping_n_s_per_m = 0.0;
+  bool damping_friction = false;             ///< the friction bound follows the total normal force
   double stiffness_exponent = 1.0;
   double delta_ref_m = 1e-4;
   std::vector<std::string> names() const;    ///< the effects present

@@ -41,10 +41,22 @@ struct Reported {
   double value = 0.0, std = 0.0;
   bool extension = false;
   double nominal = 0.0;  ///< the value under the nominal model (the PNR measures the distance from it)
-  /// Parameter-to-noise ratio |value - nominal| / std (stiffness paper eq. 10).
+  /// The standard deviation from the spread of the cross-validation folds' estimates (delete-a-block
+  /// jackknife, scaled to Student's t of its degrees of freedom); 0: not computed. `std` is the
+  /// larger of it and the asymptotic one.
+  double std_folds = 0.0;
+  /// The asymptotic standard deviation, σ² (JᵀJ)⁻¹ inflated for autocorrelation (0: same as std).
+  double std_asymptotic = 0.0;
+  /// false: the value's meaning depends on data-derived choices a fold makes anew (e.g. the
+  /// coordinates of a compliance basis chosen from its samples), so the folds cannot measure its spread.
+  bool fold_comparable = true;
+  /// Parameter-to-noise ratio |value - nominal| / std (stiffness paper eq. 10), on the asymptotic
+  /// covariance as in the paper: a measure of the design's practical identifiability, used to
+  /// screen candidates. The reported interval (std) may be wider.
   double pnr() const {
     const double d = std::abs(value - nominal);
-    return std > 0 ? d / std : (d != 0 ? 1e300 : 0.0);
+    const double sd = std_asymptotic > 0 ? std_asymptotic : std;
+    return sd > 0 ? d / sd : (d != 0 ? 1e300 : 0.0);
   }
 };
 
@@ -76,8 +88,20 @@ class Model {
   }
 };
 
+/// A parameter the run cannot determine: fixed at its nominal value (0) and not reported.
+struct Unidentifiable {
+  std::string name;
+  std::string reason;                   ///< e.g. "collinear with muK, gain_fy"
+  std::vector<std::string> collinear_with;
+};
+
 struct Fit {
   Eigen::VectorXd theta, phi;
+  /// Per parameter (θ then φ): fixed at its nominal value because the run cannot separate it from
+  /// the others (see `unidentifiable`); its covariance rows are 0. Empty: none fixed.
+  std::vector<bool> fixed;
+  std::vector<Unidentifiable> unidentifiable;
+  bool is_fixed(Eigen::Index j) const { return static_cast<std::size_t>(j) < fixed.size() && fixed[static_cast<std::size_t>(j)]; }
   Eigen::MatrixXd cov;          ///< of (θ, φ): σ² (JᵀJ)⁺ at the optimum, times variance_inflation
   double variance_inflation = 1.0;  ///< long-run variance factor of the autocorrelated residuals (>= 1)
   int rank = 0;                 ///< numerical rank of J (θ and φ columns)
@@ -102,6 +126,11 @@ struct FitOptions {
   /// Broyden secant updates of the Jacobian allowed between finite-difference ones (0: finite
   /// differences at every iteration). Convergence is always confirmed by finite differences.
   int secant_updates = 4;
+  /// Identifiability before estimation: a parameter whose column of the scaled Jacobian (at the
+  /// start and at the optimum; columns taken in order, nominal parameters first) lies within this
+  /// sine of the span of the columns kept before it is fixed at its nominal value and listed as
+  /// not identifiable; so is a nonlinear one that ends at a bound. 0: off.
+  double collinearity_sine = 1e-3;
 };
 
 /// Fits `m` on the samples `train` (indices into obs). \throws std::runtime_error if the design is zero.
