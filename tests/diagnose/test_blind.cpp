@@ -219,11 +219,12 @@ TEST_P(Blind, TheRightCauseWithItsMagnitude) {
 
 // Cases that fail because of the diagnosis engine, not of the scene or the converter (TripodScene.*
 // checks those: per sample the nominal model is the truth's law to 0.01 N / 3e-3 N m, and a clean
-// run's nominal fit returns K and μ to 0.05 %). Disabled so that the suite passes; each entry is
-// the outcome observed on the 15 s runs (run them with --gtest_also_run_disabled_tests). Noise-free
-// fits of the same runs (the truth's wrench exactly, K and μ and the one extension) show where the
-// magnitudes come from: with exact poses the estimates sit on the truth, with the poses at 2 µm
-// they move by several of the reported std, which do not account for the quantised regressor.
+// run's nominal fit returns K and μ within 0.05 %). Disabled so that the suite passes; each entry
+// is the outcome observed on the 15 s runs (run them with --gtest_also_run_disabled_tests).
+// Noise-free fits of 16 s runs (the truth's wrench without sensor chain, the nominal model and the
+// one extension, fitted on all samples) show where the magnitudes come from: with exact poses the
+// estimates are close to the truth (τ excepted), with the poses at 2 µm they move by several of
+// the reported std, which do not account for a quantised regressor.
 std::string known_failure(const std::string& effect, const std::string& resolution) {
   const bool paper = resolution == kPaper.name;
   // Friction lives in fx, fy and mz only (contacts in the plate plane, fp = P), so a common factor
@@ -234,7 +235,8 @@ std::string known_failure(const std::string& effect, const std::string& resoluti
   if (effect == "sensor_gain") return "gain_fx, gain_fy, gain_mz at the degenerate μ-gain valley's bound";
   // τ 0.02212 ± 0.00015 s (paper), 0.02195 ± 0.00015 s (fine), truth 0.02: 13 std. Noise-free: 0.0207
   // with exact poses (the residual of hil's contact point, 3δ/4 above the tip, against the point
-  // foot), 0.0219 with the poses at 2 µm (interpolating between samples averages the pose steps).
+  // foot), 0.0219 with the poses at 2 µm (presumably: interpolating between samples averages the pose
+  // steps, so a fractional delay fits the quantised poses better).
   if (effect == "time_offset" || effect == "sensor_bias_and_time_offset") return "time_offset_s 13 std above the truth";
   // c_v 196.3 ± 1.6 (paper), 196.1 ± 1.6 (fine), truth 200: 2.3-2.5 std. Noise-free: 200.15 ± 0.96
   // with exact poses, 196.7 ± 1.07 with the poses at 2 µm.
