@@ -83,9 +83,28 @@ nlohmann::json params_json(const dg::Fit& f, bool extension_only) {
   nlohmann::json p = nlohmann::json::object();
   for (const auto& q : f.reported) {
     if (extension_only && !q.extension) continue;
-    p[q.name] = {{"value", q.value}, {"std", q.std}, {"unit", q.unit}, {"pnr", q.pnr()}, {"extension", q.extension}};
+    p[q.name] = {{"value", q.value},
+                 {"std", q.std},
+                 {"std_asymptotic", q.std_asymptotic > 0 ? q.std_asymptotic : q.std},
+                 {"std_folds", q.std_folds},
+                 {"unit", q.unit},
+                 {"pnr", q.pnr()},
+                 {"extension", q.extension}};
   }
   return p;
+}
+
+nlohmann::json unidentifiable_json(const dg::Fit& f) {
+  nlohmann::json u = nlohmann::json::array();
+  for (const auto& x : f.unidentifiable) u.push_back({{"name", x.name}, {"reason", x.reason}, {"collinear_with", x.collinear_with}});
+  return u;
+}
+
+/// "gain_fx (collinear with muK), gain_fy (...)": the parameters fixed as not identifiable.
+std::string unidentifiable_text(const dg::Fit& f) {
+  std::vector<std::string> v;
+  for (const auto& x : f.unidentifiable) v.push_back(x.reason.empty() ? x.name : x.name + " (" + x.reason + ")");
+  return fmt::format("{}", fmt::join(v, ", "));
 }
 
 }  // namespace
@@ -206,10 +225,13 @@ void print_summary(std::ostream& out, const RunDiagnosis& r) {
   if (!d.second_cause.empty())
     out << fmt::format("  second cause:    {} — {}\n", d.second_cause, dg::describe_extension(d.second_cause));
   if (d.extended) {
-    out << "    (value ± 95 % interval, i.e. 1.96 std; PNR = |value - nominal| / std)\n";
+    out << "    (value ± 95 % interval, i.e. 1.96 std, the wider of the asymptotic and the folds' spread;\n"
+           "     PNR = |value - nominal| / asymptotic std)\n";
     for (const auto& q : ext.full.reported)
       if (q.extension)
         out << fmt::format("    {:<28} {}  (PNR {:.1f})\n", q.name, fmt_value(q.value, q.std, q.unit), q.pnr());
+    if (!ext.full.unidentifiable.empty())
+      out << fmt::format("    not identifiable from this run, fixed at nominal: {}\n", unidentifiable_text(ext.full));
     out << fmt::format("  extended model:  held-out relative {} error {:.2f} %  (gain {:.1f} %)\n", what, 100 * ext.cv_error,
                        d.gain_percent);
   }
@@ -272,6 +294,7 @@ nlohmann::json to_json(const RunDiagnosis& r) {
                    {"relative_error", ext.cv_error},
                    {"train_relative_error", ext.train_error},
                    {"parameters", params_json(ext.full, false)},
+                   {"unidentifiable", unidentifiable_json(ext.full)},
                    {"residuals", res(d.extended_residuals)}};
   j["gain_percent"] = d.gain_percent;
   auto table = [&](const std::vector<dg::CandidateResult>& v) {
@@ -287,7 +310,8 @@ nlohmann::json to_json(const RunDiagnosis& r) {
                    {"max_pnr", c.pnr},
                    {"supported", c.supported},
                    {"verdict", c.verdict},
-                   {"parameters", params_json(c.score.full, true)}});
+                   {"parameters", params_json(c.score.full, true)},
+                   {"unidentifiable", unidentifiable_json(c.score.full)}});
     return t;
   };
   j["candidates"] = table(d.candidates);
@@ -404,6 +428,8 @@ void write_report(const std::string& dir, const RunDiagnosis& r) {
       rows.push_back({q.name, fmt::format("{:.5g}", q.value), fmt::format("{:.2g}", q.std), q.unit, fmt::format("{:.1f}", q.pnr()),
                       q.extension ? "extension" : "nominal"});
     page.table({"parameter", "value", "std", "unit", "PNR", ""}, rows);
+    if (!ext.full.unidentifiable.empty())
+      page.paragraph("Not identifiable from this run (fixed at their nominal value, not estimated): " + unidentifiable_text(ext.full));
   }
   for (const auto& n : r.notes) page.paragraph("Note: " + n);
   page.write((fs::path(dir) / "index.html").string());
