@@ -95,6 +95,16 @@ const Effect kBiasDelay{"sensor_bias_and_time_offset",
                           s.sensor.delay_s = 0.02;
                         },
                         {"sensor_bias", "time_offset"}};
+// Damping on top of a delay (issue 12: "a second step that can find damping on top of a delay").
+// To first order D δ̇ is the normal force D/K earlier, so the sizes differ (a lead of 12.5 ms, a
+// lag of 40 ms): with D = 5000 and 20 ms the two cancel (nominal error 0.83 % against 0.66 % noise).
+const Effect kDampingDelay{"contact_damping_and_time_offset",
+                           [](ct::Scenario& s, TripodRigOptions&) {
+                             s.law.damping_n_s_per_m = 2500.0;
+                             s.law.friction_on_total_normal = true;
+                             s.sensor.delay_s = 0.04;
+                           },
+                           {"contact_damping", "time_offset"}};
 const Effect kDrift{"drifting_offset",
                     [](ct::Scenario& s, TripodRigOptions&) { s.sensor.drift_per_s << 0.05, -0.03, 0.15, 0.002, -0.002, 0.001; },
                     {},
@@ -266,13 +276,17 @@ std::string known_failure(const std::string& effect, const std::string& resoluti
   // Noise-free: 4979 ± 22 with exact poses, 4955 ± 24 at 2 µm. Suspected: the truth clips the
   // normal force at 0 while a foot lifts off fast (K δ + D δ̇ < 0), which a linear D cannot follow.
   if (effect == "contact_damping" || effect == "contact_damping_elastic_friction") return "damping_n_s_per_m 2.2-2.3 std below the truth";
+  // A 40 ms delay with D = 2500 N s/m (a 12.5 ms lead to first order): time_offset alone is named,
+  // τ 31.4 ms (paper) / 31.2 ms (fine) for 40 — the delay absorbs the damping's first order — and
+  // the damping added to it explains 0.17 of the noise variance (< 0.25): not named.
+  if (effect == "contact_damping_and_time_offset") return "only time_offset named (the delay absorbs the damping), tau 31 ms for 40";
   return "";
 }
 
 std::vector<Case> cases(const Resolution& r) {
   std::vector<Case> out;
   for (const Effect* e : {&kNone, &kBias, &kGain, &kDelay, &kViscous, &kDamping, &kDampingElastic, &kExponent, &kGeometric,
-                          &kBiasDelay, &kDrift, &kSlip})
+                          &kBiasDelay, &kDampingDelay, &kDrift, &kSlip})
     out.push_back({*e, r, known_failure(e->name, r.name)});
   return out;
 }
