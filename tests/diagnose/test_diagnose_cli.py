@@ -70,6 +70,15 @@ class Diagnose(unittest.TestCase):
         for c in d["candidates"]:
             for key in ("relative_error", "gain_percent", "bic", "max_pnr", "supported", "verdict"):
                 self.assertIn(key, c)
+            for name, p in c["parameters"].items():  # the reported std is the wider of the two
+                self.assertGreaterEqual(p["std"], p["std_asymptotic"] * (1 - 1e-12), name)
+        # The press bench is planar: nothing acts along fy, so sensor_gain's gain_fy is listed as not
+        # identifiable (fixed, with the reason) and never printed as an estimate.
+        gain = next(c for c in d["candidates"] if c["name"] == "sensor_gain")
+        fixed = {u["name"]: u["reason"] for u in gain["unidentifiable"]}
+        self.assertIn("gain_fy", fixed)
+        self.assertTrue(fixed["gain_fy"])
+        self.assertNotIn("gain_fy", gain["parameters"])
         with open(os.path.join(rep, "index.html")) as f:
             html = f.read()
         self.assertIn("Candidate ranking", html)
