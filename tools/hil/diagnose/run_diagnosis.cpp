@@ -258,7 +258,8 @@ void print_summary(std::ostream& out, const RunDiagnosis& r) {
     out << fmt::format("    {:<20} {:>9} {:>9}  {}\n", c.name, percent_cell(c.score.cv_error, "{:.2f} %"),
                        percent_cell(c.gain_percent / 100, "{:+.1f} %"), c.verdict);
   for (const auto& c : d.candidates)
-    if (c.name == "rest_change" && c.applicable) out << "  rest_change alone: " << events_text(rest_events(r, {c.name})) << "\n";
+    if (c.name == "rest_change" && c.applicable && d.cause != c.name)  // as the cause, its events are listed above
+      out << "  rest_change alone: " << events_text(rest_events(r, {c.name})) << "\n";
   for (const auto& c : d.second_step)
     if (c.name == "rest_change" && c.applicable)
       out << fmt::format("  {} + {:<10} {:>9} {:>9}  {}\n    {}\n", d.cause, c.name, percent_cell(c.score.cv_error, "{:.2f} %"),
