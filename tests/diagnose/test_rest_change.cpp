@@ -48,9 +48,9 @@ DeflectionData make_base(const std::vector<Step>& steps, unsigned seed, double n
   for (int k = 0; k < kSamples; ++k) {
     const double tk = kDt * k;
     t.push_back(tk);
-    // Plate wrench: weight plus a swinging arm's moment. The weight varies (the arm accelerates): a
-    // constant fz would make C's z column that of the rest pose, which the engine's rank-revealing
-    // solve mishandles when the collinearity is not exact to machine precision (see the report).
+    // Plate wrench: weight plus a swinging arm's moment. The weight varies (the arm accelerates): with
+    // a constant fz, C's fz columns are nearly those of the rest pose, and the engine's least squares
+    // (its COD threshold is set after the decomposition) returned a wrong θ on this design.
     Vec6 wk;
     wk << 2 * std::sin(tk), 1.5 * std::cos(0.7 * tk), -700 + 20 * std::sin(0.3 * tk + 1), 40 * std::sin(0.9 * tk),
         30 * std::cos(0.4 * tk), 3 * std::sin(1.3 * tk);
