@@ -176,6 +176,23 @@ class Diagnose(unittest.TestCase):
         self.assertGreater(c["value"], 0)
         self.assertGreaterEqual(c["pnr"], 5)
         self.assertIn("follows load_my", r.stdout)
+        # rest_change locates the two slips (docs/case-study-tiago.md): events with intervals, not
+        # standard deviations, near 23.4 s and 48.8 s, and the yaw steps they carry identifiable.
+        rc = next(c for c in d["candidates"] if c["name"] == "rest_change")
+        events = {k: v for k, v in rc["parameters"].items() if k.startswith("event_")}
+        self.assertTrue(events)
+        for v in events.values():
+            self.assertLessEqual(v["lower"], v["value"])
+            self.assertLessEqual(v["value"], v["upper"])
+            self.assertNotIn("std", v)
+        for slip in (23.45, 48.85):
+            self.assertTrue(any(abs(v["value"] - slip) < 0.1 for v in events.values()), (slip, events))
+        self.assertTrue(any(k.startswith("step_") and k.endswith("_rz") and v["pnr"] >= 5 for k, v in rc["parameters"].items()))
+        self.assertIn("rest_change alone: event_1_s", r.stdout)
+        # The whole document, located events included, is valid against its published schema.
+        import jsonschema
+        with open(os.path.join(SRC, "docs", "schemas", "hil.diagnosis.schema.json")) as f:
+            jsonschema.validate(d, json.load(f))
 
 if __name__ == "__main__":
     unittest.main(argv=[sys.argv[0]], verbosity=2)

@@ -4,6 +4,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <set>
 
 #include "../output.hpp"
 #include "hil/format/error.hpp"
@@ -105,6 +106,38 @@ std::string unidentifiable_text(const dg::Fit& f) {
   std::vector<std::string> v;
   for (const auto& x : f.unidentifiable) v.push_back(x.reason.empty() ? x.name : x.name + " (" + x.reason + ")");
   return fmt::format("{}", fmt::join(v, ", "));
+}
+
+/// The extensions of the extended model (the cause and the second cause).
+std::set<std::string> extended_set(const RunDiagnosis& r) {
+  std::set<std::string> e;
+  if (r.result.cause != "none") e.insert(r.result.cause);
+  if (!r.result.second_cause.empty()) e.insert(r.result.second_cause);
+  return e;
+}
+
+/// rest_change's events in the deflection model with the extensions `ext` (none without it). The
+/// family locates them again on all samples: the search is deterministic, so they are those its
+/// full fit used.
+std::vector<dg::RestEvent> rest_events(const RunDiagnosis& r, std::set<std::string> ext) {
+  if (!r.deflection || !ext.count("rest_change")) return {};
+  return dg::DeflectionFamily(*r.deflection, std::move(ext)).events();
+}
+
+/// event_1_s ...: located, not fitted, so an interval (the samples around the change, or the χ²
+/// profile of the split cost), not a standard deviation.
+void add_events(nlohmann::json& params, const std::vector<dg::RestEvent>& events) {
+  for (std::size_t e = 0; e < events.size(); ++e)
+    params[fmt::format("event_{}_s", e + 1)] = {{"value", events[e].t_s},       {"lower", events[e].lower_s},
+                                               {"upper", events[e].upper_s},   {"unit", "s"},
+                                               {"first_sample", events[e].first_sample}, {"located", true}};
+}
+
+std::string events_text(const std::vector<dg::RestEvent>& events) {
+  std::vector<std::string> v;
+  for (std::size_t e = 0; e < events.size(); ++e)
+    v.push_back(fmt::format("event_{}_s {:.2f} s ({:.2f} .. {:.2f})", e + 1, events[e].t_s, events[e].lower_s, events[e].upper_s));
+  return v.empty() ? std::string("no event located") : fmt::format("{}", fmt::join(v, ", "));
 }
 
 }  // namespace
@@ -232,6 +265,10 @@ void print_summary(std::ostream& out, const RunDiagnosis& r) {
         out << fmt::format("    {:<28} {}  (PNR {:.1f})\n", q.name, fmt_value(q.value, q.std, q.unit), q.pnr());
     if (!ext.full.unidentifiable.empty())
       out << fmt::format("    not identifiable from this run, fixed at nominal: {}\n", unidentifiable_text(ext.full));
+    const auto events = rest_events(r, extended_set(r));
+    for (std::size_t e = 0; e < events.size(); ++e)
+      out << fmt::format("    {:<28} {:.2f} s  (located between {:.2f} and {:.2f} s)\n", fmt::format("event_{}_s", e + 1),
+                         events[e].t_s, events[e].lower_s, events[e].upper_s);
     out << fmt::format("  extended model:  held-out relative {} error {:.2f} %  (gain {:.1f} %)\n", what, 100 * ext.cv_error,
                        d.gain_percent);
   }
@@ -242,6 +279,13 @@ void print_summary(std::ostream& out, const RunDiagnosis& r) {
   for (const auto& c : d.candidates)
     out << fmt::format("    {:<20} {:>9} {:>9}  {}\n", c.name, percent_cell(c.score.cv_error, "{:.2f} %"),
                        percent_cell(c.gain_percent / 100, "{:+.1f} %"), c.verdict);
+  for (const auto& c : d.candidates)
+    if (c.name == "rest_change" && c.applicable && d.cause != c.name)  // as the cause, its events are listed above
+      out << "  rest_change alone: " << events_text(rest_events(r, {c.name})) << "\n";
+  for (const auto& c : d.second_step)
+    if (c.name == "rest_change" && c.applicable)
+      out << fmt::format("  {} + {:<10} {:>9} {:>9}  {}\n    {}\n", d.cause, c.name, percent_cell(c.score.cv_error, "{:.2f} %"),
+                         percent_cell(c.gain_percent / 100, "{:+.1f} %"), c.verdict, events_text(rest_events(r, {d.cause, c.name})));
   for (const auto& n : r.notes) out << "  note: " << n << "\n";
   out << fmt::format("  ({:.1f} s)\n", d.seconds);
 }
@@ -283,6 +327,7 @@ nlohmann::json to_json(const RunDiagnosis& r) {
   } else {
     const auto& first = *std::find_if(d.candidates.begin(), d.candidates.end(), [&](const auto& c) { return c.name == d.cause; });
     j["cause"] = {{"name", d.cause}, {"description", dg::describe_extension(d.cause)}, {"parameters", params_json(first.score.full, true)}};
+    add_events(j["cause"]["parameters"], rest_events(r, {d.cause}));
   }
   if (d.second_cause.empty()) {
     j["second_cause"] = nullptr;
@@ -296,10 +341,13 @@ nlohmann::json to_json(const RunDiagnosis& r) {
                    {"parameters", params_json(ext.full, false)},
                    {"unidentifiable", unidentifiable_json(ext.full)},
                    {"residuals", res(d.extended_residuals)}};
+  add_events(j["extended"]["parameters"], rest_events(r, extended_set(r)));
   j["gain_percent"] = d.gain_percent;
-  auto table = [&](const std::vector<dg::CandidateResult>& v) {
+  auto table = [&](const std::vector<dg::CandidateResult>& v, bool second) {
     nlohmann::json t = nlohmann::json::array();
-    for (const auto& c : v)
+    for (const auto& c : v) {
+      std::set<std::string> with{c.name};
+      if (second) with.insert(d.cause);
       t.push_back({{"name", c.name},
                    {"relative_error", std::isfinite(c.score.cv_error) ? nlohmann::json(c.score.cv_error) : nlohmann::json(nullptr)},
                    {"scored_held_out", c.score.held_out()},
@@ -312,10 +360,12 @@ nlohmann::json to_json(const RunDiagnosis& r) {
                    {"verdict", c.verdict},
                    {"parameters", params_json(c.score.full, true)},
                    {"unidentifiable", unidentifiable_json(c.score.full)}});
+      if (c.applicable) add_events(t.back()["parameters"], rest_events(r, with));
+    }
     return t;
   };
-  j["candidates"] = table(d.candidates);
-  j["second_step"] = table(d.second_step);
+  j["candidates"] = table(d.candidates, false);
+  j["second_step"] = table(d.second_step, true);
   j["nominal"]["bic"] = d.nominal.bic;
   j["notes"] = r.notes;
   j["seconds"] = d.seconds;
@@ -430,6 +480,17 @@ void write_report(const std::string& dir, const RunDiagnosis& r) {
     page.table({"parameter", "value", "std", "unit", "PNR", ""}, rows);
     if (!ext.full.unidentifiable.empty())
       page.paragraph("Not identifiable from this run (fixed at their nominal value, not estimated): " + unidentifiable_text(ext.full));
+    const auto events = rest_events(r, extended_set(r));
+    if (!events.empty()) {
+      rows.clear();
+      for (std::size_t e = 0; e < events.size(); ++e)
+        rows.push_back({fmt::format("event_{}_s", e + 1), fmt::format("{:.2f}", events[e].t_s), fmt::format("{:.2f}", events[e].lower_s),
+                        fmt::format("{:.2f}", events[e].upper_s)});
+      page.heading("Located rest-pose changes (rest_change)", 3);
+      page.paragraph("Located by a change-point search, not fitted: the interval is where the change can be (the samples "
+                     "around it, widened by the split cost's 95 % profile), not a standard deviation.");
+      page.table({"event", "time (s)", "from (s)", "to (s)"}, rows);
+    }
   }
   for (const auto& n : r.notes) page.paragraph("Note: " + n);
   page.write((fs::path(dir) / "index.html").string());

@@ -64,6 +64,7 @@ std::string describe_extension(const std::string& n) {
   if (n == "nonlinear_stiffness") return "the normal force is a power of the interference (Hertz-like)";
   if (n == "link_compliance") return "the links bend too, not only the joints (link springs' identifiable directions)";
   if (n == "load_offset") return "the robot carried a constant load the table does not list (a tool's weight, a cable)";
+  if (n == "rest_change") return "the rest pose changes at events located from the data (the body slips on its support and stays where it went)";
   if (n == "none") return "no extension predicts held-out data better than the nominal model beyond the noise";
   return "";
 }

@@ -53,8 +53,11 @@ Eigen::VectorXd solve_ls(const Eigen::MatrixXd& A, const Eigen::VectorXd& b) {
   for (Eigen::Index j = 0; j < scale.size(); ++j)
     if (!(scale(j) > 0)) scale(j) = 1.0;
   const Eigen::MatrixXd As = A * scale.cwiseInverse().asDiagonal();
-  Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> cod(As);
+  // The threshold decides the rank inside compute(): set before it (set after, it is ignored and a
+  // nearly collinear design gets a wrong solution).
+  Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> cod;
   cod.setThreshold(1e-10);
+  cod.compute(As);
   return cod.solve(b).cwiseQuotient(scale);
 }
 
