@@ -17,6 +17,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <functional>
 #include <iomanip>
 #include <iostream>
@@ -51,7 +52,7 @@ struct Resolution {
 struct Case {
   Effect effect;
   Resolution resolution;
-  std::string known_failure;  ///< non-empty: disabled, with the outcome observed (see known_failure())
+  std::string known_failure;  ///< non-empty: skipped, with the outcome observed (see known_failure())
 };
 
 std::string label(const Case& c) { return c.effect.name + "_" + c.resolution.name; }
@@ -171,6 +172,11 @@ class Blind : public ::testing::TestWithParam<Case> {};
 
 TEST_P(Blind, TheRightCauseWithItsMagnitude) {
   const Case& c = GetParam();
+  // Known failures are skipped, with their observed outcome, unless HIL_RUN_KNOWN_FAILURES is set
+  // (a DISABLED_ name in the middle of a parameterised test's name is not seen as disabled by
+  // ctest's test discovery, which then runs it).
+  if (!c.known_failure.empty() && !std::getenv("HIL_RUN_KNOWN_FAILURES"))
+    GTEST_SKIP() << "known failure: " << c.known_failure << " (HIL_RUN_KNOWN_FAILURES=1 runs it)";
   ct::Scenario sc = pressing_and_sliding(kDuration_s);
   TripodRigOptions rig;
   c.effect.apply(sc, rig);
@@ -245,7 +251,7 @@ TEST_P(Blind, TheRightCauseWithItsMagnitude) {
 // Cases that fail because of the diagnosis engine, not of the scene or the converter (TripodScene.*
 // checks those: per sample the nominal model is the truth's law to 0.01 N / 3e-3 N m, and a clean
 // run's nominal fit returns K and μ within 0.05 %). Disabled so that the suite passes; each entry
-// is the outcome observed on the 15 s runs (run them with --gtest_also_run_disabled_tests).
+// is the outcome observed on the 15 s runs (run them with HIL_RUN_KNOWN_FAILURES=1).
 // Noise-free fits of 16 s runs (the truth's wrench without sensor chain, the nominal model and the
 // one extension, fitted on all samples) show where the magnitudes come from: with exact poses the
 // estimates are close to the truth (τ excepted), with the poses at 2 µm they move by several of
@@ -291,10 +297,7 @@ std::vector<Case> cases(const Resolution& r) {
   return out;
 }
 
-// gtest skips a test whose name has a part starting with DISABLED_ (--gtest_also_run_disabled_tests runs it).
-std::string case_name(const ::testing::TestParamInfo<Case>& i) {
-  return (i.param.known_failure.empty() ? "" : "DISABLED_") + label(i.param);
-}
+std::string case_name(const ::testing::TestParamInfo<Case>& i) { return label(i.param); }
 
 INSTANTIATE_TEST_SUITE_P(Paper, Blind, ::testing::ValuesIn(cases(kPaper)), case_name);
 INSTANTIATE_TEST_SUITE_P(Fine, Blind, ::testing::ValuesIn(cases(kFine)), case_name);
