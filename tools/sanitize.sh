@@ -29,8 +29,9 @@ else
   cmake --build --preset tsan -j "$jobs" --target "${tsan_targets[@]}"
 fi
 echo "sanitize: $kind build took $(($(date +%s) - start)) s"
-# Label `blind` (the diagnosis on the independent truth's runs: pure numerics, minutes under ASan,
-# their code covered by the other diagnosis tests) is left out to keep CI's budget.
+# Label `blind` (the blind diagnoses: hidden effects, the independent truth's runs; pure numerics,
+# minutes each under ASan, their code covered by the engine and CLI tests) is left out to keep
+# CI's budget.
 exclude=()
 [[ $kind == asan ]] && exclude=(-LE blind)
 ctest --preset "$kind" -j "$jobs" "${exclude[@]}" "$@"
