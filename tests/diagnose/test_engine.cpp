@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
 #include <random>
 
 #include "hil/diagnose/contact_family.hpp"
@@ -320,6 +321,63 @@ TEST(Engine, SecantUpdatesReachTheSameOptimumWithFewerDesigns) {
     EXPECT_NEAR(f->theta(0), 2.0, 1e-5);
   }
   EXPECT_LT(b.evaluations, a.evaluations);
+}
+
+/// The sine plus, with `with_step`, a step θ_2 H(t - t_e) at a nonlinear event time t_e. Its
+/// folds' models drop the step (as a rest-change search may find no event in a training set), so
+/// a fold's φ has fewer entries than the full fit's.
+class SineStepFamily : public Model {
+ public:
+  SineStepFamily(const Observations& o, bool with_step) : o_(o), step_(with_step) {}
+  std::string name() const override { return step_ ? "sine+step" : "sine"; }
+  std::vector<Param> linear() const override {
+    std::vector<Param> p{{"amplitude", "", 1, false}, {"offset", "", 1, true}};
+    if (step_) p.push_back({"step", "", 1, true});
+    return p;
+  }
+  std::vector<Param> nonlinear() const override {
+    std::vector<Param> p{{"frequency", "Hz", 0.1, true, 0.1, 5}};
+    if (step_) p.push_back({"event_s", "s", 0.1, true, 0.0, 4.0});
+    return p;
+  }
+  std::vector<Eigen::VectorXd> starts() const override {
+    Eigen::VectorXd s = Eigen::VectorXd::Constant(step_ ? 2 : 1, 1.2);
+    if (step_) s(1) = 2.0;
+    return {s};
+  }
+  void design(const Eigen::VectorXd& phi, Eigen::MatrixXd& A) const override {
+    A.setZero(static_cast<Eigen::Index>(6 * o_.size()), step_ ? 3 : 2);
+    for (std::size_t k = 0; k < o_.size(); ++k)
+      for (int c = 0; c < 6; ++c) {
+        const Eigen::Index row = static_cast<Eigen::Index>(6 * k) + c;
+        A(row, 0) = std::sin(2 * M_PI * phi(0) * o_.t_s[k] + c);
+        A(row, 1) = 1.0;
+        if (step_) A(row, 2) = o_.t_s[k] >= phi(1) ? 1.0 : 0.0;
+      }
+  }
+  std::unique_ptr<Model> restricted(const std::vector<int>&) const override {
+    return step_ ? std::make_unique<SineStepFamily>(o_, false) : nullptr;
+  }
+
+ private:
+  const Observations& o_;
+  bool step_;
+};
+
+TEST(Engine, ASecondStepWhoseFoldsHaveOtherParametersStartsThemByName) {
+  const auto o = sine_data(1.23, 2.5, 0.4, 0.05, 3);
+  const SineStepFamily base(o, false), ext(o, true);
+  const Score first = score(base, o);
+  const Score second = score(ext, o, {}, &first);  // was a read past φ's bounds (ASan)
+  ASSERT_EQ(second.full.phi.size(), 2);
+  ASSERT_FALSE(second.fold_phi.empty());
+  ASSERT_EQ(second.fold_phi.size(), second.fold_phi_names.size());
+  for (std::size_t k = 0; k < second.fold_phi.size(); ++k) {
+    ASSERT_EQ(second.fold_phi[k].size(), 1);
+    EXPECT_EQ(second.fold_phi_names[k], std::vector<std::string>{"frequency"});
+    EXPECT_NEAR(second.fold_phi[k](0), 1.23, 1e-2);
+  }
+  EXPECT_NEAR(second.cv_error, 0.05, 0.01);
 }
 
 TEST(Engine, TimeBlocksPartitionTheSamplesInOrder) {

@@ -275,7 +275,12 @@ Fit fit_with(const Model& m, const Observations& obs, const std::vector<int>& tr
   Projected cur;
   bool first = true;
   std::vector<Eigen::VectorXd> starts = m.starts();
-  if (warm) starts.push_back(*warm);
+  if (warm) {
+    if (warm->size() != q)
+      throw std::logic_error(m.name() + ": a warm start of " + std::to_string(warm->size()) + " values for " +
+                             std::to_string(q) + " nonlinear parameters");
+    starts.push_back(*warm);
+  }
   for (const auto& s0 : starts) {
     const Eigen::VectorXd s = hold(clamp(s0, nl));
     Projected pr = ev.project(s, true);  // every fold evaluates the same starts
@@ -503,6 +508,19 @@ Eigen::VectorXd mapped(const std::vector<Param>& nl, const std::vector<std::stri
   return out;
 }
 
+/// `fixed` (over `from`'s linear then nonlinear parameters) carried over by name to `to`'s parameters.
+std::vector<bool> fixed_by_name(const Model& from, const std::vector<bool>& fixed, const Model& to) {
+  std::vector<Param> a = from.linear(), b = to.linear();
+  const auto an = from.nonlinear(), bn = to.nonlinear();
+  a.insert(a.end(), an.begin(), an.end());
+  b.insert(b.end(), bn.begin(), bn.end());
+  std::vector<bool> out(b.size(), false);
+  for (std::size_t j = 0; j < b.size(); ++j)
+    for (std::size_t i = 0; i < a.size() && i < fixed.size(); ++i)
+      if (a[i].name == b[j].name) out[j] = fixed[i];
+  return out;
+}
+
 void extension_pnr(Score& s) {
   s.min_extension_pnr = std::numeric_limits<double>::infinity();
   s.max_extension_pnr = 0.0;
@@ -591,12 +609,16 @@ Score score(const Model& m, const Observations& obs, const CvOptions& o, const S
     std::optional<DesignCache> own_cache;
     if (own) own_cache.emplace(fm, n);
     DesignCache& fc = own ? *own_cache : cache;
+    // The fold's model may differ from the full one in its parameters: warm start and fixed flags by name.
     std::optional<Eigen::VectorXd> warm;
-    if (extends && fold < extends->fold_phi.size()) warm = mapped(nl, extends->full.phi_names, extends->fold_phi[fold]);
-    Fit f = fit_with(fm, obs, train, fold_fit, fc, warm ? &*warm : nullptr, false, &s.full.fixed);
+    if (extends && fold < extends->fold_phi.size())
+      warm = mapped(fm.nonlinear(), extends->fold_phi_names[fold], extends->fold_phi[fold]);
+    const std::vector<bool> fixed = fixed_by_name(m, s.full.fixed, fm);
+    Fit f = fit_with(fm, obs, train, fold_fit, fc, warm ? &*warm : nullptr, false, &fixed);
     const Eigen::MatrixXd pr = predict_with(fc.get(f.phi), f, n);
     for (int k : block) s.cv_prediction.row(k) = pr.row(k);
     s.fold_phi.push_back(f.phi);
+    s.fold_phi_names.push_back(f.phi_names);
     // The fold's estimates of what the full fit reports (derived quantities included).
     f.cov = Eigen::MatrixXd::Zero(f.theta.size() + f.phi.size(), f.theta.size() + f.phi.size());
     f.unidentifiable = s.full.unidentifiable;

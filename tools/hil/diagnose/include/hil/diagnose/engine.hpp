@@ -174,6 +174,9 @@ struct Score {
   /// Per fold (in time_blocks order, empty blocks skipped): φ fitted without the block; a second
   /// step's folds start from these of the model they extend.
   std::vector<Eigen::VectorXd> fold_phi;
+  /// The names of each fold's φ: a fold's own model (Model::restricted) may have other parameters
+  /// than the full one (e.g. rest-pose events located from the training blocks alone).
+  std::vector<std::vector<std::string>> fold_phi_names;
   double seconds = 0.0;
 };
 
