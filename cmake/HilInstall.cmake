@@ -20,7 +20,9 @@ set(_hil_exports
   hil_acquisition acquisition
   hil_report report
   hil_import import
-  hil_diagnosis diagnosis)
+  hil_diagnose diagnose
+  hil_rig_drivers rig_drivers
+  hil_rig rig)
 set(HIL_CONFIG_MCAP_DEPS "")
 set(HIL_PC_REQUIRES "eigen3 yaml-cpp spdlog libmodbus")
 if(TARGET hil_mcap)

@@ -15,7 +15,7 @@
 #include "hil/calibration/reduction.hpp"
 #include "hil/format/run.hpp"
 #include "identify.hpp"          // tools/hil/contact
-#include "rig_adapter.hpp"       // tools/hil/contact
+#include "hil/rig/contact.hpp"
 #include "run_diagnosis.hpp"     // tools/hil/diagnose
 #include "stiffness_io.hpp"      // tools/hil/stiffness
 
@@ -168,8 +168,8 @@ py::dict identify_stiffness(const Path& table_path, const Path& rig, double nois
   nlohmann::json j;
   {
     py::gil_scoped_release free;
-    const calibration::VjmModel model(cli::stiffness::load_robot(rig.string()));
-    const auto table = cli::stiffness::read_stiffness_table(table_path.string(), model.dof(), true);
+    const calibration::VjmModel model(rig::load_robot(rig.string()));
+    const auto table = rig::read_stiffness_table(table_path.string(), model.dof(), true);
     calibration::PipelineOptions o;  // the defaults of `hil stiffness identify`
     o.neglect_below = neglect_below;
     const auto r = calibration::calibrate(model, table.rows, {noise_pos_m, noise_rot_rad}, o);
@@ -190,8 +190,8 @@ py::dict simulate_contact(const Path& rig_path, const Path& trajectory, const py
     const double K_value = has_K ? K.cast<double>() : 0.0, mu_value = has_mu ? mu.cast<double>() : 0.0;
     py::gil_scoped_release free;
     const auto rig = format::load_rig(rig_path.string());
-    const auto scene = cli::contact::scene_from_rig(rig);
-    model = cli::contact::model_from_rig(rig);
+    const auto scene = rig::scene_from_rig(rig);
+    model = rig::model_from_rig(rig);
     if (has_K) model.K = K_value;
     if (has_mu) model.mu = mu_value;
     try {
@@ -199,8 +199,8 @@ py::dict simulate_contact(const Path& rig_path, const Path& trajectory, const py
     } catch (const std::invalid_argument& e) {
       throw py::value_error(std::string("K, mu: ") + e.what());
     }
-    const Eigen::VectorXd x_true = cli::contact::uncertainty_vector(scene, geometric, "geometric");
-    auto traj = cli::contact::read_trajectory(trajectory.string());
+    const Eigen::VectorXd x_true = rig::uncertainty_vector(scene, geometric, "geometric");
+    auto traj = rig::read_trajectory(trajectory.string());
     sim = cid::simulate(scene, model, x_true, traj.kin, sensor);
     t = std::move(traj.t);
   }

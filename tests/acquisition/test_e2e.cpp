@@ -16,7 +16,7 @@
 #include "hil/drivers/fake_rig.hpp"
 #include "hil/format/csv.hpp"
 #include "hil/format/run.hpp"
-#include "drivers_from_rig.hpp"
+#include "hil/rig_drivers/drivers_from_rig.hpp"
 
 using namespace hil;
 
@@ -24,7 +24,7 @@ namespace {
 
 std::shared_ptr<const drivers::Scenario> example_scenario(bool loop) {
   const auto run = format::load_run(std::string(HIL_SOURCE_DIR) + "/examples/runs/press_slide");
-  return std::make_shared<const drivers::Scenario>(rig::scenario_from_run(run, Eigen::Isometry3d::Identity(), loop));
+  return std::make_shared<const drivers::Scenario>(rig_drivers::scenario_from_run(run, Eigen::Isometry3d::Identity(), loop));
 }
 
 int test_domain(int base) { return base + static_cast<int>(getpid() % 40); }

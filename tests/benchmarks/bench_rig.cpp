@@ -42,7 +42,7 @@
 #include "hil/dds/topics.hpp"
 #include "hil/drivers/fake_rig.hpp"
 #include "hil/format/run.hpp"
-#include "drivers_from_rig.hpp"
+#include "hil/rig_drivers/drivers_from_rig.hpp"
 
 namespace {
 
@@ -147,7 +147,7 @@ struct Accounts {
 
 std::shared_ptr<const hil::drivers::Scenario> scenario() {
   const auto run = hil::format::load_run(std::string(HIL_SOURCE_DIR) + "/examples/runs/press_slide");
-  return std::make_shared<const hil::drivers::Scenario>(hil::rig::scenario_from_run(run, Eigen::Isometry3d::Identity(), true));
+  return std::make_shared<const hil::drivers::Scenario>(hil::rig_drivers::scenario_from_run(run, Eigen::Isometry3d::Identity(), true));
 }
 
 // SCHED_FIFO at `priority` for the calling thread and the threads it starts from now on (they

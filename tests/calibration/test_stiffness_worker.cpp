@@ -8,7 +8,7 @@
 
 #include "hil/calibration/experiment.hpp"
 #include "hil/dds/topics.hpp"
-#include "worker.hpp"
+#include "stiffness_worker.hpp"
 
 namespace hc = hil::calibration;
 namespace st = hil::cli::stiffness;

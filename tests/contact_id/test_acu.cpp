@@ -160,7 +160,7 @@ TEST(AcuCommand, IdentifyJsonAndReport) {
 }
 
 TEST(AcuCommand, BadInputMessages) {
-  namespace c = hil::cli::contact;
+  namespace c = hil::rig;
   hil::test::TempDir dir;
   const auto rig = format::load_rig(std::string(HIL_SOURCE_DIR) + "/examples/acu/acu.yaml");
   // Unknown key and unknown uncertainty in a truth file: file, line and field named.

@@ -6,7 +6,7 @@
 
 #include "hil/diagnose/contact_family.hpp"
 #include "hil/format/rig.hpp"
-#include "rig_adapter.hpp"
+#include "hil/rig/contact.hpp"
 
 namespace hil::diagnose::test {
 
@@ -21,7 +21,7 @@ struct SceneRun {
 
 /// "acu_2a", "acu_1a" (1 kHz, decimated by `acu_step`: 20 gives the paper's 50 Hz) or "press_slide" (50 Hz).
 inline SceneRun scene_run(const std::string& name, std::size_t acu_step = 20) {
-  namespace c = hil::cli::contact;
+  namespace c = hil::rig;
   const std::string src = HIL_SOURCE_DIR;
   SceneRun r;
   const bool acu = name.rfind("acu_", 0) == 0;

@@ -2,7 +2,7 @@
 // driver over Modbus TCP on 127.0.0.1 (the force plate half runs in the vcan suite).
 #include <gtest/gtest.h>
 
-#include "drivers_from_rig.hpp"
+#include "hil/rig_drivers/drivers_from_rig.hpp"
 #include "test_util.hpp"
 
 using namespace hil;
@@ -30,7 +30,7 @@ TEST(HilFakeRig, ServesTheRunOverModbus) {
   ASSERT_GT(port, 0) << "unexpected first line: " << line;
 
   const auto run = format::load_run(kRun);
-  ModbusConfig mc = rig::robot_controller_config(*run.rig);
+  ModbusConfig mc = rig_drivers::robot_controller_config(*run.rig);
   mc.port = port;
   mc.timeout_s = 2.0;
   RobotControllerDriver drv(mc);
@@ -38,7 +38,7 @@ TEST(HilFakeRig, ServesTheRunOverModbus) {
   RobotSample s;
   ASSERT_EQ(drv.poll(s), PollStatus::ok) << drv.last_problem();
   ASSERT_TRUE(s.has_pose);
-  const Eigen::Isometry3d T_world_base = rig::world_to_base(*run.rig);
+  const Eigen::Isometry3d T_world_base = rig_drivers::world_to_base(*run.rig);
   EXPECT_LT((T_world_base * s.p_base_tcp_m - run.samples.samples[0].p_world_ee_m).norm(), 1e-4);
 }
 

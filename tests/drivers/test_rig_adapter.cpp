@@ -2,7 +2,7 @@
 // run through the real drivers (loopback CAN, libmodbus on 127.0.0.1).
 #include <gtest/gtest.h>
 
-#include "drivers_from_rig.hpp"
+#include "hil/rig_drivers/drivers_from_rig.hpp"
 #include "hil/format/error.hpp"
 #include "test_util.hpp"
 
@@ -16,14 +16,14 @@ const std::string kRun = std::string(HIL_SOURCE_DIR) + "/examples/runs/press_sli
 
 TEST(RigAdapter, ExampleRigGivesDriverConfigs) {
   const auto rig = format::load_rig(kRig);
-  const ForcePlateConfig fp = rig::force_plate_config(rig);
+  const ForcePlateConfig fp = rig_drivers::force_plate_config(rig);
   EXPECT_EQ(fp.protocol, ForcePlateProtocol::ati_ft_can);
   EXPECT_EQ(fp.interface, "vcan0");
   EXPECT_EQ(fp.base_id, 0U);
   EXPECT_EQ(fp.rate_hz, 1000.0);
   ASSERT_EQ(fp.saturation_limits.size(), 6U);
   EXPECT_EQ(fp.saturation_limits[2], 1980.0);
-  const ModbusConfig mb = rig::robot_controller_config(rig);
+  const ModbusConfig mb = rig_drivers::robot_controller_config(rig);
   EXPECT_EQ(mb.transport, ModbusTransport::tcp);
   EXPECT_EQ(mb.port, 5020);
   EXPECT_EQ(mb.rate_hz, 125.0);
@@ -43,7 +43,7 @@ TEST(RigAdapter, DeclarativeAndCustomSections) {
   fp.signals.push_back(s);
   rig.devices.force_plate = fp;
   try {
-    rig::force_plate_config(rig);
+    rig_drivers::force_plate_config(rig);
     FAIL() << "no error";
   } catch (const format::FormatError& e) {
     EXPECT_EQ(e.where().file, "lab.yaml");
@@ -53,27 +53,27 @@ TEST(RigAdapter, DeclarativeAndCustomSections) {
   rig.devices.force_plate->signals[0].length_bits = 16;
   rig.devices.force_plate->signals[0].component = "torque";
   try {
-    rig::force_plate_config(rig);
+    rig_drivers::force_plate_config(rig);
     FAIL() << "no error";
   } catch (const format::FormatError& e) {
     EXPECT_EQ(e.where().field, "devices.force_plate.signals[0].component");
   }
   rig.devices.force_plate->signals[0].component = "fz";
-  EXPECT_EQ(rig::force_plate_config(rig).signals.size(), 1U);
+  EXPECT_EQ(rig_drivers::force_plate_config(rig).signals.size(), 1U);
 
   format::RobotControllerSpec rc;
   rc.register_map = "custom";
   rc.registers = {{"j1", 10, "input", "float32", "little", 1.0, 0.0}, {"j2", 11, "input", "int16", "big", 1.0, 0.0}};
   rig.devices.robot = rc;
   try {
-    rig::robot_controller_config(rig);
+    rig_drivers::robot_controller_config(rig);
     FAIL() << "no error";
   } catch (const format::FormatError& e) {
     EXPECT_EQ(e.where().field, "devices.robot.registers[1].address");
     EXPECT_EQ(e.message(), "register 11 overlaps registers[0] ('j1')");
   }
   rig.devices.robot->registers[1].address = 12;
-  const ModbusConfig mb = rig::robot_controller_config(rig);
+  const ModbusConfig mb = rig_drivers::robot_controller_config(rig);
   EXPECT_EQ(mb.map.entries[0].table, RegisterTable::input);
   EXPECT_EQ(mb.map.entries[0].word_order, WordOrder::little);
   EXPECT_FALSE(mb.kinematics.has_value());  // no robot section, no DH table
@@ -84,13 +84,13 @@ TEST(RigAdapter, DeclarativeAndCustomSections) {
   robot.joints[1].d_m = 0.1;
   robot.joints[1].type = format::JointType::prismatic;
   rig.robot = robot;
-  const ModbusConfig fk = rig::robot_controller_config(rig);
+  const ModbusConfig fk = rig_drivers::robot_controller_config(rig);
   ASSERT_TRUE(fk.kinematics.has_value());
   ASSERT_EQ(fk.kinematics->joints.size(), 2U);
   EXPECT_EQ(fk.kinematics->joints[0].a_m, 0.4);
   EXPECT_TRUE(fk.kinematics->joints[1].prismatic);
   // The example rig's UR map reads the tool pose: no kinematics needed.
-  EXPECT_FALSE(rig::robot_controller_config(format::load_rig(kRig)).kinematics.has_value());
+  EXPECT_FALSE(rig_drivers::robot_controller_config(format::load_rig(kRig)).kinematics.has_value());
 }
 
 // The example run played by the fakes and read back by the drivers, at three instants of the run
@@ -98,8 +98,8 @@ TEST(RigAdapter, DeclarativeAndCustomSections) {
 TEST(FakeRigPlaysARun, DriversReadTheRunBack) {
   const auto run = format::load_run(kRun);
   ASSERT_TRUE(run.rig.has_value());
-  const Eigen::Isometry3d T_world_base = rig::world_to_base(*run.rig);
-  const auto scenario = std::make_shared<Scenario>(rig::scenario_from_run(run, T_world_base, false));
+  const Eigen::Isometry3d T_world_base = rig_drivers::world_to_base(*run.rig);
+  const auto scenario = std::make_shared<Scenario>(rig_drivers::scenario_from_run(run, T_world_base, false));
   for (const std::size_t k : {std::size_t{0}, run.samples.size() / 2, run.samples.size() - 1}) {
     const auto& want = run.samples.samples[k];
     const double speed = 1e-12;
@@ -110,7 +110,7 @@ TEST(FakeRigPlaysARun, DriversReadTheRunBack) {
     fc.clock = frozen;
     FakeAtiForcePlate plate(fc, bus->open(), scenario);
     plate.start();
-    ForcePlateConfig pc = rig::force_plate_config(*run.rig);
+    ForcePlateConfig pc = rig_drivers::force_plate_config(*run.rig);
     pc.response_timeout_s = 0.5;
     pc.startup_timeout_s = 0.5;
     auto drv = make_force_plate(pc, bus->open());
@@ -124,11 +124,11 @@ TEST(FakeRigPlaysARun, DriversReadTheRunBack) {
     EXPECT_TRUE(hil::test::near6(w.w_fp, expect, tol)) << "sample " << k;
 
     FakeRobotConfig rc;
-    rc.map = rig::register_map(*run.rig->devices.robot, run.rig->source);
+    rc.map = rig_drivers::register_map(*run.rig->devices.robot, run.rig->source);
     rc.clock = frozen;
     FakeRobotController robot(rc, scenario);
     robot.start();
-    ModbusConfig mc = rig::robot_controller_config(*run.rig);
+    ModbusConfig mc = rig_drivers::robot_controller_config(*run.rig);
     mc.port = robot.port();
     RobotControllerDriver rdrv(mc);
     rdrv.connect();

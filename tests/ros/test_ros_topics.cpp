@@ -19,7 +19,7 @@
 #include "hil/drivers/fake_rig.hpp"
 #include "hil/format/rig.hpp"
 #include "hil/format/run.hpp"
-#include "drivers_from_rig.hpp"
+#include "hil/rig_drivers/drivers_from_rig.hpp"
 
 using namespace hil;
 namespace level = diagnostic_msgs::msg::DiagnosticStatus_Constants;
@@ -56,11 +56,11 @@ struct Collected {
 
 TEST(RosTopics, TfStaticForLateJoinersDiagnosticsAndNamedJoints) {
   const auto rig = named_rig();
-  const Eigen::Isometry3d T_world_base = rig::world_to_base(rig);
+  const Eigen::Isometry3d T_world_base = rig_drivers::world_to_base(rig);
   const auto played = format::load_run(std::string(HIL_SOURCE_DIR) + "/examples/runs/press_slide");
-  auto scenario = std::make_shared<const drivers::Scenario>(rig::scenario_from_run(played, T_world_base, true));
-  auto pcfg = rig::force_plate_config(rig);
-  auto mcfg = rig::robot_controller_config(rig);
+  auto scenario = std::make_shared<const drivers::Scenario>(rig_drivers::scenario_from_run(played, T_world_base, true));
+  auto pcfg = rig_drivers::force_plate_config(rig);
+  auto mcfg = rig_drivers::robot_controller_config(rig);
   auto bus = drivers::CanLoopbackBus::create("loop0");
   drivers::FakeAtiConfig fc;
   fc.base_id = pcfg.base_id;

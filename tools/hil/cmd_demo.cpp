@@ -18,7 +18,7 @@
 #include "acquire/acquire.hpp"
 #include "contact/identify.hpp"
 #include "contact/simulate.hpp"
-#include "contact/worker.hpp"
+#include "contact/contact_worker.hpp"
 #include "run_diagnosis.hpp"
 #include "commands.hpp"
 #include "keystore/participant.hpp"

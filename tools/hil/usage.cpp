@@ -3,24 +3,11 @@
 #include <algorithm>
 #include <iostream>
 
+#include "hil/format/edit_distance.hpp"
+
 namespace hil::cli {
 
 namespace {
-
-std::size_t edit_distance(const std::string& a, const std::string& b) {
-  std::vector<std::size_t> row(b.size() + 1);
-  for (std::size_t j = 0; j <= b.size(); ++j) row[j] = j;
-  for (std::size_t i = 1; i <= a.size(); ++i) {
-    std::size_t diag = row[0];
-    row[0] = i;
-    for (std::size_t j = 1; j <= b.size(); ++j) {
-      const std::size_t up = row[j];
-      row[j] = std::min({row[j] + 1, row[j - 1] + 1, diag + (a[i - 1] == b[j - 1] ? 0 : 1)});
-      diag = up;
-    }
-  }
-  return row[b.size()];
-}
 
 /// The command a parse error belongs to, and its words ("hil stiffness identify"): the first
 /// command the parser entered that kept words it could not place, else the deepest one entered.
@@ -81,7 +68,7 @@ std::vector<std::string> close_names(const std::string& word, const std::vector<
   const std::string w = bare(word);
   for (const auto& k : known) {
     const std::string kb = bare(k);
-    const std::size_t d = edit_distance(w, kb);
+    const std::size_t d = format::edit_distance(w, kb);
     const bool prefix = w.size() >= 3 && kb.rfind(w, 0) == 0;
     // Up to one edit in three letters (at least one, at most three): typos, not other words.
     const std::size_t limit = std::clamp<std::size_t>(std::max(w.size(), kb.size()) / 3, 1, 3);

@@ -7,6 +7,7 @@
 #include <sstream>
 #include <unordered_set>
 
+#include "hil/format/edit_distance.hpp"
 #include "hil/format/error.hpp"
 
 namespace hil::format {
@@ -38,20 +39,6 @@ bool blank_or_comment(std::string_view line) {
 }
 
 }  // namespace
-
-std::size_t edit_distance(const std::string& a, const std::string& b) {
-  std::vector<std::size_t> prev(b.size() + 1), cur(b.size() + 1);
-  for (std::size_t j = 0; j <= b.size(); ++j) prev[j] = j;
-  for (std::size_t i = 1; i <= a.size(); ++i) {
-    cur[0] = i;
-    for (std::size_t j = 1; j <= b.size(); ++j) {
-      const std::size_t sub = prev[j - 1] + (std::tolower(a[i - 1]) == std::tolower(b[j - 1]) ? 0 : 1);
-      cur[j] = std::min({prev[j] + 1, cur[j - 1] + 1, sub});
-    }
-    std::swap(prev, cur);
-  }
-  return prev[b.size()];
-}
 
 const std::vector<double>& CsvTable::numeric(const std::string& column) const {
   const auto it = numeric_.find(column);

@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "hil/format/csv.hpp"
+#include "hil/format/edit_distance.hpp"
 
 namespace hil::format::detail {
 

@@ -21,7 +21,7 @@
 #include "hil/drivers/socketcan.hpp"
 #include "hil/format/error.hpp"
 #include "hil/format/ros_frames.hpp"
-#include "drivers_from_rig.hpp"
+#include "hil/rig_drivers/drivers_from_rig.hpp"
 #include "mcap_sink.hpp"
 
 namespace hil::cli {
@@ -67,14 +67,14 @@ RigDevices open_rig_devices(const AcquireOptions& o) {
   }
   const auto& rig = d.rig;
   if (!rig.devices.force_plate) throw format::FormatError({o.rig, 0, 0, "devices.force_plate"}, "acquisition needs a force plate section");
-  d.plate_cfg = rig::force_plate_config(rig);
+  d.plate_cfg = rig_drivers::force_plate_config(rig);
   if (!o.can_interface.empty()) d.plate_cfg.interface = o.can_interface;
   d.with_robot = rig.devices.robot.has_value() && !o.no_robot;
-  d.T_world_base = rig::world_to_base(rig);
-  if (d.with_robot) d.robot_cfg = rig::robot_controller_config(rig);
+  d.T_world_base = rig_drivers::world_to_base(rig);
+  if (d.with_robot) d.robot_cfg = rig_drivers::robot_controller_config(rig);
   if (!o.play.empty()) {
     const auto played = format::load_run(o.play);
-    auto scenario = std::make_shared<const drivers::Scenario>(rig::scenario_from_run(played, d.T_world_base, false));
+    auto scenario = std::make_shared<const drivers::Scenario>(rig_drivers::scenario_from_run(played, d.T_world_base, false));
     d.play_duration_s = scenario->duration_s() / o.play_speed;
     drivers::FakeAtiConfig fc;
     fc.base_id = d.plate_cfg.base_id;

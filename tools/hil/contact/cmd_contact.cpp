@@ -19,9 +19,9 @@
 #include "hil/format/run.hpp"
 #include "hil/diagnose/contact_family.hpp"
 #include "identify.hpp"
-#include "rig_adapter.hpp"
+#include "hil/rig/contact.hpp"
 #include "simulate.hpp"
-#include "worker.hpp"
+#include "contact_worker.hpp"
 
 namespace hil::cli {
 
@@ -58,12 +58,12 @@ nlohmann::json effects_json(const hil::diagnose::Effects& e, const cid::ContactM
 
 int simulate_run(const SimulateArgs& a) {
   const auto rig = format::load_rig(a.rig);
-  const auto scene = contact::scene_from_rig(rig);
-  contact::Truth truth;
+  const auto scene = rig::scene_from_rig(rig);
+  rig::Truth truth;
   if (!a.truth.empty()) {
-    truth = contact::read_truth(a.truth, rig);
+    truth = rig::read_truth(a.truth, rig);
   } else {
-    truth.model = contact::model_from_rig(rig);
+    truth.model = rig::model_from_rig(rig);
   }
   auto& s = truth.sensor;
   if (a.force_resolution >= 0) s.force_resolution_n = a.force_resolution;
@@ -74,8 +74,8 @@ int simulate_run(const SimulateArgs& a) {
   if (a.moment_noise >= 0) s.moment_noise_nm = a.moment_noise;
   if (a.seed >= 0) s.seed = static_cast<unsigned>(a.seed);
   if (a.decimate < 1) throw format::FormatError({"command line", 0, 0, "--decimate"}, "must be at least 1");
-  const Eigen::VectorXd x_true = contact::uncertainty_vector(scene, truth.geometric, a.truth.empty() ? a.rig : a.truth);
-  const auto traj = contact::read_trajectory(a.trajectory);
+  const Eigen::VectorXd x_true = rig::uncertainty_vector(scene, truth.geometric, a.truth.empty() ? a.rig : a.truth);
+  const auto traj = rig::read_trajectory(a.trajectory);
   std::vector<cid::SimulatedSample> sim;
   if (a.inject.empty()) {
     if (!a.truth_out.empty()) throw format::FormatError({"command line", 0, 0, "--truth-out"}, "needs --inject");

@@ -1,7 +1,7 @@
 #include "identify.hpp"
 #include "../output.hpp"
 #include "hil/format/error.hpp"
-#include "rig_adapter.hpp"
+#include "hil/rig/contact.hpp"
 
 #include <fmt/format.h>
 
@@ -61,14 +61,14 @@ cid::ContactProblem problem_from_run(const format::Run& run) {
   if (!run.rig) throw format::FormatError({run.dir, 0, 0, ""}, "no rig: pass --rig or put rig.yaml in the run folder");
   const auto& rig = *run.rig;
   if (!rig.model.contact) throw format::FormatError({rig.source, 0, 0, "model.contact"}, "the rig has no contact model");
-  const auto scene = scene_from_rig(rig);
-  const auto model = model_from_rig(rig);
+  const auto scene = rig::scene_from_rig(rig);
+  const auto model = rig::model_from_rig(rig);
   cid::ProblemOptions po;
   po.v_tm = model.v_tm;
   po.force_scale_n = rig.model.contact->force_scale_n;
   po.moment_scale_nm = rig.model.contact->moment_scale_nm;
   try {
-    return cid::ContactProblem(scene, measurements(run.samples), po);
+    return cid::ContactProblem(scene, rig::measurements(run.samples), po);
   } catch (const format::FormatError&) {
     throw;
   } catch (const std::exception& e) {

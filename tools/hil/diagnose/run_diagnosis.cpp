@@ -9,8 +9,8 @@
 #include "../output.hpp"
 #include "hil/format/error.hpp"
 #include "hil/report/html.hpp"
-#include "rig_adapter.hpp"
-#include "stiffness_io.hpp"
+#include "hil/rig/contact.hpp"
+#include "hil/rig/stiffness.hpp"
 
 namespace hil::cli::diagnose {
 
@@ -153,8 +153,8 @@ static std::vector<std::string> checked_candidates(const Options& o, const std::
 
 RunDiagnosis diagnose_table(const std::string& table_path, const std::string& rig_path, const Options& o) {
   if (rig_path.empty()) throw format::FormatError({table_path, 0, 0, ""}, "a stiffness table needs --rig (the robot's rig file)");
-  const calibration::VjmModel model(stiffness::load_robot(rig_path));
-  const auto table = stiffness::read_stiffness_table(table_path, model.dof(), true);
+  const calibration::VjmModel model(rig::load_robot(rig_path));
+  const auto table = rig::read_stiffness_table(table_path, model.dof(), true);
   RunDiagnosis r;
   r.run_name = fs::path(table_path).filename().string();
   r.mode = "stiffness";
@@ -199,10 +199,10 @@ RunDiagnosis diagnose_run(const format::Run& run, const Options& o) {
   try {
     if (rig.model.contact) {
       r.mode = "contact";
-      const auto scene = contact::scene_from_rig(rig);
-      const auto model = contact::model_from_rig(rig);
+      const auto scene = rig::scene_from_rig(rig);
+      const auto model = rig::model_from_rig(rig);
       r.contact = std::make_unique<dg::ContactData>(dg::make_contact_data(
-          scene, model.v_tm, contact::measurements(run.samples), rig.model.contact->force_scale_n, rig.model.contact->moment_scale_nm));
+          scene, model.v_tm, rig::measurements(run.samples), rig.model.contact->force_scale_n, rig.model.contact->moment_scale_nm));
       r.context = contact_context(*r.contact);
       for (const auto& u : r.contact->unfit_uncertainties) r.notes.push_back("geometric_offset does not fit " + u);
       const dg::ContactData* d = r.contact.get();
@@ -212,7 +212,7 @@ RunDiagnosis diagnose_run(const format::Run& run, const Options& o) {
       std::vector<double> t;
       std::vector<cid::Kinematics> kin;
       std::vector<Eigen::Matrix<double, 6, 1>> w;
-      for (const auto& m : contact::measurements(run.samples)) {
+      for (const auto& m : rig::measurements(run.samples)) {
         t.push_back(m.t_s);
         kin.push_back(m.kin);
         w.push_back(m.w_fp);

@@ -10,7 +10,7 @@
 #include <thread>
 
 #include "../commands.hpp"
-#include "drivers_from_rig.hpp"
+#include "hil/rig_drivers/drivers_from_rig.hpp"
 #include "hil/drivers/fake_rig.hpp"
 #include "hil/drivers/socketcan.hpp"
 #include "hil/format/error.hpp"
@@ -74,10 +74,10 @@ int fake_rig(const FakeRigOptions& o) {
   } else {
     rig = format::load_rig(o.rig);
   }
-  const Eigen::Isometry3d T_world_base = rig::world_to_base(rig);
+  const Eigen::Isometry3d T_world_base = rig_drivers::world_to_base(rig);
   std::shared_ptr<const drivers::Scenario> scenario;
   if (run) {
-    scenario = std::make_shared<drivers::Scenario>(rig::scenario_from_run(*run, T_world_base, o.loop));
+    scenario = std::make_shared<drivers::Scenario>(rig_drivers::scenario_from_run(*run, T_world_base, o.loop));
   } else {
     drivers::ScenarioPoint still;
     still.joints_rad.assign(rig.robot ? rig.robot->joints.size() : 6, 0.0);
@@ -120,7 +120,7 @@ int fake_rig(const FakeRigOptions& o) {
     rc.host = o.host;
     int port = 502;
     if (rig.devices.robot) {
-      rc.map = rig::register_map(*rig.devices.robot, rig.source);
+      rc.map = rig_drivers::register_map(*rig.devices.robot, rig.source);
       port = rig.devices.robot->port;
     }
     if (!o.register_map.empty()) rc.map = drivers::builtin_register_map(o.register_map);

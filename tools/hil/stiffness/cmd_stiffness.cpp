@@ -16,7 +16,7 @@
 #include "hil/dds/topics.hpp"
 #include "hil/format/error.hpp"
 #include "stiffness_io.hpp"
-#include "worker.hpp"
+#include "stiffness_worker.hpp"
 
 namespace hil::cli {
 namespace hc = hil::calibration;

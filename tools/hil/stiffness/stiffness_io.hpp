@@ -1,7 +1,7 @@
 #pragma once
-// I/O of the `hil stiffness` commands: the rig adapter, the stiffness-experiment table and the
-// model/truth JSON files (formats in docs/calibration.md). Bad input throws hil::format::FormatError
-// naming the file, line and column or JSON field.
+// I/O of the `hil stiffness` commands: the model/truth JSON files and the reports (formats in
+// docs/calibration.md; the rig adapter and the experiment table are hil::rig's). Bad input throws
+// hil::format::FormatError naming the file and JSON field.
 #include <nlohmann/json.hpp>
 #include <ostream>
 #include <string>
@@ -9,24 +9,16 @@
 
 #include "hil/calibration/reduction.hpp"
 #include "hil/format/rig.hpp"
+#include "hil/rig/stiffness.hpp"
 
 namespace hil::cli::stiffness {
 
-/// The calibration robot model of a rig's robot (DH table, base and tool poses, joint limits).
-calibration::SerialRobot to_serial_robot(const format::RobotSpec& spec);
-/// Loads the rig and adapts its robot. \throws FormatError if the rig has no robot.
-calibration::SerialRobot load_robot(const std::string& rig_path);
-
-/// A stiffness-experiment table. `require_measured`: identify needs dx dy dz (or marker columns);
-/// predict reads the same table without them.
-struct StiffnessTable {
-  std::vector<calibration::Measurement> rows;
-  std::vector<std::size_t> lines;  ///< file line of each row
-  bool has_measured = false;
-};
-StiffnessTable read_stiffness_table(const std::string& path, int dof, bool require_measured);
-StiffnessTable parse_stiffness_table(const std::string& text, const std::string& display_name, int dof, bool require_measured);
-void write_stiffness_table(std::ostream& os, const std::vector<calibration::Measurement>& rows, int dof);
+using rig::load_robot;
+using rig::read_stiffness_table;
+using rig::parse_stiffness_table;
+using rig::StiffnessTable;
+using rig::to_serial_robot;
+using rig::write_stiffness_table;
 
 /// Compliance of each spring from a model or truth file ("springs" object). Springs not listed
 /// are rigid. \throws FormatError naming the file and field.

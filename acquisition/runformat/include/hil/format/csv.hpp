@@ -49,7 +49,4 @@ CsvTable read_csv(const std::string& path, const CsvOptions& options);
 /// Same on text already in memory (`display_name` names it in messages).
 CsvTable parse_csv(const std::string& text, const CsvOptions& options);
 
-/// Levenshtein distance, used to suggest the column a user probably meant.
-std::size_t edit_distance(const std::string& a, const std::string& b);
-
 }  // namespace hil::format

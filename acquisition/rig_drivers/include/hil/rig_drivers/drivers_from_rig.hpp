@@ -9,7 +9,7 @@
 #include "hil/format/rig.hpp"
 #include "hil/format/run.hpp"
 
-namespace hil::rig {
+namespace hil::rig_drivers {
 
 /// devices.force_plate → ForcePlateConfig (protocol, base id, rate, T_fp_sensor, signals, limits).
 /// \throws format::FormatError naming `devices.force_plate.<field>` in `rig.source`.
@@ -33,4 +33,4 @@ Eigen::Isometry3d world_to_base(const format::RigSpec& rig);
 /// (ee) pose in the robot base frame, T_base_ee = T_world_base⁻¹ · T_world_ee.
 drivers::Scenario scenario_from_run(const format::Run& run, const Eigen::Isometry3d& T_world_base, bool loop);
 
-}  // namespace hil::rig
+}  // namespace hil::rig_drivers

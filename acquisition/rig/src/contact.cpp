@@ -1,4 +1,4 @@
-#include "rig_adapter.hpp"
+#include "hil/rig/contact.hpp"
 
 #include <yaml-cpp/yaml.h>
 
@@ -8,7 +8,7 @@
 #include "hil/format/csv.hpp"
 #include "hil/format/error.hpp"
 
-namespace hil::cli::contact {
+namespace hil::rig {
 
 namespace cid = hil::contact_id;
 using format::FormatError;
@@ -221,4 +221,4 @@ Eigen::VectorXd uncertainty_vector(const cid::Scene& s, const std::map<std::stri
   return x;
 }
 
-}  // namespace hil::cli::contact
+}  // namespace hil::rig

@@ -8,7 +8,7 @@
 #include "hil/format/rig.hpp"
 #include "hil/format/samples.hpp"
 
-namespace hil::cli::contact {
+namespace hil::rig {
 
 /// The contact scene of a rig: the object hanging off `ee` is object 1, the one fixed in the world
 /// object 2; the force-plate frame is `force_plate` if the rig has one, else world.
@@ -45,4 +45,4 @@ Truth read_truth(const std::string& path, const format::RigSpec& rig);
 Eigen::VectorXd uncertainty_vector(const contact_id::Scene& s, const std::map<std::string, double>& values,
                                    const std::string& where);
 
-}  // namespace hil::cli::contact
+}  // namespace hil::rig

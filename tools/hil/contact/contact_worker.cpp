@@ -1,4 +1,4 @@
-#include "worker.hpp"
+#include "contact_worker.hpp"
 
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
@@ -16,7 +16,7 @@
 #include "hil/dds/bus.hpp"
 #include "hil/dds/topics.hpp"
 #include "hil/format/rig.hpp"
-#include "rig_adapter.hpp"
+#include "hil/rig/contact.hpp"
 
 namespace hil::cli {
 
@@ -53,15 +53,15 @@ int worker(const WorkerArgs& a) {
 }  // namespace
 
 ContactWorker::ContactWorker(dds::Participant& participant, const format::RigSpec& rig) {
-  const auto scene = contact::scene_from_rig(rig);
-  const auto model = contact::model_from_rig(rig);
+  const auto scene = rig::scene_from_rig(rig);
+  const auto model = rig::model_from_rig(rig);
   const double F = rig.model.contact->force_scale_n > 0 ? rig.model.contact->force_scale_n : 50.0;
   const double M = rig.model.contact->moment_scale_nm > 0 ? rig.model.contact->moment_scale_nm : 5.0;
   est_ = std::make_unique<cid::OnlineEstimator>(scene, model.v_tm, F, M);
   writer_ = std::make_unique<dds::Writer<hil_msgs::msg::ContactEstimate>>(participant, dds::topics::kContactEstimate);
   reader_ = std::make_unique<dds::Reader<hil_msgs::msg::PoseWrenchSample>>(
       participant, dds::topics::kPoseWrenchSample, [this](const hil_msgs::msg::PoseWrenchSample& m, const auto&) {
-        const auto meas = contact::measurement(acquisition::from_message(m));
+        const auto meas = rig::measurement(acquisition::from_message(m));
         std::lock_guard<std::mutex> lock(mu_);
         writer_->write(to_message(est_->update(meas)));
         ++processed_;

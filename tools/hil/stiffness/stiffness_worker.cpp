@@ -1,4 +1,4 @@
-#include "worker.hpp"
+#include "stiffness_worker.hpp"
 
 #include <spdlog/spdlog.h>
 

@@ -13,6 +13,7 @@
 #include <sstream>
 
 #include "hil/format/csv.hpp"
+#include "hil/format/edit_distance.hpp"
 #include "hil/format/error.hpp"
 #include "hil/import/timeparse.hpp"
 

@@ -1,9 +1,9 @@
-#include "drivers_from_rig.hpp"
+#include "hil/rig_drivers/drivers_from_rig.hpp"
 
 #include "hil/drivers/error.hpp"
 #include "hil/format/error.hpp"
 
-namespace hil::rig {
+namespace hil::rig_drivers {
 namespace {
 
 template <typename F>
@@ -153,4 +153,4 @@ drivers::Scenario scenario_from_run(const format::Run& run, const Eigen::Isometr
   return rethrow_as_format(t.file, "samples", [&] { return drivers::Scenario(std::move(pts), loop); });
 }
 
-}  // namespace hil::rig
+}  // namespace hil::rig_drivers

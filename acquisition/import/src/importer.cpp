@@ -16,6 +16,7 @@
 #include <unordered_map>
 
 #include "hil/format/csv.hpp"
+#include "hil/format/edit_distance.hpp"
 #include "hil/format/error.hpp"
 #include "hil/import/rigid_fit.hpp"
 #include "hil/import/timeparse.hpp"
