@@ -22,7 +22,8 @@ set(_hil_exports
   hil_import import
   hil_diagnose diagnose
   hil_rig_drivers rig_drivers
-  hil_rig rig)
+  hil_rig rig
+  hil_keystore keystore)
 set(HIL_CONFIG_MCAP_DEPS "")
 set(HIL_PC_REQUIRES "eigen3 yaml-cpp spdlog libmodbus")
 if(TARGET hil_mcap)

@@ -21,7 +21,7 @@
 #include "contact/contact_worker.hpp"
 #include "run_diagnosis.hpp"
 #include "commands.hpp"
-#include "keystore/participant.hpp"
+#include "participant.hpp"
 #include "data_dir.hpp"
 #include "hil/acquisition/recorder.hpp"
 #include "hil/dds/bus.hpp"

@@ -13,8 +13,8 @@
 #include <sstream>
 
 #include "hil/format/csv.hpp"
-#include "hil/format/edit_distance.hpp"
 #include "hil/format/error.hpp"
+#include "hil/format/yaml.hpp"
 #include "hil/import/timeparse.hpp"
 
 namespace hil::import {
@@ -23,136 +23,14 @@ namespace {
 using format::FormatError;
 using format::Location;
 
-/// Strict access to one YAML node: unknown keys and wrong types are errors naming their line.
-class Node {
- public:
-  Node(YAML::Node n, std::string path, const std::string* file) : n_(std::move(n)), path_(std::move(path)), file_(file) {}
+using Node = format::YamlNode;
 
-  Location where() const {
-    const auto m = n_.Mark();
-    return {*file_, m.line >= 0 ? static_cast<std::size_t>(m.line + 1) : 0,
-            m.column >= 0 ? static_cast<std::size_t>(m.column + 1) : 0, path_};
-  }
-  [[noreturn]] void fail(const std::string& message) const { throw FormatError(where(), message); }
-  [[noreturn]] void fail_missing(const std::string& key) const {
-    auto loc = where();
-    loc.field = path_.empty() ? key : path_ + "." + key;
-    throw FormatError(loc, "required field is missing");
-  }
-
-  // Found by fuzzing: a null, list or mapping key made as<string>() throw yaml-cpp's bare
-  // "bad conversion".
-  std::string key_text(const YAML::Node& k) const {
-    if (k.IsScalar()) return k.as<std::string>();
-    const auto m = k.Mark();
-    throw FormatError({*file_, static_cast<std::size_t>(m.line + 1), static_cast<std::size_t>(m.column + 1), path_},
-                      "a field name must be plain text");
-  }
-  bool is_map() const { return n_.IsMap(); }
-  std::vector<std::string> keys() const {
-    map();
-    std::vector<std::string> out;
-    for (const auto& kv : n_) out.push_back(key_text(kv.first));
-    return out;
-  }
-  bool is_scalar() const { return n_.IsScalar(); }
-  bool has(const std::string& key) const { return n_.IsMap() && n_[key].IsDefined() && !n_[key].IsNull(); }
-  Node child(const std::string& key) const { return {n_[key], path_.empty() ? key : path_ + "." + key, file_}; }
-  Node req(const std::string& key) const {
-    map();
-    if (!has(key)) fail_missing(key);
-    return child(key);
-  }
-  void map() const {
-    if (!n_.IsMap()) fail("expected a mapping of fields");
-  }
-  void only(std::initializer_list<const char*> allowed) const {
-    map();
-    for (const auto& kv : n_) {
-      const auto key = key_text(kv.first);
-      bool ok = false;
-      std::string best;
-      std::size_t best_d = 4;
-      for (const char* a : allowed) {
-        if (key == a) ok = true;
-        const auto d = format::edit_distance(key, a);
-        if (d < best_d) best_d = d, best = a;
-      }
-      if (ok) continue;
-      const auto m = kv.first.Mark();
-      std::string known;
-      for (const char* a : allowed) known += std::string(known.empty() ? "" : ", ") + a;
-      throw FormatError({*file_, static_cast<std::size_t>(m.line + 1), static_cast<std::size_t>(m.column + 1),
-                         path_.empty() ? key : path_ + "." + key},
-                        "unknown field" + (best.empty() ? "" : " (did you mean '" + best + "'?)") +
-                            "; known here: " + known);
-    }
-  }
-  std::vector<Node> seq() const {
-    if (!n_.IsSequence()) fail("expected a list");
-    std::vector<Node> out;
-    for (std::size_t i = 0; i < n_.size(); ++i) out.emplace_back(n_[i], path_ + "[" + std::to_string(i) + "]", file_);
-    return out;
-  }
-  std::string str() const {
-    if (!n_.IsScalar()) fail("expected a text value");
-    return n_.Scalar();
-  }
-  double num() const {
-    if (!n_.IsScalar()) fail("expected a number");
-    const auto s = n_.Scalar();
-    double v = 0.0;
-    const char* b = s.data();
-    if (!s.empty() && *b == '+') ++b;
-    const auto [p, ec] = std::from_chars(b, s.data() + s.size(), v);
-    if (ec != std::errc() || p != s.data() + s.size() || !std::isfinite(v))
-      fail("expected a finite number, found '" + s + "'");
-    return v;
-  }
-  double positive() const {
-    const double v = num();
-    if (!(v > 0.0)) fail("expected a positive number, found " + n_.Scalar());
-    return v;
-  }
-  std::size_t count(std::size_t min) const {
-    const double v = num();
-    if (v != std::floor(v) || v < static_cast<double>(min) || v > 1e9)
-      fail("expected an integer >= " + std::to_string(min) + ", found '" + n_.Scalar() + "'");
-    return static_cast<std::size_t>(v);
-  }
-  bool boolean() const {
-    const auto s = str();
-    if (s == "true") return true;
-    if (s == "false") return false;
-    fail("expected true or false, found '" + s + "'");
-  }
-  Eigen::Vector3d vec3() const {
-    const auto items = seq();
-    if (items.size() != 3) fail("expected a list of 3 numbers, found " + std::to_string(items.size()) + " items");
-    return {items[0].num(), items[1].num(), items[2].num()};
-  }
-  std::array<std::string, 3> names3() const {
-    const auto items = seq();
-    if (items.size() != 3) fail("expected a list of 3 column names (x, y, z), found " + std::to_string(items.size()));
-    return {items[0].str(), items[1].str(), items[2].str()};
-  }
-  /// One of `choices` (each with the value it maps to).
-  template <typename T>
-  T choice(std::initializer_list<std::pair<const char*, T>> choices) const {
-    const auto s = str();
-    std::string known;
-    for (const auto& [name, value] : choices) {
-      if (s == name) return value;
-      known += std::string(known.empty() ? "" : ", ") + name;
-    }
-    fail("expected one of " + known + ", found '" + s + "'");
-  }
-
- private:
-  YAML::Node n_;
-  std::string path_;
-  const std::string* file_;
-};
+/// `[x, y, z]` column names.
+std::array<std::string, 3> names3(const Node& n) {
+  const auto items = n.seq();
+  if (items.size() != 3) n.fail("expected a list of 3 column names (x, y, z), found " + std::to_string(items.size()));
+  return {items[0].str(), items[1].str(), items[2].str()};
+}
 
 bool valid_name(const std::string& s) {
   if (s.empty()) return false;
@@ -242,7 +120,7 @@ BodySpec parse_body(const Node& n) {
     } else {
       m.only({"name", "columns"});
       ms.name = checked_name(m.req("name"));
-      ms.columns = m.req("columns").names3();
+      ms.columns = names3(m.req("columns"));
     }
     if (!seen.insert(ms.name).second) m.fail("marker '" + ms.name + "' appears twice in this body");
     b.markers.push_back(ms);
@@ -254,14 +132,14 @@ BodySpec parse_body(const Node& n) {
     n.child("reference_m").fail("give either reference_m or reference_rows (with origin), not both");
   if (n.has("reference_m")) {
     const auto r = n.child("reference_m");
-    r.map();
+    r.expect_map();
     for (const auto& key : r.keys()) {
       bool known = false;
       for (const auto& m : b.markers) known = known || m.name == key;
       if (!known) r.child(key).fail("no marker named '" + key + "' in this body");
     }
     for (std::size_t i = 0; i < b.markers.size(); ++i) {
-      if (!r.has(b.markers[i].name)) r.fail_missing(b.markers[i].name);
+      if (!r.has(b.markers[i].name)) r.fail("required field is missing", b.markers[i].name);
       b.reference_body_m.push_back(r.child(b.markers[i].name).vec3());
     }
   } else {
@@ -275,15 +153,15 @@ BodySpec parse_body(const Node& n) {
     if (b.min_markers > b.markers.size())
       n.child("min_markers").fail("larger than the body's " + std::to_string(b.markers.size()) + " markers");
   }
-  if (n.has("max_residual_m")) b.max_residual_m = n.child("max_residual_m").positive();
+  if (n.has("max_residual_m")) b.max_residual_m = n.child("max_residual_m").num_positive();
   return b;
 }
 
 WrenchSpec parse_wrench(const Node& n) {
   n.only({"force", "moment", "force_unit", "moment_unit", "measured", "plate_axes", "moment_point_m"});
   WrenchSpec w;
-  w.force_columns = n.req("force").names3();
-  w.moment_columns = n.req("moment").names3();
+  w.force_columns = names3(n.req("force"));
+  w.moment_columns = names3(n.req("moment"));
   if (n.has("force_unit")) w.n_per_unit = n.child("force_unit").choice<double>({{"N", 1.0}, {"kN", 1e3}});
   if (n.has("moment_unit"))
     w.nm_per_unit = n.child("moment_unit").choice<double>({{"N*m", 1.0}, {"N*mm", 1e-3}, {"kN*m", 1e3}});
@@ -312,14 +190,7 @@ std::vector<std::string> expand_columns(const std::vector<std::string>& names) {
 ImportConfig parse_import_config(const std::string& text, const std::string& display_name) {
   ImportConfig c;
   c.file = display_name;
-  YAML::Node doc;
-  try {
-    doc = YAML::Load(text);
-  } catch (const YAML::Exception& e) {
-    throw FormatError({display_name, static_cast<std::size_t>(e.mark.line + 1),
-                       static_cast<std::size_t>(e.mark.column + 1), ""},
-                      "YAML syntax error: " + e.msg);
-  }
+  const YAML::Node doc = format::load_yaml(text, display_name);
   if (!doc.IsDefined() || doc.IsNull()) throw FormatError({display_name, 0, 0, ""}, "empty import config");
   const Node root(doc, "", &c.file);
   root.only({"format_version", "rig", "source", "notes", "csv", "time", "markers", "bodies", "ee", "wrench", "joints",
@@ -350,7 +221,7 @@ ImportConfig parse_import_config(const std::string& text, const std::string& dis
       for (const auto& s : c.columns)
         if (!seen.insert(s).second) n.child("columns").fail("column '" + s + "' is named twice");
     } else if (!c.header) {
-      n.fail_missing("columns");
+      n.fail("required field is missing", "columns");
     }
   }
   if (!root.has("csv")) c.header = true;
@@ -410,7 +281,7 @@ ImportConfig parse_import_config(const std::string& text, const std::string& dis
   if (root.has("twist")) {
     const auto n = root.child("twist");
     n.only({"window_s"});
-    if (n.has("window_s")) c.twist_window_s = n.child("window_s").positive();
+    if (n.has("window_s")) c.twist_window_s = n.child("window_s").num_positive();
   }
   return c;
 }

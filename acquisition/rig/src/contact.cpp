@@ -1,12 +1,12 @@
 #include "hil/rig/contact.hpp"
 
-#include <yaml-cpp/yaml.h>
-
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
 #include "hil/format/csv.hpp"
 #include "hil/format/error.hpp"
+#include "hil/format/yaml.hpp"
 
 namespace hil::rig {
 
@@ -158,46 +158,40 @@ Trajectory read_trajectory(const std::string& path) {
 Truth read_truth(const std::string& path, const format::RigSpec& rig) {
   Truth t;
   t.model = model_from_rig(rig);
-  YAML::Node n;
-  try {
-    n = YAML::LoadFile(path);
-  } catch (const YAML::Exception& e) {
-    throw FormatError({path, static_cast<std::size_t>(e.mark.line + 1), 0, ""}, e.msg);
-  }
-  auto num = [&](const YAML::Node& v, const std::string& field) {
-    try {
-      const double d = v.as<double>();
-      if (!std::isfinite(d)) throw FormatError({path, static_cast<std::size_t>(v.Mark().line + 1), 0, field}, "not a finite number");
-      return d;
-    } catch (const YAML::Exception&) {
-      throw FormatError({path, static_cast<std::size_t>(v.Mark().line + 1), 0, field}, "expected a number");
-    }
+  const YAML::Node doc = format::load_yaml_file(path);
+  if (!doc.IsDefined() || doc.IsNull()) return t;  // an empty truth: the rig's nominal model
+  const format::YamlNode root(doc, "", &path);
+  root.only({"stiffness_n_per_m", "friction_coefficient", "sticking_threshold_m_per_s", "sensor", "geometric"});
+  const auto non_negative = [](const format::YamlNode& n) {
+    const double v = n.num();
+    if (v < 0.0) n.fail("expected a number >= 0, found " + n.raw().Scalar());
+    return v;
   };
-  for (const auto& kv : n) {
-    const auto key = kv.first.as<std::string>();
-    const auto& v = kv.second;
-    if (key == "stiffness_n_per_m") t.model.K = num(v, key);
-    else if (key == "friction_coefficient") t.model.mu = num(v, key);
-    else if (key == "sticking_threshold_m_per_s") t.model.v_tm = num(v, key);
-    else if (key == "sensor") {
-      for (const auto& s : v) {
-        const auto k = s.first.as<std::string>();
-        const double d = num(s.second, "sensor." + k);
-        if (k == "position_resolution_m") t.sensor.position_resolution_m = d;
-        else if (k == "velocity_resolution_m_per_s") t.sensor.velocity_resolution_m_per_s = d;
-        else if (k == "force_resolution_n") t.sensor.force_resolution_n = d;
-        else if (k == "moment_resolution_nm") t.sensor.moment_resolution_nm = d;
-        else if (k == "force_noise_n") t.sensor.force_noise_n = d;
-        else if (k == "moment_noise_nm") t.sensor.moment_noise_nm = d;
-        else if (k == "seed") t.sensor.seed = static_cast<unsigned>(d);
-        else throw FormatError({path, static_cast<std::size_t>(s.first.Mark().line + 1), 0, "sensor." + k}, "unknown key");
-      }
-    } else if (key == "geometric") {
-      for (const auto& g : v) t.geometric[g.first.as<std::string>()] = num(g.second, "geometric." + g.first.as<std::string>());
-    } else {
-      throw FormatError({path, static_cast<std::size_t>(kv.first.Mark().line + 1), 0, key},
-                        "unknown key (expected stiffness_n_per_m, friction_coefficient, sticking_threshold_m_per_s, sensor, geometric)");
+  if (root.has("stiffness_n_per_m")) t.model.K = root.child("stiffness_n_per_m").num_positive();
+  if (root.has("friction_coefficient")) t.model.mu = non_negative(root.child("friction_coefficient"));
+  if (root.has("sticking_threshold_m_per_s")) t.model.v_tm = root.child("sticking_threshold_m_per_s").num_positive();
+  if (root.has("sensor")) {
+    const auto s = root.child("sensor");
+    s.only({"position_resolution_m", "velocity_resolution_m_per_s", "force_resolution_n", "moment_resolution_nm",
+            "force_noise_n", "moment_noise_nm", "seed"});
+    t.sensor.position_resolution_m = s.has("position_resolution_m") ? non_negative(s.child("position_resolution_m")) : 0.0;
+    t.sensor.velocity_resolution_m_per_s =
+        s.has("velocity_resolution_m_per_s") ? non_negative(s.child("velocity_resolution_m_per_s")) : 0.0;
+    t.sensor.force_resolution_n = s.has("force_resolution_n") ? non_negative(s.child("force_resolution_n")) : 0.0;
+    t.sensor.moment_resolution_nm = s.has("moment_resolution_nm") ? non_negative(s.child("moment_resolution_nm")) : 0.0;
+    t.sensor.force_noise_n = s.has("force_noise_n") ? non_negative(s.child("force_noise_n")) : 0.0;
+    t.sensor.moment_noise_nm = s.has("moment_noise_nm") ? non_negative(s.child("moment_noise_nm")) : 0.0;
+    if (s.has("seed")) {
+      const auto n = s.child("seed");
+      const long seed = n.integer();
+      if (seed < 0 || seed > static_cast<long>(std::numeric_limits<unsigned>::max()))
+        n.fail("expected a seed from 0 to " + std::to_string(std::numeric_limits<unsigned>::max()));
+      t.sensor.seed = static_cast<unsigned>(seed);
     }
+  }
+  if (root.has("geometric")) {
+    const auto g = root.child("geometric");
+    for (const auto& name : g.keys()) t.geometric[name] = g.child(name).num();
   }
   try {
     t.model.check();

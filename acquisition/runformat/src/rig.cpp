@@ -7,10 +7,10 @@
 #include <sstream>
 
 #include "hil/format/quaternion.hpp"
-#include "yaml_reader.hpp"
+#include "hil/format/yaml.hpp"
 
 namespace hil::format {
-using detail::YNode;
+using YNode = YamlNode;
 
 Eigen::Isometry3d Pose::isometry() const {
   Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
@@ -364,7 +364,7 @@ std::size_t total_features(const RigSpec& rig) {
 RigSpec parse_rig(const std::string& text, const std::string& display_name) {
   RigSpec rig;
   rig.source = display_name;
-  const YAML::Node doc = detail::load_yaml(text, display_name);
+  const YAML::Node doc = load_yaml(text, display_name);
   if (!doc.IsDefined() || doc.IsNull()) throw FormatError({display_name, 0, 0, ""}, "empty rig file");
   const YNode root(doc, "", &rig.source);
   root.only({"format_version", "name", "frames", "robot", "objects", "devices", "model"});

@@ -9,10 +9,10 @@
 #include <sstream>
 
 #include "hil/format/error.hpp"
-#include "yaml_reader.hpp"
+#include "hil/format/yaml.hpp"
 
 namespace hil::format {
-using detail::YNode;
+using YNode = YamlNode;
 
 bool is_iso8601_utc(const std::string& s) {
   static const std::regex re(R"(^\d{4}-(0[1-9]|1[0-2])-(0[1-9]|[12]\d|3[01])T([01]\d|2[0-3]):[0-5]\d:[0-5]\d(\.\d{1,9})?Z$)");
@@ -20,7 +20,7 @@ bool is_iso8601_utc(const std::string& s) {
 }
 
 RunInfo parse_run_info(const std::string& text, const std::string& display_name) {
-  const YAML::Node doc = detail::load_yaml(text, display_name);
+  const YAML::Node doc = load_yaml(text, display_name);
   if (!doc.IsDefined() || doc.IsNull()) throw FormatError({display_name, 0, 0, ""}, "empty run.yaml");
   const YNode root(doc, "", &display_name);
   root.only({"format_version", "rig", "start_time", "output_rate_hz", "sources", "notes"});

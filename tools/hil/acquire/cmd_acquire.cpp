@@ -14,7 +14,7 @@
 #include <thread>
 
 #include "../commands.hpp"
-#include "../keystore/participant.hpp"
+#include "../participant.hpp"
 #include "acquire.hpp"
 #include "hil/acquisition/acquirer.hpp"
 #include "hil/acquisition/identity.hpp"
@@ -22,7 +22,7 @@
 #include "hil/format/error.hpp"
 #include "hil/format/ros_frames.hpp"
 #include "hil/rig_drivers/drivers_from_rig.hpp"
-#include "mcap_sink.hpp"
+#include "hil/mcap/acquisition_sink.hpp"
 
 namespace hil::cli {
 namespace {
@@ -154,9 +154,9 @@ AcquireResult run_acquisition(const AcquireOptions& o, const std::function<void(
   ao.rt_priority = o.rt_priority;
   // --mcap: run.mcap beside the CSV, from the same samples (docs/mcap.md). Made before the
   // acquirer so that it outlives it: the acquirer's last samples reach a sink still there.
-  std::unique_ptr<McapSink> mcap_sink;
+  std::unique_ptr<mcap::AcquisitionSink> mcap_sink;
   if (o.mcap)
-    mcap_sink = std::make_unique<McapSink>(recorder.dir() + "/run.mcap", rig, with_robot ? mcfg.map.joint_count() : 0, start_ns,
+    mcap_sink = std::make_unique<mcap::AcquisitionSink>(recorder.dir() + "/run.mcap", rig, with_robot ? mcfg.map.joint_count() : 0, start_ns,
                                            mcap::parse_compression(o.mcap_compression));
   acquisition::Acquirer acq(ao, std::move(plate), std::move(robot), bus.get(), &recorder);
   if (observer) acq.on_sample(observer);

@@ -10,7 +10,7 @@
 #include <thread>
 
 #include "../commands.hpp"
-#include "../keystore/participant.hpp"
+#include "../participant.hpp"
 #include "hil/acquisition/sample_msg.hpp"
 #include "hil/dds/bus.hpp"
 #include "hil/dds/topics.hpp"

@@ -9,7 +9,7 @@
 #include <thread>
 
 #include "../commands.hpp"
-#include "../keystore/participant.hpp"
+#include "../participant.hpp"
 #include "../output.hpp"
 #include "hil/calibration/experiment.hpp"
 #include "hil/calibration/online.hpp"
@@ -283,17 +283,6 @@ int table1(const std::string& rig, int configs, const std::string& measure, std:
 }
 
 // ---- replay / worker
-dds::ParticipantOptions participant_options(const char* name) {
-  const auto& g = globals();
-  dds::ParticipantOptions o;
-  o.domain_id = g.dds_domain >= 0 ? g.dds_domain : dds::domain_from_env(0);
-  o.profile_file = g.dds_profile;
-  o.profile_name = g.dds_profile_name;
-  o.name = name;
-  o.security = security_files(name);  // --secure
-  return o;
-}
-
 std::atomic<bool> g_stop{false};
 extern "C" void on_signal(int) { g_stop = true; }
 

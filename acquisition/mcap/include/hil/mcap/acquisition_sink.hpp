@@ -11,11 +11,11 @@
 #include "hil/format/rig.hpp"
 #include "hil/mcap/recording.hpp"
 
-namespace hil::cli {
+namespace hil::mcap {
 
-class McapSink {
+class AcquisitionSink {
  public:
-  McapSink(const std::string& path, const format::RigSpec& rig, std::size_t joint_count, std::int64_t start_ns,
+  AcquisitionSink(const std::string& path, const format::RigSpec& rig, std::size_t joint_count, std::int64_t start_ns,
            mcap::Compression compression);
   /// A synchronized sample, as the recorder gets it (pipeline thread).
   void sample(const acquisition::SyncedSample& s);
@@ -39,4 +39,4 @@ class McapSink {
   double period_s_ = 1.0;
 };
 
-}  // namespace hil::cli
+}  // namespace hil::mcap

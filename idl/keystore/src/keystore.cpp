@@ -1,7 +1,7 @@
 // The keystore through Debian's `openssl` command rather than libcrypto: the same commands the
 // DDS Security documents and Fast DDS's examples use, so a lab can redo or audit each step by hand
 // (docs/security.md), and no key handling code of our own.
-#include "keystore.hpp"
+#include "hil/keystore/keystore.hpp"
 
 #include <fmt/format.h>
 #include <sys/wait.h>

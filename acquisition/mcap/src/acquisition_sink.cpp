@@ -1,19 +1,19 @@
-#include "mcap_sink.hpp"
+#include "hil/mcap/acquisition_sink.hpp"
 
 #include <cmath>
 
 #include "hil/acquisition/sample_msg.hpp"
 
-namespace hil::cli {
+namespace hil::mcap {
 
-McapSink::McapSink(const std::string& path, const format::RigSpec& rig, std::size_t joint_count, std::int64_t start_ns,
+AcquisitionSink::AcquisitionSink(const std::string& path, const format::RigSpec& rig, std::size_t joint_count, std::int64_t start_ns,
                    mcap::Compression compression)
     : writer_(path, &rig, joint_count, start_ns, mcap::RecordingOptions{compression, 1 << 20, 0}),
       start_ns_(start_ns),
       joints_(joint_count),
       joints_buf_(joint_count, 0.0) {}
 
-void McapSink::sample(const acquisition::SyncedSample& s) {
+void AcquisitionSink::sample(const acquisition::SyncedSample& s) {
   // The same row the CSV recorder writes: t from the run's start, joints zero-filled before the
   // first pose, a pose age that is not finite written as -1.
   const auto row = acquisition::to_row(s, static_cast<double>(s.t_ns - start_ns_) * 1e-9);
@@ -29,7 +29,7 @@ void McapSink::sample(const acquisition::SyncedSample& s) {
   writer_.write_sample(row, rows_++, joints_ ? joints_buf_.data() : nullptr, x);
 }
 
-void McapSink::health(const std::vector<acquisition::DeviceHealth>& devices, std::int64_t now_ns, bool force) {
+void AcquisitionSink::health(const std::vector<acquisition::DeviceHealth>& devices, std::int64_t now_ns, bool force) {
   std::lock_guard<std::mutex> lock(mutex_);
   const bool periodic = force || now_ns - last_periodic_ns_ >= static_cast<std::int64_t>(period_s_ * 1e9);
   if (periodic) last_periodic_ns_ = now_ns;
@@ -52,19 +52,19 @@ void McapSink::health(const std::vector<acquisition::DeviceHealth>& devices, std
   }
 }
 
-void McapSink::flush() {
+void AcquisitionSink::flush() {
   std::lock_guard<std::mutex> lock(mutex_);
   writer_.flush();
 }
 
-void McapSink::close() {
+void AcquisitionSink::close() {
   std::lock_guard<std::mutex> lock(mutex_);
   writer_.close();
 }
 
-std::uint64_t McapSink::messages() {
+std::uint64_t AcquisitionSink::messages() {
   std::lock_guard<std::mutex> lock(mutex_);
   return writer_.messages();
 }
 
-}  // namespace hil::cli
+}  // namespace hil::mcap

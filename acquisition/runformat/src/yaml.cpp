@@ -1,15 +1,28 @@
-#include "yaml_reader.hpp"
+#include "hil/format/yaml.hpp"
 
 #include <cctype>
 #include <charconv>
 #include <cmath>
+#include <fstream>
+#include <sstream>
 
-#include "hil/format/csv.hpp"
 #include "hil/format/edit_distance.hpp"
 
-namespace hil::format::detail {
+namespace hil::format {
+namespace {
 
-Location YNode::where(const std::string& sub) const {
+// Found by fuzzing: a null, list or mapping key (`? [a]: 1`, `&x : 1`) made as<string>() throw
+// yaml-cpp's bare "bad conversion".
+std::string key_text(const YAML::Node& key, const std::string& file, const std::string& path) {
+  if (key.IsScalar()) return key.Scalar();
+  const auto m = key.Mark();
+  throw FormatError(Location{file, static_cast<std::size_t>(m.line + 1), static_cast<std::size_t>(m.column + 1), path},
+                    "a field name must be plain text");
+}
+
+}  // namespace
+
+Location YamlNode::where(const std::string& sub) const {
   const auto m = n_.Mark();
   Location loc{*file_, m.line >= 0 ? static_cast<std::size_t>(m.line + 1) : 0,
                m.column >= 0 ? static_cast<std::size_t>(m.column + 1) : 0, path_};
@@ -17,33 +30,26 @@ Location YNode::where(const std::string& sub) const {
   return loc;
 }
 
-void YNode::fail(const std::string& message, const std::string& sub) const { throw FormatError(where(sub), message); }
+void YamlNode::fail(const std::string& message, const std::string& sub) const { throw FormatError(where(sub), message); }
 
-YNode YNode::child(const std::string& key) const {
-  return YNode(n_[key], path_.empty() ? key : path_ + "." + key, file_);
+YamlNode YamlNode::child(const std::string& key) const {
+  return YamlNode(n_[key], path_.empty() ? key : path_ + "." + key, file_);
 }
 
-YNode YNode::req(const std::string& key) const {
+YamlNode YamlNode::req(const std::string& key) const {
   expect_map();
   if (!has(key)) fail("required field is missing", key);
   return child(key);
 }
 
-void YNode::expect_map() const {
+void YamlNode::expect_map() const {
   if (!n_.IsMap()) fail("expected a mapping of fields");
 }
 
-void YNode::only(std::initializer_list<const char*> allowed) const {
+void YamlNode::only(std::initializer_list<const char*> allowed) const {
   expect_map();
   for (const auto& kv : n_) {
-    // Found by fuzzing: a null, list or mapping key (`? [a]: 1`, `&x : 1`) made as<string>()
-    // throw yaml-cpp's bare "bad conversion".
-    if (!kv.first.IsScalar()) {
-      const auto m = kv.first.Mark();
-      throw FormatError(Location{*file_, static_cast<std::size_t>(m.line + 1), static_cast<std::size_t>(m.column + 1), path_},
-                        "a field name must be plain text");
-    }
-    const auto key = kv.first.as<std::string>();
+    const auto key = key_text(kv.first, *file_, path_);
     bool ok = false;
     std::string best;
     std::size_t best_d = 4;
@@ -64,14 +70,21 @@ void YNode::only(std::initializer_list<const char*> allowed) const {
   }
 }
 
-std::vector<YNode> YNode::seq() const {
+std::vector<std::string> YamlNode::keys() const {
+  expect_map();
+  std::vector<std::string> out;
+  for (const auto& kv : n_) out.push_back(key_text(kv.first, *file_, path_));
+  return out;
+}
+
+std::vector<YamlNode> YamlNode::seq() const {
   if (!n_.IsSequence()) fail("expected a list");
-  std::vector<YNode> out;
+  std::vector<YamlNode> out;
   for (std::size_t i = 0; i < n_.size(); ++i) out.emplace_back(n_[i], path_ + "[" + std::to_string(i) + "]", file_);
   return out;
 }
 
-double YNode::num() const {
+double YamlNode::num() const {
   if (!n_.IsScalar()) fail("expected a number");
   const auto s = n_.Scalar();
   double v = 0.0;
@@ -96,19 +109,26 @@ double YNode::num() const {
   return v;
 }
 
-double YNode::num_positive() const {
+double YamlNode::num_positive() const {
   const double v = num();
   if (!(v > 0.0)) fail("expected a positive number, found " + n_.Scalar());
   return v;
 }
 
-long YNode::integer() const {
+long YamlNode::integer() const {
   const double v = num();
   if (v != std::floor(v) || std::fabs(v) > 9.0e15) fail("expected an integer, found '" + n_.Scalar() + "'");
   return static_cast<long>(v);
 }
 
-bool YNode::boolean() const {
+std::size_t YamlNode::count(std::size_t min) const {
+  const double v = num();
+  if (v != std::floor(v) || v < static_cast<double>(min) || v > 1e9)
+    fail("expected an integer >= " + std::to_string(min) + ", found '" + n_.Scalar() + "'");
+  return static_cast<std::size_t>(v);
+}
+
+bool YamlNode::boolean() const {
   if (!n_.IsScalar()) fail("expected true or false");
   const auto s = n_.Scalar();
   if (s == "true") return true;
@@ -116,18 +136,18 @@ bool YNode::boolean() const {
   fail("expected true or false, found '" + s + "'");
 }
 
-std::string YNode::str() const {
+std::string YamlNode::str() const {
   if (!n_.IsScalar()) fail("expected a text value");
   return n_.Scalar();
 }
 
-std::vector<double> YNode::nums() const {
+std::vector<double> YamlNode::nums() const {
   std::vector<double> out;
   for (const auto& e : seq()) out.push_back(e.num());
   return out;
 }
 
-Eigen::Vector3d YNode::vec3() const {
+Eigen::Vector3d YamlNode::vec3() const {
   const auto v = nums();
   if (v.size() != 3) fail("expected a list of 3 numbers, found " + std::to_string(v.size()));
   return {v[0], v[1], v[2]};
@@ -142,4 +162,12 @@ YAML::Node load_yaml(const std::string& text, const std::string& file) {
   }
 }
 
-}  // namespace hil::format::detail
+YAML::Node load_yaml_file(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw FormatError({path, 0, 0, ""}, "cannot open the file");
+  std::ostringstream text;
+  text << in.rdbuf();
+  return load_yaml(text.str(), path);
+}
+
+}  // namespace hil::format
