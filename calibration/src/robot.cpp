@@ -65,6 +65,12 @@ Eigen::Isometry3d tool_pose(const SerialRobot& robot, const Eigen::Ref<const Eig
   return forward(robot, q).T_world_ee;
 }
 
+Eigen::Isometry3d tool_in_base(const SerialRobot& robot, const double* q) noexcept {
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  for (std::size_t i = 0; i < robot.joints.size(); ++i) T = T * dh_transform(robot.convention, robot.joints[i], q[i]);
+  return T * robot.T_flange_ee;
+}
+
 Eigen::MatrixXd tool_jacobian(const SerialRobot& robot, const ChainPoses& poses) {
   const int n = robot.dof();
   Eigen::MatrixXd J(6, n);

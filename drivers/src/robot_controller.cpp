@@ -34,9 +34,10 @@ void ModbusConfig::validate() const {
     throw ConfigError("reconnect_min_s", "need 0 < reconnect_min_s <= reconnect_max_s");
   map.validate();
   if (kinematics) {
-    if (kinematics->joints.empty()) throw ConfigError("kinematics", "the DH chain has no joints");
-    if (map.joint_count() < kinematics->joints.size())
-      throw ConfigError("kinematics", "the DH chain has " + std::to_string(kinematics->joints.size()) +
+    if (kinematics->joints == 0 || !kinematics->T_base_tool)
+      throw ConfigError("kinematics", "no joints or no forward kinematics given");
+    if (map.joint_count() < kinematics->joints)
+      throw ConfigError("kinematics", "the robot has " + std::to_string(kinematics->joints) +
                                           " joints but the register map reads " + std::to_string(map.joint_count()));
   }
 }
@@ -238,7 +239,7 @@ PollStatus RobotControllerDriver::poll(RobotSample& out) noexcept {
   }
   out.pose_from_kinematics = false;
   if (!out.has_pose && cfg_.kinematics) {
-    const Eigen::Isometry3d T = forward_kinematics(*cfg_.kinematics, out.joints.data());
+    const Eigen::Isometry3d T = cfg_.kinematics->T_base_tool(out.joints.data());
     out.has_pose = true;
     out.pose_from_kinematics = true;
     out.p_base_tcp_m = T.translation();

@@ -78,6 +78,27 @@ TEST(Kinematics, ConventionsAgreeOnAnEquivalentPlanarArm) {
   EXPECT_TRUE(hil::test::near(hc::tool_jacobian(s, q), hc::tool_jacobian(m, q), 1e-12));
 }
 
+TEST(Kinematics, ToolInBaseIsTheToolPoseWithoutTheBase) {
+  // The allocation-free form the Modbus driver calls per poll (through hil::rig_drivers), for both
+  // conventions and a prismatic joint: T_world_base^-1 T_world_ee.
+  for (const auto convention : {hc::DhConvention::standard, hc::DhConvention::modified}) {
+    const hc::SerialRobot r = mixed_robot(convention);
+    const Eigen::Vector4d q(0.3, 0.05, -1.2, 2.0);
+    const Eigen::Isometry3d expect = r.T_world_base.inverse() * hc::tool_pose(r, q);
+    EXPECT_TRUE(hil::test::near(hc::tool_in_base(r, q.data()).matrix(), expect.matrix(), 1e-12));
+  }
+  // Craig's convention with a prismatic last joint, by hand: joint 1 turns 90° about z, link 1 m,
+  // the slider adds 0.25 m to d = 0.5 m along z, the tool 0.1 m further along z.
+  hc::SerialRobot craig;
+  craig.convention = hc::DhConvention::modified;
+  craig.joints = {{"j1", hc::JointKind::revolute, 0.0, 0.0, 0.0, 0.0},
+                  {"j2", hc::JointKind::revolute, 1.0, 0.0, 0.0, 0.0},
+                  {"j3", hc::JointKind::prismatic, 0.0, 0.0, 0.5, 0.0}};
+  craig.T_flange_ee = Eigen::Isometry3d(Eigen::Translation3d(0.0, 0.0, 0.1));
+  const double q[3] = {1.5707963267948966, 0.0, 0.25};
+  EXPECT_TRUE(hil::test::near(hc::tool_in_base(craig, q).translation(), Eigen::Vector3d(0, 1, 0.85), 1e-12));
+}
+
 TEST(Kinematics, WrongJointCountIsRefused) {
   EXPECT_THROW(hc::forward(hc::kr270_like(), Eigen::VectorXd::Zero(5)), std::invalid_argument);
 }

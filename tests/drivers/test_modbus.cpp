@@ -88,21 +88,6 @@ TEST(RobotDriver, JointsOnlyAndInputRegisters) {
   for (unsigned j = 0; j < 6; ++j) EXPECT_NEAR(s.joints[j], kJoints[j], 0.5e-6 + 1e-12);
 }
 
-TEST(Kinematics, StandardAndModifiedDh) {
-  DhChain planar;
-  planar.joints = {{1.0, 0.0, 0.0, 0.0, false}, {1.0, 0.0, 0.0, 0.0, false}};
-  const double q[2] = {std::numbers::pi / 2, -std::numbers::pi / 2};
-  const Eigen::Isometry3d T = forward_kinematics(planar, q);
-  EXPECT_LT((T.translation() - Eigen::Vector3d(1, 1, 0)).norm(), 1e-12);
-  EXPECT_LT((T.linear() - Eigen::Matrix3d::Identity()).norm(), 1e-12);
-  DhChain craig;
-  craig.modified = true;
-  craig.joints = {{0.0, 0.0, 0.0, 0.0, false}, {1.0, 0.0, 0.0, 0.0, false}, {0.0, 0.0, 0.5, 0.0, true}};
-  craig.T_flange_tool.translation() = Eigen::Vector3d(0, 0, 0.1);
-  const double q2[3] = {std::numbers::pi / 2, 0.0, 0.25};
-  EXPECT_LT((forward_kinematics(craig, q2).translation() - Eigen::Vector3d(0, 1, 0.85)).norm(), 1e-12);
-}
-
 TEST(RobotDriver, JointsOnlyMapGetsThePoseByKinematics) {
   RegisterMap m;
   m.entries = {{"j1", 0, RegisterTable::holding, RegisterType::float32, WordOrder::big, 1.0, 0.0, -1},
@@ -116,8 +101,15 @@ TEST(RobotDriver, JointsOnlyMapGetsThePoseByKinematics) {
   ModbusConfig mc;
   mc.port = fake.port();
   mc.map = m;
-  mc.kinematics = DhChain{};
-  mc.kinematics->joints = {{1.0, 0.0, 0.0, 0.0, false}, {1.0, 0.0, 0.0, 0.0, false}};
+  // A planar 2R arm with unit links, as the rig adapter would give it (tests/drivers/test_rig_adapter
+  // checks the adapter's chain; calibration's tests the DH kinematics).
+  mc.kinematics = ForwardKinematics{2, [](const double* qq) {
+                                      Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+                                      T.translation() = Eigen::Vector3d(std::cos(qq[0]) + std::cos(qq[0] + qq[1]),
+                                                                        std::sin(qq[0]) + std::sin(qq[0] + qq[1]), 0.0);
+                                      T.linear() = Eigen::AngleAxisd(qq[0] + qq[1], Eigen::Vector3d::UnitZ()).toRotationMatrix();
+                                      return T;
+                                    }};
   RobotControllerDriver drv(mc);
   drv.connect();
   RobotSample s;
@@ -125,8 +117,10 @@ TEST(RobotDriver, JointsOnlyMapGetsThePoseByKinematics) {
   ASSERT_TRUE(s.has_pose);
   EXPECT_TRUE(s.pose_from_kinematics);
   EXPECT_LT((s.p_base_tcp_m - Eigen::Vector3d(1, 1, 0)).norm(), 1e-6);
-  mc.kinematics->joints.push_back({});
+  mc.kinematics->joints = 3;
   EXPECT_TRUE(hil::test::config_error([&] { RobotControllerDriver d(mc); }, "kinematics", "has 3 joints but the register map reads 2"));
+  mc.kinematics->T_base_tool = nullptr;
+  EXPECT_TRUE(hil::test::config_error([&] { RobotControllerDriver d(mc); }, "kinematics", "no forward kinematics given"));
 }
 
 TEST(FakeRobot, RefusesWrites) {

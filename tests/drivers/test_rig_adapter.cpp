@@ -86,9 +86,11 @@ TEST(RigAdapter, DeclarativeAndCustomSections) {
   rig.robot = robot;
   const ModbusConfig fk = rig_drivers::robot_controller_config(rig);
   ASSERT_TRUE(fk.kinematics.has_value());
-  ASSERT_EQ(fk.kinematics->joints.size(), 2U);
-  EXPECT_EQ(fk.kinematics->joints[0].a_m, 0.4);
-  EXPECT_TRUE(fk.kinematics->joints[1].prismatic);
+  ASSERT_EQ(fk.kinematics->joints, 2U);
+  // Link 1 of 0.4 m along x after joint 1 (standard DH), then the slider's d = 0.1 m + q2 along z.
+  const double q[2] = {1.5707963267948966, 0.05};
+  const Eigen::Isometry3d T = fk.kinematics->T_base_tool(q);
+  EXPECT_LT((T.translation() - Eigen::Vector3d(0.0, 0.4, 0.15)).norm(), 1e-12) << T.translation().transpose();
   // The example rig's UR map reads the tool pose: no kinematics needed.
   EXPECT_FALSE(rig_drivers::robot_controller_config(format::load_rig(kRig)).kinematics.has_value());
 }

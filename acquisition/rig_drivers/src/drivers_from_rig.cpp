@@ -1,7 +1,9 @@
 #include "hil/rig_drivers/drivers_from_rig.hpp"
 
+#include "hil/calibration/robot.hpp"
 #include "hil/drivers/error.hpp"
 #include "hil/format/error.hpp"
+#include "hil/rig/stiffness.hpp"
 
 namespace hil::rig_drivers {
 namespace {
@@ -112,19 +114,19 @@ drivers::ModbusConfig robot_controller_config(const format::RigSpec& rig) {
     c.stop_bits = r.stop_bits;
     c.rate_hz = r.rate_hz;
     c.timeout_s = r.timeout_s;
-    if (!c.map.has_pose() && rig.robot) c.kinematics = dh_chain(*rig.robot);
+    if (!c.map.has_pose() && rig.robot) c.kinematics = forward_kinematics(*rig.robot);
     c.validate();
     return c;
   });
 }
 
-drivers::DhChain dh_chain(const format::RobotSpec& robot) {
-  drivers::DhChain c;
-  c.modified = robot.convention == format::DhConvention::modified;
-  for (const auto& j : robot.joints)
-    c.joints.push_back({j.a_m, j.alpha_rad, j.d_m, j.theta_offset_rad, j.type == format::JointType::prismatic});
-  c.T_flange_tool = robot.T_flange_ee.isometry();
-  return c;
+drivers::ForwardKinematics forward_kinematics(const format::RobotSpec& robot) {
+  calibration::SerialRobot r = rig::to_serial_robot(robot);
+  r.T_world_base = Eigen::Isometry3d::Identity();  // the controller reports the tool in its base
+  drivers::ForwardKinematics fk;
+  fk.joints = r.joints.size();
+  fk.T_base_tool = [r = std::move(r)](const double* q) { return calibration::tool_in_base(r, q); };
+  return fk;
 }
 
 Eigen::Isometry3d world_to_base(const format::RigSpec& rig) {

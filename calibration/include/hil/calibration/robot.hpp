@@ -63,6 +63,9 @@ ChainPoses forward(const SerialRobot& robot, const Eigen::Ref<const Eigen::Vecto
 
 /// T_world_ee at q.
 Eigen::Isometry3d tool_pose(const SerialRobot& robot, const Eigen::Ref<const Eigen::VectorXd>& q);
+/// The tool in the robot's base frame (T_world_base left out) for joint values `q` (rad or m, dof()
+/// of them). Allocation-free: the driver of a controller that reports only joints calls it per poll.
+Eigen::Isometry3d tool_in_base(const SerialRobot& robot, const double* q) noexcept;
 
 /// Geometric Jacobian (6 x N) of the tool point: [v_W; ω_W] = J q̇ with v the velocity of the
 /// tool-frame origin, both in the world frame.

@@ -7,18 +7,25 @@
 #include <array>
 #include <chrono>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
 #include <vector>
 
-#include "hil/drivers/kinematics.hpp"
 #include "hil/drivers/register_map.hpp"
 #include "hil/drivers/status.hpp"
 
 namespace hil::drivers {
 
 enum class ModbusTransport : std::uint8_t { tcp, rtu };
+
+/// T_base_tool from the first `joints` joint values (rad or m) of a poll: the robot's forward
+/// kinematics, given by whoever knows the robot (the driver does not). Called on the polling thread.
+struct ForwardKinematics {
+  std::size_t joints = 0;
+  std::function<Eigen::Isometry3d(const double* q)> T_base_tool;
+};
 
 struct ModbusConfig {
   ModbusTransport transport = ModbusTransport::tcp;
@@ -36,9 +43,9 @@ struct ModbusConfig {
   int retries = 1;                ///< extra tries per poll after a timeout/garbled answer (flush first)
   double reconnect_min_s = 0.05;  ///< back-off after a lost link, doubled per failed attempt...
   double reconnect_max_s = 2.0;   ///< ...up to this
-  /// When the map has joints but no tool pose: the pose by forward kinematics of this chain
-  /// (needs at least as many mapped joints as the chain has).
-  std::optional<DhChain> kinematics;
+  /// When the map has joints but no tool pose: the pose by the robot's forward kinematics (from the
+  /// rig's robot description, hil::rig_drivers; needs at least as many mapped joints).
+  std::optional<ForwardKinematics> kinematics;
   /// \throws ConfigError naming the field.
   void validate() const;
   /// "tcp 127.0.0.1:502 unit 1" / "rtu /dev/ttyUSB0 115200 8N1 unit 1".

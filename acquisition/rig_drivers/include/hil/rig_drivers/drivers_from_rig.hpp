@@ -23,8 +23,9 @@ drivers::ModbusConfig robot_controller_config(const format::RigSpec& rig);
 /// The register map a robot spec asks for (built-in ur/float32, or its custom registers).
 drivers::RegisterMap register_map(const format::RobotControllerSpec& spec, const std::string& rig_source);
 
-/// The robot's DH table as a drivers::DhChain (tool = T_flange_ee).
-drivers::DhChain dh_chain(const format::RobotSpec& robot);
+/// The robot's forward kinematics for the driver: its DH table through hil::rig's robot adapter and
+/// calibration's kinematics (the one DH implementation), T_base_tool with tool = T_flange_ee.
+drivers::ForwardKinematics forward_kinematics(const format::RobotSpec& robot);
 
 /// T_world_base of the rig's robot (identity without a robot section).
 Eigen::Isometry3d world_to_base(const format::RigSpec& rig);
