@@ -11,6 +11,7 @@ include(CMakePackageConfigHelpers)
 
 # Target -> exported name (hil::<name>). Exported ones must only link exported or imported targets.
 set(_hil_exports
+  hil_so3 so3
   hil_calibration calibration
   hil_contact_id contact_id
   hil_runformat runformat
@@ -113,6 +114,10 @@ if(HIL_SANITIZE)
   set(HIL_PC_CFLAGS " -fsanitize=${HIL_SANITIZE}")
 endif()
 foreach(target IN LISTS _hil_order)
+  get_target_property(type ${target} TYPE)
+  if(type STREQUAL "INTERFACE_LIBRARY")
+    continue()  # header-only (hil::so3): nothing to link
+  endif()
   get_target_property(out ${target} OUTPUT_NAME)
   if(NOT out)
     set(out ${target})

@@ -39,7 +39,7 @@ py::object interval95(const py::dict& d, const char* value, const char* std_dev)
 struct Fit {
   std::vector<double> t;
   std::vector<int> sample, contacts;
-  std::vector<cid::Vec6> measured_fp, model_fp;
+  std::vector<cid::Vector6d> measured_fp, model_fp;
 };
 
 Fit fit_arrays(const cid::ContactProblem& p, const Eigen::VectorXd& x, const cid::LinearEstimate& e) {

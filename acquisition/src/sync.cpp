@@ -1,4 +1,5 @@
 #include "hil/acquisition/sync.hpp"
+#include "hil/so3/so3.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -23,13 +24,6 @@ std::vector<double> lowpass_taps(int half, double fc) {
   return h;
 }
 
-Eigen::Vector3d log_rotation(const Eigen::Quaterniond& q) {
-  const Eigen::AngleAxisd aa(q);
-  double angle = aa.angle();
-  Eigen::Vector3d axis = aa.axis();
-  if (angle > kPi) angle -= 2.0 * kPi;
-  return axis * angle;
-}
 }  // namespace
 
 Synchronizer::Synchronizer(const SyncConfig& config, Sink sink) : cfg_(config), sink_(std::move(sink)) {
@@ -154,7 +148,7 @@ bool Synchronizer::fill_pose(SyncedSample& s, bool force) const {
   for (const auto& p : poses_) {
     if (p.t_ns < s.t_ns - W || p.t_ns > s.t_ns + W) continue;
     const double tau = (p.t_ns - s.t_ns) * 1e-9;
-    const Eigen::Vector3d rv = log_rotation(p.q_world_ee * q_ref_inv);  // world-frame rotation vector
+    const Eigen::Vector3d rv = so3::log(p.q_world_ee * q_ref_inv);  // world-frame rotation vector
     st += tau, stt += tau * tau, sp += p.p_world_ee_m, stp += tau * p.p_world_ee_m, sr += rv, str += tau * rv;
     ++n;
   }

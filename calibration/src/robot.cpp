@@ -1,4 +1,5 @@
 #include "hil/calibration/robot.hpp"
+#include "hil/so3/so3.hpp"
 
 #include <cmath>
 #include <stdexcept>
@@ -93,8 +94,7 @@ Eigen::MatrixXd tool_jacobian(const SerialRobot& robot, const Eigen::Ref<const E
 
 Vector6d pose_difference(const Eigen::Isometry3d& T_a, const Eigen::Isometry3d& T_b) {
   Vector6d d;
-  const Eigen::AngleAxisd aa(Eigen::Matrix3d(T_b.linear() * T_a.linear().transpose()));
-  d << T_b.translation() - T_a.translation(), aa.angle() * aa.axis();
+  d << T_b.translation() - T_a.translation(), so3::log(Eigen::Matrix3d(T_b.linear() * T_a.linear().transpose()));
   return d;
 }
 

@@ -4,6 +4,7 @@
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
 #endif
 #include "hil/contact_id/identification.hpp"
+#include "hil/so3/so3.hpp"
 
 #include <Eigen/QR>
 #include <Eigen/SVD>
@@ -324,7 +325,7 @@ void ContactProblem::sensitivity(const Eigen::VectorXd& x, int j, double h, Eige
       for (const auto& v : poly.vertices()) moved_m = std::max(moved_m, (T * v - Tx * v).norm());
     moved_m = moved_m * (1.0 + 1e-9) + 1e-15;  // rounding
     // (exactly 0 for a translation: acos near 1 would turn rounding into ~1e-8 rad)
-    turn_rad = T.linear() == Tx.linear() ? 0.0 : Eigen::AngleAxisd(T.linear() * Tx.linear().transpose()).angle() * (1.0 + 1e-9);
+    turn_rad = T.linear() == Tx.linear() ? 0.0 : so3::angle(T.linear() * Tx.linear().transpose()) * (1.0 + 1e-9);
   };
   double moved_p, turn_p, moved_m, turn_m;
   motion(Tp, moved_p, turn_p);
@@ -410,7 +411,7 @@ LinearEstimate solve_theta(const Eigen::MatrixX2d& A, const Eigen::VectorXd& b) 
   return e;
 }
 
-void RunningLeastSquares::add(const Regressor& A, const Vec6& b) {
+void RunningLeastSquares::add(const Regressor& A, const Vector6d& b) {
   Eigen::Matrix<double, 8, 2> M;
   Eigen::Matrix<double, 8, 1> y;
   M << R_, A;

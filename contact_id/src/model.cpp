@@ -114,35 +114,35 @@ Regressor regressor(const std::vector<ContactPoint>& contacts, const Eigen::Isom
   return r;
 }
 
-Vec6 plate_to_object1(const Vec6& w_fp, const Eigen::Isometry3d& T_world_fp, const Eigen::Isometry3d& T_world_o1) {
+Vector6d plate_to_object1(const Vector6d& w_fp, const Eigen::Isometry3d& T_world_fp, const Eigen::Isometry3d& T_world_o1) {
   // Plate wrench in world, about the world origin.
   const Vec3 f_w = T_world_fp.linear() * w_fp.head<3>();
   const Vec3 m_w = T_world_fp.linear() * w_fp.tail<3>() + T_world_fp.translation().cross(f_w);
   // Object 1 feels the opposite; move to o1's origin and frame.
   const Vec3 f1 = -f_w;
   const Vec3 m1 = -m_w - T_world_o1.translation().cross(f1);
-  Vec6 out;
+  Vector6d out;
   out.head<3>() = T_world_o1.linear().transpose() * f1;
   out.tail<3>() = T_world_o1.linear().transpose() * m1;
   return out;
 }
 
-Vec6 object1_to_plate(const Vec6& w_o1, const Eigen::Isometry3d& T_world_fp, const Eigen::Isometry3d& T_world_o1) {
+Vector6d object1_to_plate(const Vector6d& w_o1, const Eigen::Isometry3d& T_world_fp, const Eigen::Isometry3d& T_world_o1) {
   const Vec3 f1 = T_world_o1.linear() * w_o1.head<3>();
   const Vec3 m1 = T_world_o1.linear() * w_o1.tail<3>() + T_world_o1.translation().cross(f1);
   const Vec3 f_w = -f1;
   const Vec3 m_w = -m1 - T_world_fp.translation().cross(f_w);
-  Vec6 out;
+  Vector6d out;
   out.head<3>() = T_world_fp.linear().transpose() * f_w;
   out.tail<3>() = T_world_fp.linear().transpose() * m_w;
   return out;
 }
 
-Vec6 plate_wrench(const Scene& s, const ContactModel& m, const Eigen::VectorXd& x, const Kinematics& k,
+Vector6d plate_wrench(const Scene& s, const ContactModel& m, const Eigen::VectorXd& x, const Kinematics& k,
                   MindistWorkspace& ws, std::vector<ContactPoint>& contacts) {
   mindist(s, k, x, m.v_tm, contacts, ws);
   const Eigen::Isometry3d T_world_o1 = body_pose(s.bodies[0], k.T_world_ee);
-  const Vec6 w_o1 = regressor(contacts, T_world_o1) * m.theta();
+  const Vector6d w_o1 = regressor(contacts, T_world_o1) * m.theta();
   return object1_to_plate(w_o1, s.T_world_fp, T_world_o1);
 }
 

@@ -22,7 +22,7 @@ OnlineEstimate OnlineEstimator::update(const Measurement& m) {
   if (contacts_.empty()) return out;
   const Eigen::Isometry3d T = body_pose(scene_.bodies[0], m.kin.T_world_ee);
   Regressor A = regressor(contacts_, T);
-  Vec6 b = plate_to_object1(m.w_fp, scene_.T_world_fp, T);
+  Vector6d b = plate_to_object1(m.w_fp, scene_.T_world_fp, T);
   A.topRows<3>() *= wf_;
   A.bottomRows<3>() *= wm_;
   b.head<3>() *= wf_;

@@ -12,6 +12,7 @@
 
 #include "hil/drivers/can_channel.hpp"
 #include "hil/drivers/error.hpp"
+#include "hil/so3/so3.hpp"
 
 namespace hil::drivers {
 
@@ -244,8 +245,7 @@ PollStatus RobotControllerDriver::poll(RobotSample& out) noexcept {
     out.pose_from_kinematics = true;
     out.p_base_tcp_m = T.translation();
     out.q_base_tcp = Eigen::Quaterniond(T.linear());
-    const Eigen::AngleAxisd aa(out.q_base_tcp);
-    out.r_base_tcp = aa.angle() * aa.axis();
+    out.r_base_tcp = so3::log(out.q_base_tcp);
   }
   out.sequence = ++sequence_;
   ++counters_.samples;

@@ -3,6 +3,7 @@
 
 #include "hil/drivers/error.hpp"
 #include "hil/drivers/fake_rig.hpp"
+#include "hil/so3/so3.hpp"
 
 namespace hil::drivers {
 
@@ -61,8 +62,7 @@ void Scenario::at(double t, ScenarioPoint& out) const {
 
 void encode_state(const RegisterMap& map, std::span<const double> joints, const Eigen::Vector3d& p,
                   const Eigen::Quaterniond& q, std::span<std::uint16_t> holding) {
-  const Eigen::AngleAxisd aa(q.normalized());
-  const Eigen::Vector3d r = aa.angle() * aa.axis();
+  const Eigen::Vector3d r = so3::log(q);
   for (const auto& e : map.entries) {
     const Quantity qu = parse_quantity(e.quantity, "quantity");
     double v = 0.0;

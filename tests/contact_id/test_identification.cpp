@@ -19,7 +19,7 @@ TEST(Model, PlateWrenchMatchesHandComputation) {
   k.v_world_ee = Vec3(0.01, 0.0, 0.0);
   MindistWorkspace ws;
   std::vector<ContactPoint> c;
-  const Vec6 w = plate_wrench(s, m, s.design(), k, ws, c);
+  const Vector6d w = plate_wrench(s, m, s.design(), k, ws, c);
   ASSERT_EQ(c.size(), 1u);
   const Vec3 F(m.mu * m.K * d, 0.0, -m.K * d);
   const Vec3 p = Vec3(0.01, 0.02, -d / 2) - s.T_world_fp.translation();  // point in plate frame
@@ -34,7 +34,7 @@ TEST(Model, WrenchTransformsAreInverse) {
   Tfp.translation() = Vec3(0.1, -0.2, 0.3);
   To1.linear() = Eigen::AngleAxisd(-0.7, Vec3(3, 1, 2).normalized()).toRotationMatrix();
   To1.translation() = Vec3(-0.4, 0.5, 0.6);
-  Vec6 w;
+  Vector6d w;
   w << 1, 2, 3, 4, 5, 6;
   EXPECT_LT((object1_to_plate(plate_to_object1(w, Tfp, To1), Tfp, To1) - w).norm(), 1e-12);
 }

@@ -602,22 +602,22 @@ TEST(ContactFamily, ACompliancesFreeDirectionsCanMakeItPositiveSemiDefinite) {
   // Fitted coordinates C_xy = 2 with the diagonal unidentified (0): not PSD as it stands, but the
   // free diagonal can make it so. With nothing free, or only off-diagonal freedom against a
   // negative diagonal (the trace stays negative), it cannot.
-  Mat6 C = Mat6::Zero();
+  Matrix6d C = Matrix6d::Zero();
   C(0, 1) = C(1, 0) = 2.0;
-  std::vector<Mat6> diag, off;
+  std::vector<Matrix6d> diag, off;
   for (int i = 0; i < 6; ++i) {
-    Mat6 E = Mat6::Zero();
+    Matrix6d E = Matrix6d::Zero();
     E(i, i) = 1.0;
     diag.push_back(E);
     for (int j = i + 1; j < 6; ++j) {
-      Mat6 F = Mat6::Zero();
+      Matrix6d F = Matrix6d::Zero();
       F(i, j) = F(j, i) = 1.0;
       off.push_back(F);
     }
   }
   EXPECT_NEAR(max_min_eigenvalue(C, {}), -2.0, 1e-12);
   EXPECT_GE(max_min_eigenvalue(C, diag), 0.0);
-  EXPECT_LT(max_min_eigenvalue(-Mat6::Identity(), off), -0.5);
+  EXPECT_LT(max_min_eigenvalue(-Matrix6d::Identity(), off), -0.5);
 }
 
 TEST(Generator, DrawsSeededEffectsAndRefusesUnknownOnes) {
@@ -671,7 +671,7 @@ TEST(DeflectionFamily, NamesACompliantBaseAndNoneForARigidOne) {
   std::vector<double> t;
   std::vector<cid::Kinematics> kin_soft, kin_rigid;
   std::vector<Eigen::Matrix<double, 6, 1>> w;
-  Mat6 C = Mat6::Zero();
+  Matrix6d C = Matrix6d::Zero();
   C(3, 4) = C(4, 3) = 0;
   C(3, 3) = 4e-5;   // rad/(N m): tilt about x under a moment about x
   C(4, 4) = 2.5e-5;

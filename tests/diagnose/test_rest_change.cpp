@@ -16,12 +16,10 @@ namespace hil::diagnose {
 namespace {
 
 namespace cid = hil::contact_id;
-using Vec6 = Eigen::Matrix<double, 6, 1>;
-using Mat6 = Eigen::Matrix<double, 6, 6>;
 
 struct Step {
   int sample;  ///< the first sample at the new rest pose
-  Vec6 offset;
+  Vector6d offset;
 };
 
 constexpr int kSamples = 1500;
@@ -33,7 +31,7 @@ constexpr double kDt = 0.01;
 DeflectionData make_base(const std::vector<Step>& steps, unsigned seed, double noise = 1e-5, double compliance = 1.0) {
   std::mt19937 rng(seed);
   std::normal_distribution<double> g(0, 1);
-  Mat6 C = Mat6::Zero();
+  Matrix6d C = Matrix6d::Zero();
   C(3, 3) = 4e-5;  // rad/(N m)
   C(4, 4) = 2.5e-5;
   C(5, 5) = 3e-4;
@@ -42,7 +40,7 @@ DeflectionData make_base(const std::vector<Step>& steps, unsigned seed, double n
   C *= compliance;
   std::vector<double> t;
   std::vector<cid::Kinematics> kin;
-  std::vector<Vec6> w;
+  std::vector<Vector6d> w;
   const Eigen::Matrix3d R0 = Eigen::AngleAxisd(0.3, Eigen::Vector3d(0.2, -0.5, 1).normalized()).toRotationMatrix();
   const Eigen::Vector3d p0 = Eigen::Vector3d::Zero();  // the plate's origin: the load about p0 is the plate's wrench
   for (int k = 0; k < kSamples; ++k) {
@@ -51,11 +49,11 @@ DeflectionData make_base(const std::vector<Step>& steps, unsigned seed, double n
     // Plate wrench: weight plus a swinging arm's moment. The weight varies (the arm accelerates): with
     // a constant fz, C's fz columns are nearly those of the rest pose, and the engine's least squares
     // (its COD threshold is set after the decomposition) returned a wrong θ on this design.
-    Vec6 wk;
+    Vector6d wk;
     wk << 2 * std::sin(tk), 1.5 * std::cos(0.7 * tk), -700 + 20 * std::sin(0.3 * tk + 1), 40 * std::sin(0.9 * tk),
         30 * std::cos(0.4 * tk), 3 * std::sin(1.3 * tk);
     w.push_back(wk);
-    Vec6 v = C * wk;
+    Vector6d v = C * wk;
     for (const auto& s : steps)
       if (k >= s.sample) v += s.offset;
     for (int i = 0; i < 6; ++i) v(i) += noise * g(rng);
@@ -70,7 +68,7 @@ DeflectionData make_base(const std::vector<Step>& steps, unsigned seed, double n
 }
 
 std::vector<Step> two_slips() {
-  Vec6 a, b;
+  Vector6d a, b;
   a << 1.0e-3, -0.5e-3, 0, 0, 0, -8e-3;
   b << -0.6e-3, 1.2e-3, 0.1e-3, 0, 0, 12e-3;
   return {{500, a}, {1100, b}};

@@ -35,8 +35,8 @@ TEST(TripodScene, TheNominalModelOnTheSceneIsTheTruthsLawPerSample) {
   int in_contact = 0, lifted = 0;
   double max_force_n = 0.0;
   for (std::size_t k = 0; k < samples.size(); ++k) {
-    const Vec6 w = cid::plate_wrench(scene, model, scene.design(), m[k].kin, ws, contacts);
-    const Vec6 truth = samples[k].wrench_true;
+    const Vector6d w = cid::plate_wrench(scene, model, scene.design(), m[k].kin, ws, contacts);
+    const Vector6d truth = samples[k].wrench_true;
     SCOPED_TRACE("sample " + std::to_string(k));
     // Same feet in contact (the tetrahedra's apexes are the truth's points).
     ASSERT_EQ(static_cast<int>(contacts.size()), samples[k].feet_in_contact);
@@ -64,7 +64,7 @@ TEST(TripodScene, TheForcePlateFrameIsThePlatesAndTheWrenchIsAboutItsOrigin) {
   const ct::BodyState b = ct::true_state(sc, 0.3);
   std::vector<ct::FootContact> feet;
   const ct::Vector6d truth = ct::plate_wrench(sc.plate, sc.tripod, sc.law, b, &feet);
-  Vec6 sum = Vec6::Zero();
+  Vector6d sum = Vector6d::Zero();
   for (const auto& f : feet) {
     ASSERT_TRUE(f.in_contact);
     const Eigen::Vector3d n = sc.plate.T_world_plate().linear().col(2);

@@ -4,6 +4,7 @@
 #include <random>
 
 #include "hil/import/rigid_fit.hpp"
+#include "hil/so3/so3.hpp"
 
 namespace hil::import {
 namespace {
@@ -67,7 +68,7 @@ TEST(RigidFit, NoiseGivesSmallPoseErrorAndResidualOfTheNoiseSize) {
     const auto fit = fit_rigid_body(markers_body(), w, {true, true, true, true}, 3);
     ASSERT_TRUE(fit);
     EXPECT_LT((fit->p_world_body_m - p).norm(), 1.5e-3);
-    EXPECT_LT(rotation_vector(R.transpose() * fit->R_world_body).norm(), 10e-3);
+    EXPECT_LT(hil::so3::log(R.transpose() * fit->R_world_body).norm(), 10e-3);
     sum_rms2 += fit->residual_rms_m * fit->residual_rms_m;
   }
   // E[rms^2] = sigma^2 (3N - 6) / N for N markers (6 pose parameters absorbed): 0.2 mm * sqrt(6/4).

@@ -19,6 +19,7 @@
 #include "hil/format/edit_distance.hpp"
 #include "hil/format/error.hpp"
 #include "hil/import/rigid_fit.hpp"
+#include "hil/so3/so3.hpp"
 #include "hil/import/timeparse.hpp"
 
 namespace hil::import {
@@ -362,7 +363,7 @@ BodyStats body_statistics(BodyStats st, const std::vector<const RigidFit*>& fits
     st.rms_max_m = std::max(st.rms_max_m, fit->residual_rms_m);
     pmin = pmin.cwiseMin(fit->p_world_body_m);
     pmax = pmax.cwiseMax(fit->p_world_body_m);
-    const Eigen::Vector3d rv = rotation_vector(first->R_world_body.transpose() * fit->R_world_body);
+    const Eigen::Vector3d rv = so3::log(first->R_world_body.transpose() * fit->R_world_body);
     rmin = rmin.cwiseMin(rv);
     rmax = rmax.cwiseMax(rv);
     st.max_displacement_m = std::max(st.max_displacement_m, (fit->p_world_body_m - first->p_world_body_m).norm());

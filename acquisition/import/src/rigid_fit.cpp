@@ -2,9 +2,12 @@
 
 #include <fmt/format.h>
 
+#include <Eigen/Geometry>
 #include <Eigen/SVD>
 #include <algorithm>
 #include <cmath>
+
+#include "hil/so3/so3.hpp"
 
 namespace hil::import {
 
@@ -35,25 +38,15 @@ std::optional<RigidFit> fit_rigid_body(const Eigen::Matrix3Xd& body_m, const Eig
   }
   // Nearly collinear markers leave the rotation about their line undetermined.
   if (planarity_ratio(B) < 1e-3) return fail("seen markers are (nearly) collinear");
-  const Eigen::Vector3d b_mean = B.rowwise().mean(), w_mean = W.rowwise().mean();
-  const Eigen::Matrix3Xd Bc = B.colwise() - b_mean, Wc = W.colwise() - w_mean;
-  const Eigen::Matrix3d H = Bc * Wc.transpose();  // sum b_i w_i^T
-  const Eigen::JacobiSVD<Eigen::Matrix3d> svd(H, Eigen::ComputeFullU | Eigen::ComputeFullV);
-  const Eigen::Matrix3d U = svd.matrixU(), V = svd.matrixV();
-  Eigen::Matrix3d D = Eigen::Matrix3d::Identity();
-  D(2, 2) = (V * U.transpose()).determinant() < 0.0 ? -1.0 : 1.0;  // a rotation, not a reflection
+  // Least-squares rotation and translation (Kabsch/Umeyama, a rotation, never a reflection).
+  const Eigen::Matrix4d T = Eigen::umeyama(B, W, false);
   RigidFit f;
-  f.R_world_body = V * D * U.transpose();
-  f.p_world_body_m = w_mean - f.R_world_body * b_mean;
+  f.R_world_body = T.topLeftCorner<3, 3>();
+  f.p_world_body_m = T.topRightCorner<3, 1>();
   const Eigen::Matrix3Xd r = (f.R_world_body * B).colwise() + f.p_world_body_m - W;
   f.residual_rms_m = std::sqrt(r.colwise().squaredNorm().sum() / static_cast<double>(n));
   f.markers_used = n;
   return f;
-}
-
-Eigen::Vector3d rotation_vector(const Eigen::Matrix3d& R) {
-  const Eigen::AngleAxisd aa(R);
-  return aa.axis() * aa.angle();
 }
 
 Twist twist_from_poses(const PoseTrack& track, double window_s) {
@@ -79,7 +72,7 @@ Twist twist_from_poses(const PoseTrack& track, double window_s) {
     Eigen::Vector3d p_mean = Eigen::Vector3d::Zero(), phi_mean = Eigen::Vector3d::Zero();
     std::vector<Eigen::Vector3d> phi(b - a);
     for (std::size_t j = a; j < b; ++j) {
-      phi[j - a] = rotation_vector(track.q_world_body[j].toRotationMatrix() * Ri_T);
+      phi[j - a] = so3::log(track.q_world_body[j].toRotationMatrix() * Ri_T);
       t_mean += track.t_s[j] - ti;
       p_mean += track.p_world_body_m[j];
       phi_mean += phi[j - a];

@@ -7,6 +7,7 @@
 #include "hil/format/csv.hpp"
 #include "hil/format/error.hpp"
 #include "hil/format/yaml.hpp"
+#include "hil/so3/so3.hpp"
 
 namespace hil::rig {
 
@@ -148,8 +149,7 @@ Trajectory read_trajectory(const std::string& path) {
       const std::size_t a = i == 0 ? 0 : i - 1, b = i + 1 < n ? i + 1 : n - 1;
       const double dt = tr.t[b] - tr.t[a];
       tr.kin[i].v_world_ee = (tr.kin[b].T_world_ee.translation() - tr.kin[a].T_world_ee.translation()) / dt;
-      const Eigen::AngleAxisd d(tr.kin[b].T_world_ee.linear() * tr.kin[a].T_world_ee.linear().transpose());
-      tr.kin[i].w_world_ee = d.axis() * d.angle() / dt;
+      tr.kin[i].w_world_ee = so3::log(Eigen::Matrix3d(tr.kin[b].T_world_ee.linear() * tr.kin[a].T_world_ee.linear().transpose())) / dt;
     }
   }
   return tr;

@@ -1,4 +1,5 @@
 #include "hil/diagnose/contact_family.hpp"
+#include "hil/so3/so3.hpp"
 
 #include <Eigen/Eigenvalues>
 #include <Eigen/SVD>
@@ -23,10 +24,9 @@ double compliance_scale(int i, int j) {
   return 1e-5;
 }
 
-Eigen::Isometry3d deflect(const Eigen::Isometry3d& T, const Vec6& d) {
+Eigen::Isometry3d deflect(const Eigen::Isometry3d& T, const Vector6d& d) {
   Eigen::Isometry3d D = Eigen::Isometry3d::Identity();
-  const double a = d.tail<3>().norm();
-  if (a > 0) D.linear() = Eigen::AngleAxisd(a, d.tail<3>() / a).toRotationMatrix();
+  D.linear() = so3::exp(d.tail<3>());
   D.translation() = d.head<3>();
   return T * D;
 }
@@ -69,10 +69,10 @@ std::string describe_extension(const std::string& n) {
   return "";
 }
 
-Vec6 plate_wrench_of(const Eigen::Isometry3d& T_world_fp, const Vec3& f, const Vec3& p) {
+Vector6d plate_wrench_of(const Eigen::Isometry3d& T_world_fp, const Vec3& f, const Vec3& p) {
   // The plate feels -f applied at p; moment about the plate origin, both in the plate frame.
   const Vec3 o = T_world_fp.translation();
-  Vec6 w;
+  Vector6d w;
   w.head<3>() = T_world_fp.linear().transpose() * (-f);
   w.tail<3>() = T_world_fp.linear().transpose() * (p - o).cross(-f);
   return w;
@@ -148,11 +148,11 @@ ContactData make_contact_data(const cid::Scene& scene, double v_tm, const std::v
   return d;
 }
 
-std::vector<Mat6> ContactFamily::all_basis() const {
-  std::vector<Mat6> b;
+std::vector<Matrix6d> ContactFamily::all_basis() const {
+  std::vector<Matrix6d> b;
   for (int i = 0; i < 6; ++i)
     for (int j = i; j < 6; ++j) {
-      Mat6 E = Mat6::Zero();
+      Matrix6d E = Matrix6d::Zero();
       E(i, j) = E(j, i) = compliance_scale(i, j);
       b.push_back(E);
     }
@@ -252,7 +252,7 @@ ContactFamily::ContactFamily(const ContactData& d, std::set<std::string> extensi
     basis_.clear();
     const Eigen::VectorXd sv = svd.singularValues();
     for (Eigen::Index i = 0; i < svd.matrixV().cols(); ++i) {
-      Mat6 B = Mat6::Zero();
+      Matrix6d B = Matrix6d::Zero();
       for (Eigen::Index j = 0; j < c0.size(); ++j) B += svd.matrixV()(j, i) * full[static_cast<std::size_t>(j)];
       const bool seen = i < sv.size() && i < 6 && sv(i) > 0.05 * sv(0) && basis_.size() == static_cast<std::size_t>(i);
       (seen ? basis_ : null_basis_).push_back(B);
@@ -273,7 +273,7 @@ ContactFamily::ContactFamily(const ContactData& d, std::set<std::string> extensi
     i_gain_ = static_cast<int>(nonlinear_.size());
     // The reference is the component with the largest measured signal: its gain is absorbed by K.
     Eigen::Index ref = 0;
-    Vec6 energy = Vec6::Zero();
+    Vector6d energy = Vector6d::Zero();
     for (int k : used) energy += d.obs.y.row(k).transpose().cwiseProduct(d.obs.weight).cwiseAbs2();
     energy.maxCoeff(&ref);
     gain_ref_ = static_cast<int>(ref);
@@ -415,7 +415,7 @@ bool ContactFamily::sample_contacts(std::size_t k, const cid::Kinematics& kin, c
     if (sc.bodies[b].on_end_effector) {
       const Eigen::Isometry3d T0 = cid::body_pose(sc.bodies[b], d_.kin[k].T_world_ee);
       shift_m[b] = (T[b].translation() - T0.translation()).norm();
-      turn_rad[b] = Eigen::AngleAxisd(T[b].linear() * T0.linear().transpose()).angle();
+      turn_rad[b] = so3::angle(T[b].linear() * T0.linear().transpose());
     }
     w.done[b].assign(pairs_->index[b].size(), 0);
     w.posed[b].resize(pairs_->index[b].size());
@@ -471,7 +471,7 @@ void ContactFamily::design(const Eigen::VectorXd& phi, Eigen::MatrixXd& A) const
   if (i_geo_ >= 0)
     for (std::size_t j = 0; j < d_.fit_uncertainties.size(); ++j)
       x(d_.fit_uncertainties[j]) += phi(i_geo_ + static_cast<Eigen::Index>(j));
-  Mat6 C = Mat6::Zero();
+  Matrix6d C = Matrix6d::Zero();
   if (i_cmp_ >= 0)
     for (std::size_t i = 0; i < basis_.size(); ++i) C += phi(i_cmp_ + static_cast<Eigen::Index>(i)) * basis_[i];
   if (!recompute) {
@@ -495,7 +495,7 @@ void ContactFamily::design(const Eigen::VectorXd& phi, Eigen::MatrixXd& A) const
       cid::Kinematics kin = tau != 0.0 ? kinematics_at(d_.obs.t_s[k] - tau) : d_.kin[k];
       if (i_cmp_ >= 0) {
         // The measured contact wrench on the held object, about the ee origin, in ee.
-        const Vec6 w_ee = cid::plate_to_object1(d_.obs.y.row(static_cast<Eigen::Index>(k)).transpose(), d_.scene.T_world_fp,
+        const Vector6d w_ee = cid::plate_to_object1(d_.obs.y.row(static_cast<Eigen::Index>(k)).transpose(), d_.scene.T_world_fp,
                                                kin.T_world_ee);
         kin.T_world_ee = deflect(kin.T_world_ee, C * w_ee);
       }
@@ -574,14 +574,14 @@ std::vector<Reported> ContactFamily::report(const Fit& f) const {
   return out;
 }
 
-double max_min_eigenvalue(const Mat6& C, const std::vector<Mat6>& free_directions, int iterations) {
-  Mat6 X = C;
-  Eigen::SelfAdjointEigenSolver<Mat6> es(X);
+double max_min_eigenvalue(const Matrix6d& C, const std::vector<Matrix6d>& free_directions, int iterations) {
+  Matrix6d X = C;
+  Eigen::SelfAdjointEigenSolver<Matrix6d> es(X);
   double best = es.eigenvalues()(0);
   if (free_directions.empty()) return best;
   const double step0 = std::max(C.norm(), 1e-12);
   for (int it = 0; it < iterations && best < 0; ++it) {
-    const Vec6 u = es.eigenvectors().col(0);
+    const Vector6d u = es.eigenvectors().col(0);
     Eigen::VectorXd g(static_cast<Eigen::Index>(free_directions.size()));
     for (std::size_t k = 0; k < free_directions.size(); ++k) g(static_cast<Eigen::Index>(k)) = u.dot(free_directions[k] * u);
     const double gn = g.norm();
@@ -603,10 +603,10 @@ std::string ContactFamily::check(const Fit& f) const {
   }
   if (i_cmp_ >= 0 && !basis_.empty()) {
     // C in balanced units (µm/N, 0.1 mrad/(N m)): positive semi-definiteness is invariant under it.
-    Vec6 s;
+    Vector6d s;
     s << 1e3, 1e3, 1e3, 1e2, 1e2, 1e2;
     const Eigen::Index p = static_cast<Eigen::Index>(linear_.size()), r = static_cast<Eigen::Index>(basis_.size());
-    Mat6 C = Mat6::Zero(), V = Mat6::Zero();
+    Matrix6d C = Matrix6d::Zero(), V = Matrix6d::Zero();
     for (Eigen::Index m = 0; m < r; ++m) C += f.phi(i_cmp_ + m) * basis_[static_cast<std::size_t>(m)];
     for (int i = 0; i < 6; ++i)
       for (int j = 0; j < 6; ++j) {
@@ -614,12 +614,12 @@ std::string ContactFamily::check(const Fit& f) const {
         for (Eigen::Index m = 0; m < r; ++m) b(m) = basis_[static_cast<std::size_t>(m)](i, j);
         V(i, j) = std::sqrt(std::max(0.0, b.dot(f.cov.block(p + i_cmp_, p + i_cmp_, r, r) * b)));
       }
-    const Mat6 Cs = s.asDiagonal() * C * s.asDiagonal(), Vs = s.asDiagonal() * V * s.asDiagonal();
+    const Matrix6d Cs = s.asDiagonal() * C * s.asDiagonal(), Vs = s.asDiagonal() * V * s.asDiagonal();
     // The fit fixes C only along the identifiable directions; the others are free. It is physical
     // when some compliance with the fitted coordinates is positive semi-definite (within two
     // standard deviations): max over the free coordinates z of λ_min(C + Σ z_k N_k), a concave
     // function of z, by subgradient ascent (the gradient is u^T N_k u, u the lowest eigenvector).
-    std::vector<Mat6> Ns;
+    std::vector<Matrix6d> Ns;
     for (const auto& N : null_basis_) Ns.push_back(s.asDiagonal() * N * s.asDiagonal());
     if (max_min_eigenvalue(Cs, Ns) < -2.0 * Vs.norm()) return "no positive semi-definite compliance has the fitted coordinates";
   }
@@ -697,11 +697,11 @@ std::vector<cid::SimulatedSample> simulate_with_effects(const cid::Scene& s, con
   cid::MindistWorkspace ws;
   std::vector<cid::ContactPoint> cs;
   const std::size_t n = truth.size();
-  std::vector<Vec6> w(n);
+  std::vector<Vector6d> w(n);
   std::vector<int> count(n);
   auto wrench = [&](const cid::Kinematics& k) {
     cid::mindist(s, k, x, m.v_tm, cs, ws);
-    Vec6 out = Vec6::Zero();
+    Vector6d out = Vector6d::Zero();
     for (const auto& c : cs) {
       const double de = e.stiffness_exponent == 1.0 ? c.delta
                                                     : e.delta_ref_m * std::pow(c.delta / e.delta_ref_m, e.stiffness_exponent);
@@ -719,7 +719,7 @@ std::vector<cid::SimulatedSample> simulate_with_effects(const cid::Scene& s, con
     if (!e.compliance.isZero()) {
       // The deflected pose and its load agree: fixed point T = T_cmd Exp(C w_ee(T)).
       for (int it = 0; it < 50; ++it) {
-        const Vec6 w_ee = cid::plate_to_object1(w[k], s.T_world_fp, kin.T_world_ee);
+        const Vector6d w_ee = cid::plate_to_object1(w[k], s.T_world_fp, kin.T_world_ee);
         const Eigen::Isometry3d T = deflect(truth[k].T_world_ee, e.compliance * w_ee);
         const double change = (T.matrix() - kin.T_world_ee.matrix()).norm();
         kin.T_world_ee = T;
@@ -735,10 +735,10 @@ std::vector<cid::SimulatedSample> simulate_with_effects(const cid::Scene& s, con
   for (std::size_t k = 0; k < n; ++k) {
     auto& smp = out[k];
     smp.contacts = count[k];
-    Vec6 wt = w[k];
+    Vector6d wt = w[k];
     if (e.time_offset_s != 0)
       interpolate(t_s, t_s[k] - e.time_offset_s, [&](std::size_t j0, std::size_t j1, double a) { wt = (1 - a) * w[j0] + a * w[j1]; });
-    wt = wt.cwiseProduct(Vec6::Ones() + e.sensor_gain) + e.sensor_bias;
+    wt = wt.cwiseProduct(Vector6d::Ones() + e.sensor_gain) + e.sensor_bias;
     smp.w_fp_true = wt;
     smp.kin = truth[k];
     for (int i = 0; i < 3; ++i) {

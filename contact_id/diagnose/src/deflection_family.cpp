@@ -1,4 +1,5 @@
 #include "hil/diagnose/deflection_family.hpp"
+#include "hil/so3/so3.hpp"
 
 #include <Eigen/Eigenvalues>
 #include <Eigen/QR>
@@ -30,10 +31,9 @@ DeflectionData make_deflection_data(const std::vector<double>& t_s, const std::v
   for (std::size_t k = 0; k < n; ++k) {
     const auto& T = kin[k].T_world_ee;
     if (!T.matrix().allFinite() || !w_fp[k].allFinite()) throw std::runtime_error("sample " + std::to_string(k) + ": non-finite value");
-    const Eigen::AngleAxisd aa(T.linear() * R0.transpose());
     const auto i = static_cast<Eigen::Index>(k);
     d.obs.y.row(i).head<3>() = (T.translation() - p0).transpose();
-    d.obs.y.row(i).tail<3>() = (aa.angle() * aa.axis()).transpose();
+    d.obs.y.row(i).tail<3>() = so3::log(Eigen::Matrix3d(T.linear() * R0.transpose())).transpose();
     // The load that deflects a body standing on the plate is what it pushes onto its support:
     // in equilibrium the spring (suspension, wheels) passes it on to the plate, so the load is the
     // plate's wrench itself, moved to p_0 in world axes.

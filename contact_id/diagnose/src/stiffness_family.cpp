@@ -10,8 +10,6 @@ namespace hil::diagnose {
 
 namespace {
 
-using Mat6 = Eigen::Matrix<double, 6, 6>;
-using Vec6 = Eigen::Matrix<double, 6, 1>;
 
 /// Link directions kept: singular value >= this fraction of the largest (columns at unit norm, then
 /// the joints' part projected out), at most kMaxLinkDirections of them. Weaker directions are
@@ -38,7 +36,7 @@ StiffnessData make_stiffness_data(const calibration::VjmModel& model, const std:
   d.link_ops.resize(n);
   for (int j = 1; j <= dof; ++j) d.joint_names.push_back(model.springs()[static_cast<std::size_t>(model.joint_spring(j))].name);
   // Every symmetric entry of every link spring: M_p = J_s E_p J_sᵀ.
-  std::vector<std::vector<Mat6>> raw(n);
+  std::vector<std::vector<Matrix6d>> raw(n);
   calibration::VjmWorkspace ws;
   for (std::size_t k = 0; k < n; ++k) {
     const auto& m = rows[k];
@@ -54,14 +52,14 @@ StiffnessData make_stiffness_data(const calibration::VjmModel& model, const std:
     d.config.push_back(m.config);
     model.jacobians(m.q_rad, ws);
     for (int j = 1; j <= dof; ++j) {
-      const Vec6 c = ws.J[static_cast<std::size_t>(model.joint_spring(j))].col(0);
+      const Vector6d c = ws.J[static_cast<std::size_t>(model.joint_spring(j))].col(0);
       d.joint_ops[k].push_back(c * c.transpose());
     }
     for (int l = 0; l <= dof; ++l) {
-      const Mat6& J = ws.J[static_cast<std::size_t>(model.link_spring(l))];
+      const Matrix6d& J = ws.J[static_cast<std::size_t>(model.link_spring(l))];
       for (int r = 0; r < 6; ++r)
         for (int c = r; c < 6; ++c) {
-          Mat6 M = J.col(r) * J.col(c).transpose();
+          Matrix6d M = J.col(r) * J.col(c).transpose();
           if (r != c) M += J.col(c) * J.col(r).transpose();
           raw[k].push_back(M);
         }
@@ -71,7 +69,7 @@ StiffnessData make_stiffness_data(const calibration::VjmModel& model, const std:
   const double ts = std::max(d.obs.y.leftCols(3).cwiseAbs().maxCoeff(), 1e-12);
   const double rs = std::max(d.obs.y.rightCols(3).cwiseAbs().maxCoeff(), 1e-12);
   d.obs.weight << 1 / ts, 1 / ts, 1 / ts, 1 / rs, 1 / rs, 1 / rs;
-  Vec6 rms = Vec6::Zero();
+  Vector6d rms = Vector6d::Zero();
   for (const auto& w : d.load) rms += w.cwiseAbs2();
   rms.head<3>().maxCoeff(&d.gain_reference);  // the force component with the most load
 
@@ -104,7 +102,7 @@ StiffnessData make_stiffness_data(const calibration::VjmModel& model, const std:
     // Scaled so that a unit parameter moves the weighted prediction by about one unit.
     const double unit = 1.0 / s(r);
     for (std::size_t k = 0; k < n; ++k) {
-      Mat6 M = Mat6::Zero();
+      Matrix6d M = Matrix6d::Zero();
       for (Eigen::Index p = 0; p < P; ++p) M += v(p) * raw[k][static_cast<std::size_t>(p)];
       d.link_ops[k].push_back(unit * M);
     }
@@ -136,7 +134,7 @@ StiffnessFamily::StiffnessFamily(const StiffnessData& d, std::set<std::string> e
   }
   if (ext_.count("load_offset")) {
     i_offset_ = static_cast<int>(nonlinear_.size());
-    Vec6 rms = Vec6::Zero();
+    Vector6d rms = Vector6d::Zero();
     for (const auto& w : d.load) rms += w.cwiseAbs2();
     rms = (rms / static_cast<double>(std::max<std::size_t>(1, d.load.size()))).cwiseSqrt();
     for (int c = 0; c < 6; ++c)
@@ -155,7 +153,7 @@ std::string StiffnessFamily::name() const {
 void StiffnessFamily::design(const Eigen::VectorXd& phi, Eigen::MatrixXd& A) const {
   const std::size_t n = d_.obs.size();
   A.setZero(static_cast<Eigen::Index>(6 * n), static_cast<Eigen::Index>(linear_.size()));
-  Vec6 gain = Vec6::Ones(), offset = Vec6::Zero();
+  Vector6d gain = Vector6d::Ones(), offset = Vector6d::Zero();
   if (i_gain_ >= 0) {
     Eigen::Index g = i_gain_;
     for (int c = 0; c < 6; ++c)
@@ -165,7 +163,7 @@ void StiffnessFamily::design(const Eigen::VectorXd& phi, Eigen::MatrixXd& A) con
   const auto nj = static_cast<Eigen::Index>(d_.joint_names.size());
   for (std::size_t k = 0; k < n; ++k) {
     const auto r0 = static_cast<Eigen::Index>(6 * k);
-    const Vec6 w = gain.cwiseProduct(d_.load[k]) + offset;  // the load the robot really carried
+    const Vector6d w = gain.cwiseProduct(d_.load[k]) + offset;  // the load the robot really carried
     for (Eigen::Index j = 0; j < nj; ++j) A.block(r0, j, 6, 1) = d_.joint_ops[k][static_cast<std::size_t>(j)] * w;
     if (links_)
       for (std::size_t i = 0; i < d_.link_ops[k].size(); ++i)

@@ -51,7 +51,7 @@ int main(int argc, char** argv) try {
   k.T_world_ee = Eigen::Translation3d(0.33, 0.33, -0.0125) * Eigen::Isometry3d::Identity();
   ci::MindistWorkspace ws;
   std::vector<ci::ContactPoint> contacts;
-  const ci::Vec6 w = ci::plate_wrench(scene, model, scene.design(), k, ws, contacts);
+  const ci::Vector6d w = ci::plate_wrench(scene, model, scene.design(), k, ws, contacts);
   std::printf("contacts %zu\n", contacts.size());
   for (const auto& p : contacts)
     std::printf("contact delta %.6g point %.6g %.6g %.6g normal %.6g %.6g %.6g\n", p.delta, p.point.x(), p.point.y(),

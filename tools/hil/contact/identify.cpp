@@ -41,14 +41,14 @@ nlohmann::json num_or_null(double v) { return std::isfinite(v) ? nlohmann::json(
 
 }  // namespace
 
-std::vector<cid::Vec6> model_plate_wrenches(const cid::ContactProblem& p, const Eigen::VectorXd& x, const Eigen::Vector2d& theta,
+std::vector<cid::Vector6d> model_plate_wrenches(const cid::ContactProblem& p, const Eigen::VectorXd& x, const Eigen::Vector2d& theta,
                                              std::vector<int>& counts) {
   Eigen::MatrixX2d A;
   p.regressor(x, A, &counts);
   Eigen::Vector2d th = theta;
   if (!std::isfinite(th[1])) th[1] = 0.0;  // μ not identifiable: all contacts stick, the column is zero
   const Eigen::VectorXd w = (A * th).cwiseQuotient(p.weights());
-  std::vector<cid::Vec6> out;
+  std::vector<cid::Vector6d> out;
   for (std::size_t a = 0; a < p.used().size(); ++a) {
     const auto& m = p.data()[static_cast<std::size_t>(p.used()[a])];
     const Eigen::Isometry3d T = cid::body_pose(p.scene().bodies[0], m.kin.T_world_ee);
@@ -257,7 +257,7 @@ void write_report(const std::string& dir, const std::string& run_name, const cid
   for (int k : p.used()) t.push_back(p.data()[static_cast<std::size_t>(k)].t_s);
   std::vector<int> n_nom, n_geo;
   const auto w_nom = model_plate_wrenches(p, p.scene().design(), r.nominal.theta, n_nom);
-  std::vector<cid::Vec6> w_geo;
+  std::vector<cid::Vector6d> w_geo;
   if (r.geometric) w_geo = model_plate_wrenches(p, r.geometric->x, r.geometric->theta.theta, n_geo);
 
   std::ostringstream summary;

@@ -39,7 +39,7 @@ IdentifyResult identify(const contact_id::ContactProblem& p, const IdentifyOptio
 contact_id::ContactProblem problem_from_run(const format::Run& run);
 /// The model's plate wrench (Φ θ at geometry x, mapped to the force-plate frame; N, N m) for every
 /// sample the problem uses, with each sample's contact count in `counts`.
-std::vector<contact_id::Vec6> model_plate_wrenches(const contact_id::ContactProblem& p, const Eigen::VectorXd& x,
+std::vector<contact_id::Vector6d> model_plate_wrenches(const contact_id::ContactProblem& p, const Eigen::VectorXd& x,
                                                    const Eigen::Vector2d& theta, std::vector<int>& counts);
 void print(std::ostream& out, const contact_id::ContactProblem& p, const IdentifyResult& r);
 nlohmann::json to_json(const contact_id::ContactProblem& p, const IdentifyResult& r);

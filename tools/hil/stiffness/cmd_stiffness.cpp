@@ -15,6 +15,7 @@
 #include "hil/calibration/online.hpp"
 #include "hil/dds/topics.hpp"
 #include "hil/format/error.hpp"
+#include "hil/so3/so3.hpp"
 #include "stiffness_io.hpp"
 #include "stiffness_worker.hpp"
 
@@ -176,9 +177,8 @@ int predict(const std::string& model_path, const std::string& data_path, const s
       const hc::Vector6d t = mf.model.deflection(mf.k, m.q_rad, m.w_world);
       Eigen::Isometry3d Tc = T;
       Tc.translation() -= t.head<3>();
-      if (t.tail<3>().norm() > 0) Tc.linear() = Eigen::AngleAxisd(t.tail<3>().norm(), -t.tail<3>().normalized()).toRotationMatrix() * T.linear();
-      const Eigen::AngleAxisd aa(T.linear()), aac(Tc.linear());
-      const Eigen::Vector3d rv = aa.angle() * aa.axis(), rvc = aac.angle() * aac.axis();
+      Tc.linear() = so3::exp(-t.tail<3>()) * T.linear();
+      const Eigen::Vector3d rv = so3::log(Eigen::Matrix3d(T.linear())), rvc = so3::log(Eigen::Matrix3d(Tc.linear()));
       const Eigen::VectorXd qc = mf.model.compensate(mf.k, m.q_rad, m.w_world);
       os << fmt::format(",{:.9f},{:.9f},{:.9f},{:.9f},{:.9f},{:.9f}", T.translation().x(), T.translation().y(), T.translation().z(), rv.x(),
                         rv.y(), rv.z());

@@ -5,9 +5,11 @@
 #include <Eigen/Geometry>
 #include <cstdint>
 
+#include "hil/so3/so3.hpp"
+
 namespace hil::acquisition {
 
-using Vector6d = Eigen::Matrix<double, 6, 1>;
+using hil::Vector6d;
 
 /// Quality bits, identical to hil_msgs::msg::QUALITY_* on the bus and the recorder's `quality` column.
 enum Quality : std::uint32_t {

@@ -12,10 +12,12 @@
 #include <string>
 #include <vector>
 
+#include "hil/so3/so3.hpp"
+
 namespace hil::calibration {
 
-using Vector6d = Eigen::Matrix<double, 6, 1>;
-using Matrix6d = Eigen::Matrix<double, 6, 6>;
+using hil::Matrix6d;
+using hil::Vector6d;
 
 enum class DhConvention {
   standard,  ///< Denavit-Hartenberg 1955: T_{i-1,i} = Rz(θ) Tz(d) Tx(a) Rx(α); joint i moves about z_{i-1}

@@ -24,7 +24,7 @@ namespace hil::contact_id {
 struct Measurement {
   double t_s = 0.0;
   Kinematics kin;
-  Vec6 w_fp = Vec6::Zero();
+  Vector6d w_fp = Vector6d::Zero();
 };
 
 struct ProblemOptions {
@@ -57,7 +57,7 @@ class ContactProblem {
   double moment_scale() const { return m_scale_; }
   double v_tm() const { return opt_.v_tm; }
   /// The measured contact wrench on object 1 (o1 frame) of used sample a.
-  const Vec6& measured(std::size_t a) const { return y_o1_[a]; }
+  const Vector6d& measured(std::size_t a) const { return y_o1_[a]; }
 
   /// W^{-1/2} Φ^T stacked over the used samples at x. `contacts` (optional): contact points per used sample.
   void regressor(const Eigen::VectorXd& x, Eigen::MatrixX2d& A, std::vector<int>* contacts = nullptr) const;
@@ -95,7 +95,7 @@ class ContactProblem {
   std::vector<int> fixed_contacts_;
   std::vector<VarPair> var_;
   std::vector<Eigen::Isometry3d> T_o1_, T_o2_;  ///< per used sample (T_o2_ empty when object 2 is fixed)
-  std::vector<Vec6> y_o1_;
+  std::vector<Vector6d> y_o1_;
   std::vector<bool> touched_;
   std::array<std::vector<std::pair<int, int>>, 2> index_;  ///< flattened polyhedron -> (feature, polyhedron)
   Eigen::VectorXd y_, w_;
@@ -142,7 +142,7 @@ LinearEstimate global_estimate(const ContactProblem& p, const Eigen::VectorXd& x
 class RunningLeastSquares {
  public:
   /// Adds one sample's weighted rows (A_k θ ≈ b_k).
-  void add(const Regressor& A, const Vec6& b);
+  void add(const Regressor& A, const Vector6d& b);
   std::size_t samples() const { return n_; }
   /// The estimate so far; mu_identifiable false until some contact slid. Valid once samples() > 0.
   LinearEstimate estimate() const;

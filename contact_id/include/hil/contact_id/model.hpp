@@ -17,10 +17,11 @@
 
 #include "hil/contact_id/geometry.hpp"
 #include "hil/contact_id/mindist.hpp"
+#include "hil/so3/so3.hpp"
 
 namespace hil::contact_id {
 
-using Vec6 = Eigen::Matrix<double, 6, 1>;
+using hil::Vector6d;
 using Regressor = Eigen::Matrix<double, 6, 2>;  ///< Φ^T of one sample (6 wrench rows, columns K and μK)
 
 /// The two objects, the uncertainties on their features and the force-plate frame.
@@ -95,9 +96,9 @@ Regressor regressor(const std::vector<ContactPoint>& contacts, const Eigen::Isom
 Regressor regressor_row(const ContactPoint& c, const Eigen::Isometry3d& T_world_o1);
 
 /// The plate's wrench (fp frame, about the fp origin) -> the wrench of object 2 on object 1 (o1, about o1).
-Vec6 plate_to_object1(const Vec6& w_fp, const Eigen::Isometry3d& T_world_fp, const Eigen::Isometry3d& T_world_o1);
+Vector6d plate_to_object1(const Vector6d& w_fp, const Eigen::Isometry3d& T_world_fp, const Eigen::Isometry3d& T_world_o1);
 /// The inverse of plate_to_object1.
-Vec6 object1_to_plate(const Vec6& w_o1, const Eigen::Isometry3d& T_world_fp, const Eigen::Isometry3d& T_world_o1);
+Vector6d object1_to_plate(const Vector6d& w_o1, const Eigen::Isometry3d& T_world_fp, const Eigen::Isometry3d& T_world_o1);
 
 /// Sensor model of a simulation: quantisation steps (0 = none) and Gaussian noise std.
 struct SensorModel {
@@ -113,8 +114,8 @@ struct SensorModel {
 /// The simulated measurement of one sample.
 struct SimulatedSample {
   Kinematics kin;   ///< as measured (quantised)
-  Vec6 w_fp;        ///< plate wrench as measured (quantised, noisy)
-  Vec6 w_fp_true;   ///< noise-free plate wrench
+  Vector6d w_fp;        ///< plate wrench as measured (quantised, noisy)
+  Vector6d w_fp_true;   ///< noise-free plate wrench
   int contacts = 0;
 };
 
@@ -124,7 +125,7 @@ std::vector<SimulatedSample> simulate(const Scene& s, const ContactModel& m, con
                                       const std::vector<Kinematics>& truth, const SensorModel& sensor);
 
 /// The noise-free plate wrench of one sample.
-Vec6 plate_wrench(const Scene& s, const ContactModel& m, const Eigen::VectorXd& x, const Kinematics& k,
+Vector6d plate_wrench(const Scene& s, const ContactModel& m, const Eigen::VectorXd& x, const Kinematics& k,
                   MindistWorkspace& ws, std::vector<ContactPoint>& contacts);
 
 }  // namespace hil::contact_id

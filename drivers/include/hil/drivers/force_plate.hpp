@@ -16,11 +16,12 @@
 #include "hil/drivers/ati_protocol.hpp"
 #include "hil/drivers/can_channel.hpp"
 #include "hil/drivers/status.hpp"
+#include "hil/so3/so3.hpp"
 
 namespace hil::drivers {
 
-using Vector6d = Eigen::Matrix<double, 6, 1>;
-using Matrix6d = Eigen::Matrix<double, 6, 6>;
+using hil::Matrix6d;
+using hil::Vector6d;
 
 enum class WrenchComponent : std::uint8_t { fx, fy, fz, mx, my, mz, status };
 /// "fx".."mz", "status". \throws ConfigError(field) on anything else.

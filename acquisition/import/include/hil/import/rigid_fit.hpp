@@ -30,9 +30,6 @@ std::optional<RigidFit> fit_rigid_body(const Eigen::Matrix3Xd& markers_body_m, c
 /// Spread of points across their best line, relative to their spread along it (0 = collinear).
 double planarity_ratio(const Eigen::Matrix3Xd& points);
 
-/// Rotation vector (axis * angle, rad) of R, angle in [0, pi].
-Eigen::Vector3d rotation_vector(const Eigen::Matrix3d& R);
-
 /// A pose over time and its twist.
 struct PoseTrack {
   std::vector<double> t_s;  ///< strictly increasing

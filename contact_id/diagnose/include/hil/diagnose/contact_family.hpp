@@ -36,8 +36,8 @@
 namespace hil::diagnose {
 
 namespace cid = hil::contact_id;
-using Vec6 = Eigen::Matrix<double, 6, 1>;
-using Mat6 = Eigen::Matrix<double, 6, 6>;
+using hil::Matrix6d;
+using hil::Vector6d;
 
 /// The candidate causes of the contact family, in the order they are reported.
 const std::vector<std::string>& contact_extensions();
@@ -57,7 +57,7 @@ struct ContactData {
   std::size_t samples_in_contact = 0;
   /// Per plate component, the sensor's quantisation step seen in the data (0: not quantised). A
   /// constant offset cannot be known better than step/√12, whatever the number of samples.
-  Vec6 resolution = Vec6::Zero();
+  Vector6d resolution = Vector6d::Zero();
 };
 
 /// \param force_scale_n, moment_scale_nm the weights' scales (0: the largest measured component).
@@ -87,7 +87,7 @@ class ContactFamily : public Model {
   std::unique_ptr<Model> restricted(const std::vector<int>& train) const override;
   const std::set<std::string>& extensions() const { return ext_; }
   /// The compliance directions (21 symmetric coordinates -> 6x6) kept for robot_compliance.
-  const std::vector<Mat6>& compliance_basis() const { return basis_; }
+  const std::vector<Matrix6d>& compliance_basis() const { return basis_; }
 
  private:
   struct PairTable;
@@ -98,13 +98,13 @@ class ContactFamily : public Model {
   const ContactData& d_;
   std::set<std::string> ext_;
   std::vector<Param> linear_, nonlinear_;
-  std::vector<Mat6> basis_;
-  std::vector<Mat6> null_basis_;  ///< the symmetric directions the data cannot see (the rest of the 21)
+  std::vector<Matrix6d> basis_;
+  std::vector<Matrix6d> null_basis_;  ///< the symmetric directions the data cannot see (the rest of the 21)
   int gain_ref_ = 2;
   // offsets into φ
   int i_geo_ = -1, i_cmp_ = -1, i_exp_ = -1, i_tau_ = -1, i_gain_ = -1;
   int j_visc_ = -1, j_damp_ = -1, j_bias_ = -1;
-  std::vector<Mat6> all_basis() const;
+  std::vector<Matrix6d> all_basis() const;
   /// The measured kinematics interpolated at time t (slerp; held at the ends).
   cid::Kinematics kinematics_at(double t) const;
 
@@ -135,7 +135,7 @@ class ContactFamily : public Model {
   struct Base {
     bool valid = false;
     double tau_s = 0.0;
-    Mat6 C = Mat6::Zero();
+    Matrix6d C = Matrix6d::Zero();
     std::array<std::vector<Eigen::Isometry3d>, 2> T_body_feature;
     std::vector<std::vector<cid::ContactPoint>> contacts;  ///< per sample
     std::vector<bool> full;                                ///< per sample: by full mindist (not from the table)
@@ -160,11 +160,11 @@ class ContactFamily : public Model {
 /// max over z of the smallest eigenvalue of C + Σ z_k N_k (symmetric C, N_k): whether some matrix
 /// that agrees with C outside the free directions N_k is positive semi-definite (result >= 0).
 /// Subgradient ascent from z = 0 (the function is concave); stops once it is >= 0.
-double max_min_eigenvalue(const Mat6& C, const std::vector<Mat6>& free_directions, int iterations = 2000);
+double max_min_eigenvalue(const Matrix6d& C, const std::vector<Matrix6d>& free_directions, int iterations = 2000);
 
 /// The wrench on the plate (fp frame, about the fp origin) of a force f (world) applied to object 1
 /// at the point p (world): the plate feels -f at p.
-Vec6 plate_wrench_of(const Eigen::Isometry3d& T_world_fp, const Eigen::Vector3d& f_world, const Eigen::Vector3d& p_world);
+Vector6d plate_wrench_of(const Eigen::Isometry3d& T_world_fp, const Eigen::Vector3d& f_world, const Eigen::Vector3d& p_world);
 
 // ---------------------------------------------------------------------------------------------
 // The hidden-effect generator.
@@ -172,10 +172,10 @@ Vec6 plate_wrench_of(const Eigen::Isometry3d& T_world_fp, const Eigen::Vector3d&
 /// Effects injected into a simulation (zero / one = absent). Same parameterisations as above.
 struct Effects {
   std::map<std::string, double> geometric;   ///< x_u true values by name (others at design)
-  Mat6 compliance = Mat6::Zero();            ///< robot compliance C (ee frame; m/N, rad/N, rad/(N m))
+  Matrix6d compliance = Matrix6d::Zero();            ///< robot compliance C (ee frame; m/N, rad/N, rad/(N m))
   double time_offset_s = 0.0;
-  Vec6 sensor_bias = Vec6::Zero();
-  Vec6 sensor_gain = Vec6::Zero();           ///< γ per component
+  Vector6d sensor_bias = Vector6d::Zero();
+  Vector6d sensor_gain = Vector6d::Zero();           ///< γ per component
   double viscous_n_s_per_m = 0.0;
   double damping_n_s_per_m = 0.0;
   bool damping_friction = false;             ///< the friction bound follows the total normal force
