@@ -162,10 +162,10 @@ std::vector<Matrix6d> ContactFamily::all_basis() const {
 ContactFamily::ContactFamily(const ContactData& d, std::set<std::string> extensions)
     : ContactFamily(d, std::move(extensions), std::vector<int>{}) {}
 
-std::unique_ptr<Model> ContactFamily::restricted(const std::vector<int>& train) const {
+std::unique_ptr<ModelFamily> ContactFamily::restricted(const std::vector<int>& train) const {
   if (!has("robot_compliance") && !has("sensor_gain")) return nullptr;
   // The pair table depends on the design geometry and the measured poses only: shared.
-  return std::unique_ptr<Model>(new ContactFamily(d_, ext_, train, pairs_));
+  return std::unique_ptr<ModelFamily>(new ContactFamily(d_, ext_, train, pairs_));
 }
 
 ContactFamily::ContactFamily(const ContactData& d, std::set<std::string> extensions, const std::vector<int>& samples)

@@ -298,7 +298,7 @@ void DeflectionFamily::locate(const std::vector<int>& train) {
   if (train.size() < 2) throw std::runtime_error("rest_change: too few samples to locate events");
   const auto& t = d_.obs.t_s;
   // The weighted residual on `train` of the model's columns before the steps.
-  auto search = [&](const Model& m, const Fit& f) {
+  auto search = [&](const ModelFamily& m, const Fit& f) {
     Eigen::MatrixXd A;
     m.design(f.phi, A);
     const Eigen::Index p = static_cast<Eigen::Index>(first_step_);
@@ -334,15 +334,15 @@ void DeflectionFamily::locate(const std::vector<int>& train) {
 }
 
 std::vector<Reported> DeflectionFamily::report(const Fit& f) const {
-  std::vector<Reported> out = Model::report(f);
+  std::vector<Reported> out = ModelFamily::report(f);
   for (auto& r : out)
     if (r.name.rfind("step_", 0) == 0) r.fold_comparable = false;
   return out;
 }
 
-std::unique_ptr<Model> DeflectionFamily::restricted(const std::vector<int>& train) const {
+std::unique_ptr<ModelFamily> DeflectionFamily::restricted(const std::vector<int>& train) const {
   if (!ext_.count("rest_change")) return nullptr;
-  return std::unique_ptr<Model>(new DeflectionFamily(d_, ext_, train));
+  return std::unique_ptr<ModelFamily>(new DeflectionFamily(d_, ext_, train));
 }
 
 std::string DeflectionFamily::check(const Fit& f) const {

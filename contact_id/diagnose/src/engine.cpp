@@ -16,11 +16,11 @@
 
 namespace hil::diagnose {
 
-std::vector<Eigen::VectorXd> Model::starts() const {
+std::vector<Eigen::VectorXd> ModelFamily::starts() const {
   return {Eigen::VectorXd::Zero(static_cast<Eigen::Index>(nonlinear().size()))};
 }
 
-std::vector<Reported> Model::report(const Fit& f) const {
+std::vector<Reported> ModelFamily::report(const Fit& f) const {
   std::vector<Reported> out;
   const auto lin = linear();
   const auto nl = nonlinear();
@@ -72,7 +72,7 @@ struct Projected {
 /// A(φ) is deterministic, so a cached design is the one a new evaluation would give.
 class DesignCache {
  public:
-  DesignCache(const Model& m, std::size_t samples) : m_(m), rows_(static_cast<Eigen::Index>(6 * samples)) {}
+  DesignCache(const ModelFamily& m, std::size_t samples) : m_(m), rows_(static_cast<Eigen::Index>(6 * samples)) {}
   /// A(φ); `keep`: hold it for the rest of the cache's life.
   const Eigen::MatrixXd& get(const Eigen::VectorXd& phi, bool keep = false) {
     const Key key(phi.data(), phi.data() + phi.size());
@@ -101,7 +101,7 @@ class DesignCache {
  private:
   using Key = std::vector<double>;
   static constexpr std::size_t kRecent = 24;  // an LM iteration: q columns and up to 12 trials
-  const Model& m_;
+  const ModelFamily& m_;
   Eigen::Index rows_;
   std::map<Key, Eigen::MatrixXd> kept_;
   std::list<std::pair<Key, Eigen::MatrixXd>> recent_;
@@ -156,7 +156,7 @@ double fd_step(const Param& q, double value) {
 }
 
 /// What the model reports, without the parameters that were fixed as not identifiable.
-std::vector<Reported> reported_of(const Model& m, const Fit& f) {
+std::vector<Reported> reported_of(const ModelFamily& m, const Fit& f) {
   std::vector<Reported> out = m.report(f);
   out.erase(std::remove_if(out.begin(), out.end(),
                            [&](const Reported& r) {
@@ -251,7 +251,7 @@ std::vector<Unidentifiable> unidentifiable_columns(const Eigen::MatrixXd& J, con
 /// start with the lowest training cost wins, so the estimate is still its own training data's
 /// optimum). `statistics`: identifiability, covariance, rank, reported parameters and validity (a
 /// fold's prediction needs none of them). `fixed`: parameters held at their nominal value (0).
-Fit fit_with(const Model& m, const Observations& obs, const std::vector<int>& train, const FitOptions& o, DesignCache& cache,
+Fit fit_with(const ModelFamily& m, const Observations& obs, const std::vector<int>& train, const FitOptions& o, DesignCache& cache,
              const Eigen::VectorXd* warm, bool statistics, const std::vector<bool>* fixed_in = nullptr) {
   if (train.empty()) throw std::runtime_error(m.name() + ": no samples to fit");
   const auto lin = m.linear();
@@ -467,12 +467,12 @@ Eigen::MatrixXd predict_with(const Eigen::MatrixXd& A, const Fit& f, std::size_t
 
 }  // namespace
 
-Fit fit(const Model& m, const Observations& obs, const std::vector<int>& train, const FitOptions& o) {
+Fit fit(const ModelFamily& m, const Observations& obs, const std::vector<int>& train, const FitOptions& o) {
   DesignCache cache(m, obs.size());
   return fit_with(m, obs, train, o, cache, nullptr, true);
 }
 
-Eigen::MatrixXd predict(const Model& m, const Fit& f, std::size_t samples) {
+Eigen::MatrixXd predict(const ModelFamily& m, const Fit& f, std::size_t samples) {
   Eigen::MatrixXd A;
   m.design(f.phi, A);
   return predict_with(A, f, samples);
@@ -509,7 +509,7 @@ Eigen::VectorXd mapped(const std::vector<Param>& nl, const std::vector<std::stri
 }
 
 /// `fixed` (over `from`'s linear then nonlinear parameters) carried over by name to `to`'s parameters.
-std::vector<bool> fixed_by_name(const Model& from, const std::vector<bool>& fixed, const Model& to) {
+std::vector<bool> fixed_by_name(const ModelFamily& from, const std::vector<bool>& fixed, const ModelFamily& to) {
   std::vector<Param> a = from.linear(), b = to.linear();
   const auto an = from.nonlinear(), bn = to.nonlinear();
   a.insert(a.end(), an.begin(), an.end());
@@ -567,7 +567,7 @@ void honest_intervals(Score& s, const std::map<std::string, std::vector<double>>
 
 }  // namespace
 
-Score score(const Model& m, const Observations& obs, const CvOptions& o, const Score* extends) {
+Score score(const ModelFamily& m, const Observations& obs, const CvOptions& o, const Score* extends) {
   const auto t0 = std::chrono::steady_clock::now();
   Score s;
   s.model = m.name();
@@ -604,8 +604,8 @@ Score score(const Model& m, const Observations& obs, const CvOptions& o, const S
       if (k < block.front() - o.gap_samples || k > block.back() + o.gap_samples) train.push_back(k);
     if (train.empty()) continue;
     // Leak-free: the family's data-derived choices and every start come from `train` alone.
-    const std::unique_ptr<Model> own = m.restricted(train);
-    const Model& fm = own ? *own : m;
+    const std::unique_ptr<ModelFamily> own = m.restricted(train);
+    const ModelFamily& fm = own ? *own : m;
     std::optional<DesignCache> own_cache;
     if (own) own_cache.emplace(fm, n);
     DesignCache& fc = own ? *own_cache : cache;

@@ -68,7 +68,7 @@ ContactData make_contact_data(const cid::Scene& scene, double v_tm, const std::v
 /// The nominal contact model with a set of extensions. Not thread-safe: when the contacts depend on
 /// φ (geometric_offset, robot_compliance, time_offset), design() keeps scratch and the last
 /// evaluation's contacts; use one object per thread.
-class ContactFamily : public Model {
+class ContactFamily : public ModelFamily {
  public:
   ContactFamily(const ContactData& d, std::set<std::string> extensions);
   /// \param samples the samples the data-derived choices (robot_compliance's identifiable
@@ -84,7 +84,7 @@ class ContactFamily : public Model {
   /// semi-definite compliance.
   std::string check(const Fit& f) const override;
   /// With robot_compliance or sensor_gain: the family with its basis and reference chosen from `train`.
-  std::unique_ptr<Model> restricted(const std::vector<int>& train) const override;
+  std::unique_ptr<ModelFamily> restricted(const std::vector<int>& train) const override;
   const std::set<std::string>& extensions() const { return ext_; }
   /// The compliance directions (21 symmetric coordinates -> 6x6) kept for robot_compliance.
   const std::vector<Matrix6d>& compliance_basis() const { return basis_; }

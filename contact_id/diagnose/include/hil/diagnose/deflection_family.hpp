@@ -66,7 +66,7 @@ struct DeflectionData {
 DeflectionData make_deflection_data(const std::vector<double>& t_s, const std::vector<contact_id::Kinematics>& kin,
                                     const std::vector<Eigen::Matrix<double, 6, 1>>& w_fp, const Eigen::Isometry3d& T_world_fp);
 
-class DeflectionFamily : public Model {
+class DeflectionFamily : public ModelFamily {
  public:
   DeflectionFamily(const DeflectionData& d, std::set<std::string> extensions);
   std::string name() const override;
@@ -77,9 +77,9 @@ class DeflectionFamily : public Model {
   /// C must be symmetric positive semi-definite (within two standard deviations).
   std::string check(const Fit& f) const override;
   /// With rest_change: the same family with its events located from the samples `train` only.
-  /// As Model::report; a fold locates its own events, so its step_k_* are not those of the full fit.
+  /// As ModelFamily::report; a fold locates its own events, so its step_k_* are not those of the full fit.
   std::vector<Reported> report(const Fit& f) const override;
-  std::unique_ptr<Model> restricted(const std::vector<int>& train) const override;
+  std::unique_ptr<ModelFamily> restricted(const std::vector<int>& train) const override;
   /// rest_change's events (empty without it, or when the search found none: then the family is the
   /// one without rest_change).
   const std::vector<RestEvent>& events() const { return events_; }

@@ -92,7 +92,7 @@ struct Diagnosis {
   double seconds = 0.0;
 };
 
-using ModelFactory = std::function<std::unique_ptr<Model>(const std::set<std::string>&)>;
+using ModelFactory = std::function<std::unique_ptr<ModelFamily>(const std::set<std::string>&)>;
 /// Progress: (step, total, what).
 using Progress = std::function<void(int, int, const std::string&)>;
 

@@ -63,9 +63,9 @@ struct Reported {
 struct Fit;
 
 /// A separable model family: prediction = A(φ) θ, 6 rows per sample (row 6k + c).
-class Model {
+class ModelFamily {
  public:
-  virtual ~Model() = default;
+  virtual ~ModelFamily() = default;
   virtual std::string name() const = 0;
   virtual std::vector<Param> linear() const = 0;
   virtual std::vector<Param> nonlinear() const { return {}; }
@@ -82,7 +82,7 @@ class Model {
   /// directions, a reference component, event times) made from the samples `train` only: what a
   /// cross-validation fold fits, so that nothing of its held-out block leaks into its prediction.
   /// Its parameters must have the same names. Default: nullptr (the family derives nothing).
-  virtual std::unique_ptr<Model> restricted(const std::vector<int>& train) const {
+  virtual std::unique_ptr<ModelFamily> restricted(const std::vector<int>& train) const {
     (void)train;
     return nullptr;
   }
@@ -134,9 +134,9 @@ struct FitOptions {
 };
 
 /// Fits `m` on the samples `train` (indices into obs). \throws std::runtime_error if the design is zero.
-Fit fit(const Model& m, const Observations& obs, const std::vector<int>& train, const FitOptions& o = {});
+Fit fit(const ModelFamily& m, const Observations& obs, const std::vector<int>& train, const FitOptions& o = {});
 /// N x 6 prediction of the fitted model on every sample.
-Eigen::MatrixXd predict(const Model& m, const Fit& f, std::size_t samples);
+Eigen::MatrixXd predict(const ModelFamily& m, const Fit& f, std::size_t samples);
 
 /// sqrt(mean((w (y - ŷ))²)) over the rows of `samples`: the contact paper's mean relative error.
 double relative_error(const Observations& obs, const Eigen::MatrixXd& prediction, const std::vector<int>& samples);
@@ -174,7 +174,7 @@ struct Score {
   /// Per fold (in time_blocks order, empty blocks skipped): φ fitted without the block; a second
   /// step's folds start from these of the model they extend.
   std::vector<Eigen::VectorXd> fold_phi;
-  /// The names of each fold's φ: a fold's own model (Model::restricted) may have other parameters
+  /// The names of each fold's φ: a fold's own model (ModelFamily::restricted) may have other parameters
   /// than the full one (e.g. rest-pose events located from the training blocks alone).
   std::vector<std::vector<std::string>> fold_phi_names;
   double seconds = 0.0;
@@ -183,7 +183,7 @@ struct Score {
 /// \param extends the score of a model `m` extends (e.g. the cause, in the second step): its full
 /// fit's φ, by name, the others at 0, is one more start of the full fit, and each of its folds' φ
 /// one more start of the same fold.
-Score score(const Model& m, const Observations& obs, const CvOptions& o = {}, const Score* extends = nullptr);
+Score score(const ModelFamily& m, const Observations& obs, const CvOptions& o = {}, const Score* extends = nullptr);
 
 /// The sample indices of the blocked cross-validation folds (contiguous blocks).
 std::vector<std::vector<int>> time_blocks(std::size_t samples, int folds);

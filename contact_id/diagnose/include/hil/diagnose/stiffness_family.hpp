@@ -42,7 +42,7 @@ struct StiffnessData {
 /// non-finite values (naming the row).
 StiffnessData make_stiffness_data(const calibration::VjmModel& model, const std::vector<calibration::Measurement>& rows);
 
-class StiffnessFamily : public Model {
+class StiffnessFamily : public ModelFamily {
  public:
   /// \throws std::invalid_argument on an extension that does not apply to a stiffness table.
   StiffnessFamily(const StiffnessData& d, std::set<std::string> extensions);
