@@ -9,7 +9,7 @@ using namespace hil;
 using namespace hil::drivers;
 
 namespace {
-const std::string kHil = std::string(HIL_BINARY_DIR) + "/tools/hil/hil";
+const std::string kHil = HIL_EXECUTABLE;
 const std::string kRun = std::string(HIL_SOURCE_DIR) + "/examples/runs/press_slide";
 
 /// "fake-rig: robot controller Modbus TCP 127.0.0.1:PORT map ur" -> PORT

@@ -269,7 +269,7 @@ TEST(SocketCanOpen, ClearErrorWithoutCan) {
 // fake's traffic, which our log reader parses bit-exact.
 TEST_F(SocketCan, HilFakeRigPlateCapturedByCandump) {
   if (!have_tool("candump")) GTEST_SKIP() << "can-utils not installed";
-  const std::string hil = std::string(HIL_BINARY_DIR) + "/tools/hil/hil";
+  const std::string hil = HIL_EXECUTABLE;
   ASSERT_TRUE(std::filesystem::exists(hil)) << hil;
   hil::test::Child dump({tool("candump"), "-L", can_iface()});
   auto tx = open();
