@@ -9,7 +9,7 @@
 #include <mutex>
 #include <thread>
 
-#include "../runformat/test_util.hpp"
+#include "hil/test/files.hpp"
 #include "hil/acquisition/acquirer.hpp"
 #include "hil/acquisition/sample_msg.hpp"
 #include "hil/dds/topics.hpp"

@@ -5,7 +5,7 @@
 
 #include <filesystem>
 
-#include "../runformat/test_util.hpp"
+#include "hil/test/files.hpp"
 #include "hil/acquisition/recorder.hpp"
 
 using namespace hil::acquisition;

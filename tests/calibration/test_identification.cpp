@@ -5,7 +5,7 @@
 #include <cmath>
 #include <random>
 
-#include "eigen_testing.hpp"
+#include "hil/test/eigen.hpp"
 #include "hil/calibration/experiment.hpp"
 #include "hil/calibration/reduction.hpp"
 

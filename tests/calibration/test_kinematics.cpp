@@ -4,7 +4,7 @@
 
 #include <random>
 
-#include "eigen_testing.hpp"
+#include "hil/test/eigen.hpp"
 #include "hil/calibration/robot.hpp"
 
 namespace hc = hil::calibration;

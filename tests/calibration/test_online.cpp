@@ -1,7 +1,7 @@
 // The online identifier: Givens updates give the batch answer after every configuration.
 #include <gtest/gtest.h>
 
-#include "eigen_testing.hpp"
+#include "hil/test/eigen.hpp"
 #include "hil/calibration/experiment.hpp"
 #include "hil/calibration/online.hpp"
 

@@ -4,8 +4,8 @@
 
 #include <sstream>
 
-#include "../runformat/test_util.hpp"
-#include "eigen_testing.hpp"
+#include "hil/test/files.hpp"
+#include "hil/test/eigen.hpp"
 #include "hil/calibration/experiment.hpp"
 #include "hil/format/rig.hpp"
 #include "stiffness_io.hpp"

@@ -4,7 +4,7 @@
 
 #include <random>
 
-#include "eigen_testing.hpp"
+#include "hil/test/eigen.hpp"
 #include "hil/calibration/experiment.hpp"
 #include "hil/calibration/observation.hpp"
 #include "hil/calibration/reduction.hpp"

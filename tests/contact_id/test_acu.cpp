@@ -4,7 +4,7 @@
 #include <filesystem>
 #include <fstream>
 
-#include "../runformat/test_util.hpp"
+#include "hil/test/files.hpp"
 #include "acu.hpp"
 #include "hil/report/html.hpp"
 #include "identify.hpp"

@@ -14,7 +14,7 @@
 #include <sstream>
 #include <thread>
 
-#include "../runformat/test_util.hpp"
+#include "hil/test/files.hpp"
 #include "hil/acquisition/sample_msg.hpp"
 #include "hil/dds/bus.hpp"
 #include "hil/dds/topics.hpp"

@@ -1,7 +1,7 @@
 #include <gtest/gtest.h>
 
 #include "hil/format/rig.hpp"
-#include "test_util.hpp"
+#include "hil/test/files.hpp"
 
 using hil::format::parse_rig;
 using hil::test::fails_with;

@@ -1,7 +1,7 @@
 #include <gtest/gtest.h>
 
 #include "hil/format/run.hpp"
-#include "test_util.hpp"
+#include "hil/test/files.hpp"
 
 using hil::test::fails_with;
 

@@ -1,7 +1,7 @@
 #include <gtest/gtest.h>
 
 #include "hil/format/samples.hpp"
-#include "test_util.hpp"
+#include "hil/test/files.hpp"
 
 using hil::format::parse_samples;
 using hil::test::fails_with;

@@ -1,4 +1,6 @@
 #pragma once
+// A temporary folder per test and the check that bad input is refused with its file, line, field
+// and message.
 #include <gtest/gtest.h>
 
 #include <filesystem>
