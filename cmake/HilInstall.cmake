@@ -24,7 +24,8 @@ set(_hil_exports
   hil_diagnose diagnose
   hil_rig_drivers rig_drivers
   hil_rig rig
-  hil_keystore keystore)
+  hil_keystore keystore
+  hil_services services)
 set(HIL_CONFIG_MCAP_DEPS "")
 set(HIL_PC_REQUIRES "eigen3 yaml-cpp spdlog libmodbus")
 if(TARGET hil_mcap)

@@ -1,7 +1,8 @@
 # The dependency rules of docs/architecture.md, checked when the build is configured:
 # - a numerics module (pure computation on Eigen) links no I/O module (files, devices, bus);
 # - a command library (hil_cli_*) links no other command's library; commands share code through
-#   the modules (hil::rig, hil::diagnose, ...), and only the `hil` executable links them all.
+#   the modules (hil::services, hil::rig, hil::diagnose, ...), and only the `hil` executable links
+#   them all: no module, Python module or test links a command library (OTHERS).
 # A violation stops the configuration with the chain of links that breaks the rule.
 include_guard(GLOBAL)
 
@@ -70,19 +71,21 @@ function(_hil_forbid from to what whom)
   set(problems ${problems} ${found} PARENT_SCOPE)
 endfunction()
 
-# hil_check_layers(NUMERICS targets... IO targets... COMMANDS targets...)
+# hil_check_layers(NUMERICS targets... IO targets... COMMANDS targets... [OTHERS targets...])
 function(hil_check_layers)
-  cmake_parse_arguments(arg "" "" "NUMERICS;IO;COMMANDS" ${ARGN})
+  cmake_parse_arguments(arg "" "" "NUMERICS;IO;COMMANDS;OTHERS" ${ARGN})
   set(problems "")
   _hil_forbid("${arg_NUMERICS}" "${arg_IO}" "numerics module" "the I/O module")
   _hil_forbid("${arg_COMMANDS}" "${arg_COMMANDS}" "command library" "another command's library")
+  _hil_forbid("${arg_OTHERS}" "${arg_COMMANDS}" "target" "the command library")
   if(problems)
     list(JOIN problems "\n  " text)
     message(FATAL_ERROR "hil's dependency rules (docs/architecture.md) are broken:\n  ${text}")
   endif()
   list(LENGTH arg_NUMERICS n)
   list(LENGTH arg_COMMANDS c)
-  message(STATUS "hil dependency rules: ${n} numerics modules and ${c} command libraries checked")
+  list(LENGTH arg_OTHERS o)
+  message(STATUS "hil dependency rules: ${n} numerics modules, ${c} command libraries and ${o} other targets checked")
 endfunction()
 
 # The targets defined in `dir` and the directories below it.

@@ -14,10 +14,10 @@
 #include "convert.hpp"
 #include "hil/calibration/reduction.hpp"
 #include "hil/format/run.hpp"
-#include "identify.hpp"          // tools/hil/contact
+#include "hil/services/contact_identify.hpp"
 #include "hil/rig/contact.hpp"
-#include "run_diagnosis.hpp"     // tools/hil/diagnose
-#include "stiffness_io.hpp"      // tools/hil/stiffness
+#include "hil/services/diagnose_run.hpp"
+#include "hil/services/stiffness_io.hpp"
 
 namespace hil::python {
 
@@ -44,7 +44,7 @@ struct Fit {
 
 Fit fit_arrays(const cid::ContactProblem& p, const Eigen::VectorXd& x, const cid::LinearEstimate& e) {
   Fit f;
-  f.model_fp = cli::contact::model_plate_wrenches(p, x, e.theta, f.contacts);  // as the command's report draws it
+  f.model_fp = services::contact::model_plate_wrenches(p, x, e.theta, f.contacts);  // as the command's report draws it
   for (const int k : p.used()) {
     const auto& m = p.data()[static_cast<std::size_t>(k)];
     f.t.push_back(m.t_s);
@@ -91,8 +91,8 @@ py::dict identify_contact(const Path& run_path, const Path& rig, bool geometric,
   {
     py::gil_scoped_release free;
     const auto run = format::load_run(run_path.string(), rig.string());
-    const auto problem = cli::contact::problem_from_run(run);
-    cli::contact::IdentifyOptions o;
+    const auto problem = services::contact::problem_from_run(run);
+    services::contact::IdentifyOptions o;
     o.geometric = geometric;
     o.lambda = lambda;
     o.solver = solver;
@@ -100,8 +100,8 @@ py::dict identify_contact(const Path& run_path, const Path& rig, bool geometric,
     o.window = window;
     o.lcurve_points = lcurve_points;
     o.include_weak = include_weak;
-    const auto r = cli::contact::identify(problem, o);
-    j = cli::contact::to_json(problem, r);
+    const auto r = services::contact::identify(problem, o);
+    j = services::contact::to_json(problem, r);
     // The final estimate: with the identified geometry when it was fitted, else the nominal one.
     if (r.geometric) {
       fit = fit_arrays(problem, r.geometric->x, r.geometric->theta);
@@ -135,7 +135,7 @@ py::dict diagnose(const Path& path, const Path& rig, const std::vector<std::stri
   std::exception_ptr python_error;
   try {
     py::gil_scoped_release free;
-    cli::diagnose::Options o;
+    services::diagnose::Options o;
     o.candidates = candidates;
     o.folds = folds;
     // Between steps, with the GIL: Ctrl-C (signals reach Python only while it runs) and the callback.
@@ -151,9 +151,9 @@ py::dict diagnose(const Path& path, const Path& rig, const std::vector<std::stri
     };
     // A file is a stiffness-experiment table, a folder a run (as `hil diagnose`).
     const auto r = std::filesystem::is_regular_file(path)
-                       ? cli::diagnose::diagnose_table(path.string(), rig.string(), o)
-                       : cli::diagnose::diagnose_run(format::load_run(path.string(), rig.string()), o);
-    j = cli::diagnose::to_json(r);
+                       ? services::diagnose::diagnose_table(path.string(), rig.string(), o)
+                       : services::diagnose::diagnose_run(format::load_run(path.string(), rig.string()), o);
+    j = services::diagnose::to_json(r);
   } catch (const StopForPython&) {
     std::rethrow_exception(python_error);  // the GIL is held again: raise the Python exception
   }
@@ -173,7 +173,7 @@ py::dict identify_stiffness(const Path& table_path, const Path& rig, double nois
     calibration::PipelineOptions o;  // the defaults of `hil stiffness identify`
     o.neglect_below = neglect_below;
     const auto r = calibration::calibrate(model, table.rows, {noise_pos_m, noise_rot_rad}, o);
-    j = cli::stiffness::result_to_json(model, r);
+    j = services::stiffness::result_to_json(model, r);
   }
   return to_python(j);
 }

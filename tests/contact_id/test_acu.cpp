@@ -1,13 +1,11 @@
-// The re-created ACU experiment (examples/acu): the paper's qualitative findings, and the adapter.
+// The re-created ACU experiment (examples/acu): the paper's qualitative findings.
 #include <gtest/gtest.h>
 
 #include <filesystem>
 #include <fstream>
 
 #include "hil/test/files.hpp"
-#include "acu.hpp"
-#include "hil/report/html.hpp"
-#include "identify.hpp"
+#include "hil/test/acu.hpp"
 
 namespace hil::contact_id::test {
 namespace {
@@ -138,48 +136,8 @@ TEST(AcuExperiment, Test1aIsFourPointsThenEightAndIllConditioned) {
   EXPECT_FALSE(o.coupled.empty());  // the symmetric contact makes uncertainties correlate (paper eq. 28)
 }
 
-TEST(AcuCommand, IdentifyJsonAndReport) {
-  hil::test::TempDir dir;
-  const auto r = acu_run("2a", 40);
-  ContactProblem p(r.scene, r.data, r.options);
-  hil::cli::contact::IdentifyOptions o;
-  o.geometric = true;
-  o.lambda = "auto";
-  o.lcurve_points = 8;
-  const auto res = hil::cli::contact::identify(p, o);
-  const auto j = hil::cli::contact::to_json(p, res);
-  for (const char* key : {"K", "K_std", "mu", "mu_std", "geometric", "lambda", "relative_force_error"}) EXPECT_TRUE(j.contains(key)) << key;
-  EXPECT_EQ(j["geometric"].size(), 9u);
-  EXPECT_LT(j["relative_force_error"].get<double>(), j["relative_force_error_nominal"].get<double>());
-  hil::cli::contact::write_report(dir.path(), "2a", p, res);
-  std::ifstream f(dir.path() + "/index.html");
-  const std::string html((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
-  EXPECT_NE(html.find("<svg"), std::string::npos);
-  EXPECT_NE(html.find("L-curve"), std::string::npos);
-  EXPECT_NE(html.find("Number of contact points"), std::string::npos);
-}
-
-TEST(AcuCommand, BadInputMessages) {
-  namespace c = hil::rig;
-  hil::test::TempDir dir;
-  const auto rig = format::load_rig(std::string(HIL_SOURCE_DIR) + "/examples/acu/acu.yaml");
-  // Unknown key and unknown uncertainty in a truth file: file, line and field named.
-  const auto bad = dir.file("truth.yaml", "stiffness_n_per_m: 1.8e5\nfriction: 0.2\n");
-  EXPECT_TRUE(hil::test::fails_with([&] { c::read_truth(bad, rig); }, 2, "friction", "unknown field; known here: stiffness_n_per_m, friction_coefficient"));
-  const auto neg = dir.file("neg.yaml", "stiffness_n_per_m: -1\n");
-  EXPECT_TRUE(hil::test::fails_with([&] { c::read_truth(neg, rig); }, 1, "stiffness_n_per_m", "expected a positive number, found -1"));
-  // The sensor's seed and resolutions are checked too, with their line.
-  const auto seed = dir.file("seed.yaml", "stiffness_n_per_m: 1.8e5\nsensor:\n  force_noise_n: 0.1\n  seed: -3\n");
-  EXPECT_TRUE(hil::test::fails_with([&] { c::read_truth(seed, rig); }, 4, "sensor.seed", "expected a seed from 0 to"));
-  const auto res = dir.file("res.yaml", "sensor:\n  force_resolution_n: -0.05\n");
-  EXPECT_TRUE(hil::test::fails_with([&] { c::read_truth(res, rig); }, 2, "sensor.force_resolution_n", "expected a number >= 0"));
-  const auto syntax = dir.file("syntax.yaml", "stiffness_n_per_m: [1\n");
-  EXPECT_TRUE(hil::test::fails_with([&] { c::read_truth(syntax, rig); }, 0, "", "YAML syntax error"));
-  EXPECT_THROW(c::uncertainty_vector(c::scene_from_rig(rig), {{"guide9_shift", 1e-4}}, "truth.yaml"), std::runtime_error);
-  // A trajectory whose time goes backwards.
-  const auto tr = dir.file("t.csv", "t,px,py,pz,qw,qx,qy,qz\n0,0,0,0,1,0,0,0\n0.1,0,0,0,1,0,0,0\n0.05,0,0,0,1,0,0,0\n");
-  EXPECT_TRUE(hil::test::fails_with([&] { c::read_trajectory(tr); }, 4, "t", "increase"));
-  // A run that never touches: the identification says so.
+TEST(AcuExperiment, ARunThatNeverTouchesIsRefused) {
+  // The identification says so rather than fitting noise.
   auto r = acu_run("2a", 1000);
   for (auto& m : r.data) m.kin.T_world_ee.translation().z() = 0.05;
   try {
@@ -188,35 +146,6 @@ TEST(AcuCommand, BadInputMessages) {
   } catch (const std::runtime_error& e) {
     EXPECT_NE(std::string(e.what()).find("into contact"), std::string::npos) << e.what();
   }
-}
-
-TEST(AcuCommand, GeometricWithNothingObservableIsRefused) {
-  // Test 2a with only the (weak) rotations declared: nothing to fit unless asked.
-  auto r = acu_run("2a", 40);
-  std::vector<Uncertainty> rot;
-  for (const auto& u : r.scene.uncertainties)
-    if (u.kind == Uncertainty::Kind::rotation) rot.push_back(u);
-  r.scene.uncertainties = rot;
-  ContactProblem p(r.scene, r.data, r.options);
-  hil::cli::contact::IdentifyOptions o;
-  o.geometric = true;
-  o.lambda = "0.01";
-  try {
-    hil::cli::contact::identify(p, o);
-    FAIL() << "no exception";
-  } catch (const std::runtime_error& e) {
-    EXPECT_NE(std::string(e.what()).find("no geometric uncertainty is observable"), std::string::npos) << e.what();
-  }
-  o.include_weak = true;
-  EXPECT_NO_THROW(hil::cli::contact::identify(p, o));
-}
-
-TEST(Report, LogLogPlotSkipsNonPositiveValues) {
-  hil::report::PlotOptions o{"t", "x", "y", true, true};
-  const auto svg = hil::report::svg_plot({{"s", {1e-3, 0.0, 1e2}, {1.0, 2.0, -1.0}}}, o);
-  EXPECT_NE(svg.find("<path"), std::string::npos);
-  EXPECT_EQ(svg.find("nan"), std::string::npos);
-  EXPECT_EQ(hil::report::escape("<a&b>"), "&lt;a&amp;b&gt;");
 }
 
 }  // namespace

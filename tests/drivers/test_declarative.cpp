@@ -6,7 +6,7 @@
 
 #include "hil/drivers/error.hpp"
 #include "hil/drivers/force_plate.hpp"
-#include "test_util.hpp"
+#include "hil/test/drivers.hpp"
 
 using namespace hil::drivers;
 using namespace std::chrono_literals;

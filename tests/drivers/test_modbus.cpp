@@ -13,7 +13,7 @@
 #include "hil/drivers/error.hpp"
 #include "hil/drivers/fake_rig.hpp"
 #include "hil/drivers/robot_controller.hpp"
-#include "test_util.hpp"
+#include "hil/test/drivers.hpp"
 
 using namespace hil::drivers;
 using hil::test::eventually;

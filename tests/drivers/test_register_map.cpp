@@ -7,7 +7,7 @@
 #include <sstream>
 
 #include "hil/drivers/register_map.hpp"
-#include "test_util.hpp"
+#include "hil/test/drivers.hpp"
 
 using namespace hil::drivers;
 

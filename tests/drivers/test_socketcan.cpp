@@ -12,7 +12,7 @@
 #include "hil/drivers/fake_rig.hpp"
 #include "hil/drivers/force_plate.hpp"
 #include "hil/drivers/socketcan.hpp"
-#include "test_util.hpp"
+#include "hil/test/drivers.hpp"
 
 using namespace hil::drivers;
 using namespace std::chrono_literals;

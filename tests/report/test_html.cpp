@@ -150,5 +150,13 @@ TEST(Report, PlotDataOfSeriesOnDifferentAxes) {
   EXPECT_EQ(rows[3], (std::vector<std::string>{"2.5", "30", "", ""}));
 }
 
+TEST(Report, LogLogPlotSkipsNonPositiveValues) {
+  PlotOptions o{"t", "x", "y", true, true};
+  const auto svg = svg_plot({{"s", {1e-3, 0.0, 1e2}, {1.0, 2.0, -1.0}}}, o);
+  EXPECT_NE(svg.find("<path"), std::string::npos);
+  EXPECT_EQ(svg.find("nan"), std::string::npos);
+  EXPECT_EQ(escape("<a&b>"), "&lt;a&amp;b&gt;");
+}
+
 }  // namespace
 }  // namespace hil::report

@@ -15,13 +15,13 @@
 #include <mutex>
 #include <sstream>
 
-#include "acquire/acquire.hpp"
-#include "contact/identify.hpp"
-#include "contact/simulate.hpp"
-#include "contact/contact_worker.hpp"
-#include "run_diagnosis.hpp"
-#include "commands.hpp"
-#include "participant.hpp"
+#include "hil/services/acquire.hpp"
+#include "hil/services/contact_identify.hpp"
+#include "hil/services/contact_simulate.hpp"
+#include "hil/services/contact_worker.hpp"
+#include "hil/services/diagnose_run.hpp"
+#include "hil/cli/commands.hpp"
+#include "hil/cli/participant.hpp"
 #include "data_dir.hpp"
 #include "hil/acquisition/recorder.hpp"
 #include "hil/dds/bus.hpp"
@@ -31,6 +31,14 @@
 #include "summary.hpp"
 
 namespace hil::cli {
+
+namespace contact = services::contact;
+namespace diagnose = services::diagnose;
+using services::AcquireOptions;
+using services::ContactWorker;
+using services::run_acquisition;
+using services::contact::SimulateArgs;
+using services::contact::simulate_run;
 namespace {
 struct DemoOptions {
   // Defaults from hil's data dir (data_dir.hpp); empty if it is missing, refused when run.

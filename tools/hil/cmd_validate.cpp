@@ -5,13 +5,18 @@
 #include <filesystem>
 #include <iostream>
 
-#include "commands.hpp"
+#include "hil/cli/commands.hpp"
 #include "hil/format/error.hpp"
 #include "hil/format/run.hpp"
-#include "output.hpp"
+#include "hil/services/output.hpp"
 #include "summary.hpp"
 
 namespace hil::cli {
+
+using services::human;
+using services::is_stdout;
+using services::tag_format;
+using services::write_json;
 namespace fs = std::filesystem;
 
 namespace {

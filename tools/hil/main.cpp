@@ -6,23 +6,9 @@
 #include <exception>
 #include <iostream>
 
-#include "commands.hpp"
+#include "hil/cli/commands.hpp"
 #include "hil/format/error.hpp"
 #include "usage.hpp"
-
-namespace hil::cli {
-
-GlobalOptions& globals() {
-  static GlobalOptions g;
-  return g;
-}
-
-namespace {
-Action g_action;
-}
-void set_action(Action a) { g_action = std::move(a); }
-
-}  // namespace hil::cli
 
 int main(int argc, char** argv) {
   using namespace hil::cli;
@@ -65,7 +51,8 @@ int main(int argc, char** argv) {
   spdlog::set_level(spdlog::level::from_str(g.log_level));
   spdlog::set_pattern("[%H:%M:%S.%e] [%^%l%$] %v");
   try {
-    return g_action ? g_action() : 1;
+    const auto& run = action();
+    return run ? run() : 1;
   } catch (const hil::format::FormatError& e) {
     std::cerr << "error: " << e.what() << '\n';
     return kExitUsage;

@@ -8,8 +8,8 @@
 #include <csignal>
 #include <thread>
 
-#include "../commands.hpp"
-#include "../participant.hpp"
+#include "hil/cli/commands.hpp"
+#include "hil/cli/participant.hpp"
 #include "hil/acquisition/sample_msg.hpp"
 #include "hil/dds/bus.hpp"
 #include "hil/dds/topics.hpp"

@@ -7,12 +7,18 @@
 #include <fstream>
 #include <iostream>
 
-#include "../commands.hpp"
-#include "../output.hpp"
+#include "hil/cli/commands.hpp"
+#include "hil/services/output.hpp"
 #include "hil/format/run.hpp"
-#include "run_diagnosis.hpp"
+#include "hil/services/diagnose_run.hpp"
 
 namespace hil::cli {
+
+namespace diagnose = services::diagnose;
+using services::human;
+using services::is_stdout;
+using services::tag_format;
+using services::write_json;
 
 namespace {
 

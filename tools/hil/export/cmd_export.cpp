@@ -4,7 +4,7 @@
 
 #include <iostream>
 
-#include "../commands.hpp"
+#include "hil/cli/commands.hpp"
 #include "hil/format/error.hpp"
 #include "hil/format/run.hpp"
 #include "hil/mcap/mcap.hpp"

@@ -5,7 +5,7 @@
 #include <filesystem>
 #include <iostream>
 
-#include "../commands.hpp"
+#include "hil/cli/commands.hpp"
 #include "hil/format/run.hpp"
 #include "hil/import/config.hpp"
 #include "hil/import/importer.hpp"

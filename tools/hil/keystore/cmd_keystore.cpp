@@ -4,7 +4,7 @@
 #include <filesystem>
 #include <iostream>
 
-#include "../commands.hpp"
+#include "hil/cli/commands.hpp"
 #include "hil/keystore/keystore.hpp"
 
 namespace hil::cli {

@@ -9,7 +9,7 @@
 #include <optional>
 #include <thread>
 
-#include "../commands.hpp"
+#include "hil/cli/commands.hpp"
 #include "hil/rig_drivers/drivers_from_rig.hpp"
 #include "hil/drivers/fake_rig.hpp"
 #include "hil/drivers/socketcan.hpp"

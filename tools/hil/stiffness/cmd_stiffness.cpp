@@ -8,21 +8,27 @@
 #include <iostream>
 #include <thread>
 
-#include "../commands.hpp"
-#include "../participant.hpp"
-#include "../output.hpp"
+#include "hil/cli/commands.hpp"
+#include "hil/cli/participant.hpp"
+#include "hil/services/output.hpp"
 #include "hil/calibration/experiment.hpp"
 #include "hil/calibration/online.hpp"
 #include "hil/dds/topics.hpp"
 #include "hil/format/error.hpp"
 #include "hil/so3/so3.hpp"
-#include "stiffness_io.hpp"
-#include "stiffness_worker.hpp"
+#include "hil/services/stiffness_io.hpp"
+#include "hil/services/stiffness_worker.hpp"
 
 namespace hil::cli {
 namespace hc = hil::calibration;
 using format::FormatError;
-using namespace stiffness;
+using namespace services::stiffness;
+using services::human;
+using services::is_stdout;
+using services::tag_format;
+using services::write_json;
+using services::Output;
+
 
 namespace {
 

@@ -12,7 +12,7 @@
 #include "hil/diagnose/diagnose.hpp"
 #include "hil/format/run.hpp"
 
-namespace hil::cli::diagnose {
+namespace hil::services::diagnose {
 
 struct Options {
   std::vector<std::string> candidates;  ///< empty: all that apply
@@ -43,4 +43,4 @@ void print_summary(std::ostream& out, const RunDiagnosis& r);
 nlohmann::json to_json(const RunDiagnosis& r);
 void write_report(const std::string& dir, const RunDiagnosis& r);
 
-}  // namespace hil::cli::diagnose
+}  // namespace hil::services::diagnose

@@ -1,10 +1,10 @@
 #pragma once
-/// \file `hil contact simulate`: a run of the rig's contact scene along a trajectory, optionally
+/// \file A run (`hil contact simulate`) of the rig's contact scene along a trajectory, optionally
 /// with hidden effects (the diagnosis' candidates) drawn by seed. Used by the command and the demo.
 #include <string>
 #include <vector>
 
-namespace hil::cli {
+namespace hil::services::contact {
 
 /// -1 / empty: the rig's or the truth file's value.
 struct SimulateArgs {
@@ -22,4 +22,4 @@ struct SimulateArgs {
 /// \throws format::FormatError / std::runtime_error on bad input.
 int simulate_run(const SimulateArgs& a);
 
-}  // namespace hil::cli
+}  // namespace hil::services::contact

@@ -1,4 +1,4 @@
-#include "run_diagnosis.hpp"
+#include "hil/services/diagnose_run.hpp"
 
 #include <fmt/format.h>
 
@@ -6,13 +6,13 @@
 #include <fstream>
 #include <set>
 
-#include "../output.hpp"
+#include "hil/services/output.hpp"
 #include "hil/format/error.hpp"
 #include "hil/report/html.hpp"
 #include "hil/rig/contact.hpp"
 #include "hil/rig/stiffness.hpp"
 
-namespace hil::cli::diagnose {
+namespace hil::services::diagnose {
 
 namespace dg = hil::diagnose;
 namespace cid = hil::contact_id;
@@ -497,4 +497,4 @@ void write_report(const std::string& dir, const RunDiagnosis& r) {
   page.write_figures((fs::path(dir) / "figures").string());
 }
 
-}  // namespace hil::cli::diagnose
+}  // namespace hil::services::diagnose

@@ -1,5 +1,5 @@
 #pragma once
-// Each subcommand group registers itself on the root app. A handler returns the exit status;
+// The command framework (hil_cli): each subcommand group registers itself on the root app. A handler returns the exit status;
 // bad input is reported by throwing hil::format::FormatError (or std::runtime_error), which
 // main() turns into one clear line on stderr and exit status 2.
 #include <CLI/CLI.hpp>
@@ -22,6 +22,8 @@ GlobalOptions& globals();
 /// Set by the chosen subcommand; run by main() after parsing.
 using Action = std::function<int()>;
 void set_action(Action a);
+/// The action set by the chosen subcommand (empty if none was).
+const Action& action();
 
 void add_validate(CLI::App& app);
 void add_demo(CLI::App& app);

@@ -8,7 +8,7 @@
 #include "hil/contact_id/identification.hpp"
 #include "hil/format/run.hpp"
 
-namespace hil::cli::contact {
+namespace hil::services::contact {
 
 struct IdentifyOptions {
   bool geometric = false;
@@ -47,4 +47,4 @@ nlohmann::json to_json(const contact_id::ContactProblem& p, const IdentifyResult
 void write_report(const std::string& dir, const std::string& run_name, const contact_id::ContactProblem& p,
                   const IdentifyResult& r);
 
-}  // namespace hil::cli::contact
+}  // namespace hil::services::contact

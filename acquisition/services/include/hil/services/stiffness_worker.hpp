@@ -11,7 +11,7 @@
 #include "hil/calibration/online.hpp"
 #include "hil/dds/bus.hpp"
 
-namespace hil::cli::stiffness {
+namespace hil::services::stiffness {
 
 hil_msgs::msg::StiffnessMeasurement to_message(const calibration::Measurement& m);
 /// \throws std::invalid_argument if the joint count differs from `dof`.
@@ -41,4 +41,4 @@ class StiffnessWorker {
   calibration::OnlineEstimate last_;
 };
 
-}  // namespace hil::cli::stiffness
+}  // namespace hil::services::stiffness

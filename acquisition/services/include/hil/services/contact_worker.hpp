@@ -1,7 +1,5 @@
 #pragma once
-/// \file `hil contact worker`: subscribes to PoseWrenchSample, publishes ContactEstimate.
-#include <CLI/CLI.hpp>
-
+/// \file The online contact worker of `hil contact worker` and `hil demo`: subscribes to PoseWrenchSample, publishes ContactEstimate.
 #include <atomic>
 #include <memory>
 #include <mutex>
@@ -11,7 +9,7 @@
 #include "hil/format/rig.hpp"
 #include "hil_msgsPubSubTypes.h"
 
-namespace hil::cli {
+namespace hil::services {
 
 /// The online contact worker: from construction on, every PoseWrenchSample on the participant's
 /// domain updates the estimator and a ContactEstimate is published.
@@ -34,6 +32,4 @@ class ContactWorker {
 /// The ContactEstimate message for one online estimate.
 hil_msgs::msg::ContactEstimate to_message(const contact_id::OnlineEstimate& e);
 
-void add_contact_worker(CLI::App& contact);
-
-}  // namespace hil::cli
+}  // namespace hil::services

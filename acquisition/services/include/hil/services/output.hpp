@@ -7,7 +7,7 @@
 #include <stdexcept>
 #include <string>
 
-namespace hil::cli {
+namespace hil::services {
 
 /// Version of every `hil.<kind>` JSON format hil writes; bumped when a field changes meaning or goes.
 inline constexpr int kJsonFormatVersion = 1;
@@ -54,4 +54,4 @@ inline void write_json(const std::string& path, const nlohmann::json& j) {
   out.close();
 }
 
-}  // namespace hil::cli
+}  // namespace hil::services

@@ -1,5 +1,5 @@
 #pragma once
-// Helpers shared by the driver tests (the process helpers are tests/common's).
+// Helpers of the device tests (drivers, rig_drivers): wrench comparison and the ConfigError check.
 #include <gtest/gtest.h>
 
 #include <cmath>

@@ -1,4 +1,4 @@
-#include "contact_worker.hpp"
+#include "hil/services/contact_worker.hpp"
 
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
@@ -6,50 +6,20 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
-#include <csignal>
 #include <mutex>
-#include <thread>
 
-#include "../commands.hpp"
-#include "../participant.hpp"
 #include "hil/acquisition/sample_msg.hpp"
 #include "hil/dds/bus.hpp"
 #include "hil/dds/topics.hpp"
 #include "hil/format/rig.hpp"
 #include "hil/rig/contact.hpp"
 
-namespace hil::cli {
+namespace hil::services {
 
 namespace cid = hil::contact_id;
 
 namespace {
-std::atomic<bool> g_stop{false};
-void on_signal(int) { g_stop = true; }
-
 double finite_or(double v, double fallback) { return std::isfinite(v) ? v : fallback; }
-
-struct WorkerArgs {
-  std::string rig;
-  long count = 0;        ///< stop after this many samples (0: run until interrupted)
-  double duration = 0;   ///< stop after this many seconds (0: no limit)
-};
-
-int worker(const WorkerArgs& a) {
-  const auto rig = format::load_rig(a.rig);
-  dds::Participant participant(participant_options("hil-contact-worker"));
-  ContactWorker w(participant, rig);
-  std::signal(SIGINT, on_signal);
-  std::signal(SIGTERM, on_signal);
-  const auto t0 = std::chrono::steady_clock::now();
-  while (!g_stop && (a.count <= 0 || w.processed() < a.count) &&
-         (a.duration <= 0 || std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() < a.duration))
-    std::this_thread::sleep_for(std::chrono::milliseconds(20));
-  w.flush();
-  const auto e = w.global();
-  std::cout << fmt::format("contact worker: {} samples, running global K = {:.5g} ± {:.3g} N/m, mu = {:.4g} ± {:.3g}\n",
-                           w.processed(), e.K, e.K_std, e.mu, e.mu_std);
-  return 0;
-}
 }  // namespace
 
 ContactWorker::ContactWorker(dds::Participant& participant, const format::RigSpec& rig) {
@@ -94,13 +64,4 @@ hil_msgs::msg::ContactEstimate to_message(const cid::OnlineEstimate& e) {
   return m;
 }
 
-void add_contact_worker(CLI::App& contact) {
-  static WorkerArgs wa;
-  auto* w = contact.add_subcommand("worker", "Online estimates: subscribe to PoseWrenchSample, publish ContactEstimate");
-  w->add_option("--rig", wa.rig, "rig file (geometry, contact model, F_max/M_max)")->required();
-  w->add_option("--count", wa.count, "stop after this many samples (0: until interrupted)")->capture_default_str();
-  w->add_option("--duration", wa.duration, "stop after this many seconds (0: no limit)")->capture_default_str();
-  w->callback([] { set_action([] { return worker(wa); }); });
-}
-
-}  // namespace hil::cli
+}  // namespace hil::services

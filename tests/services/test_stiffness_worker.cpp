@@ -8,10 +8,10 @@
 
 #include "hil/calibration/experiment.hpp"
 #include "hil/dds/topics.hpp"
-#include "stiffness_worker.hpp"
+#include "hil/services/stiffness_worker.hpp"
 
 namespace hc = hil::calibration;
-namespace st = hil::cli::stiffness;
+namespace st = hil::services::stiffness;
 
 TEST(StiffnessMessages, RoundTripAndRefusals) {
   hc::Measurement m;

@@ -4,7 +4,7 @@
 
 #include "hil/rig_drivers/drivers_from_rig.hpp"
 #include "hil/format/error.hpp"
-#include "test_util.hpp"
+#include "hil/test/drivers.hpp"
 
 using namespace hil;
 using namespace hil::drivers;

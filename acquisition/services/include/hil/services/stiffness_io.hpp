@@ -11,7 +11,7 @@
 #include "hil/format/rig.hpp"
 #include "hil/rig/stiffness.hpp"
 
-namespace hil::cli::stiffness {
+namespace hil::services::stiffness {
 
 using rig::load_robot;
 using rig::read_stiffness_table;
@@ -41,4 +41,4 @@ void print_report(std::ostream& os, const calibration::VjmModel& model, const ca
 /// The reduction table beside Table I of the paper.
 void print_reduction_table(std::ostream& os, const std::vector<calibration::ReductionLine>& lines);
 
-}  // namespace hil::cli::stiffness
+}  // namespace hil::services::stiffness

@@ -8,10 +8,10 @@
 #include "hil/test/eigen.hpp"
 #include "hil/calibration/experiment.hpp"
 #include "hil/format/rig.hpp"
-#include "stiffness_io.hpp"
+#include "hil/services/stiffness_io.hpp"
 
 namespace hc = hil::calibration;
-namespace io = hil::cli::stiffness;
+namespace io = hil::services::stiffness;
 using hil::test::fails_with;
 
 namespace {

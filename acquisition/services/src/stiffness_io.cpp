@@ -1,4 +1,4 @@
-#include "stiffness_io.hpp"
+#include "hil/services/stiffness_io.hpp"
 
 #include <fmt/format.h>
 
@@ -7,11 +7,11 @@
 #include <map>
 #include <sstream>
 
-#include "../output.hpp"
+#include "hil/services/output.hpp"
 #include "hil/calibration/experiment.hpp"
 #include "hil/format/error.hpp"
 
-namespace hil::cli::stiffness {
+namespace hil::services::stiffness {
 namespace hc = hil::calibration;
 using format::FormatError;
 
@@ -296,4 +296,4 @@ void print_report(std::ostream& os, const hc::VjmModel& model, const hc::Calibra
   }
 }
 
-}  // namespace hil::cli::stiffness
+}  // namespace hil::services::stiffness

@@ -1,5 +1,5 @@
-#include "identify.hpp"
-#include "../output.hpp"
+#include "hil/services/contact_identify.hpp"
+#include "hil/services/output.hpp"
 #include "hil/format/error.hpp"
 #include "hil/rig/contact.hpp"
 
@@ -14,7 +14,7 @@
 
 #include "hil/report/html.hpp"
 
-namespace hil::cli::contact {
+namespace hil::services::contact {
 
 namespace cid = hil::contact_id;
 
@@ -359,4 +359,4 @@ void write_report(const std::string& dir, const std::string& run_name, const cid
   page.write_figures((std::filesystem::path(dir) / "figures").string());
 }
 
-}  // namespace hil::cli::contact
+}  // namespace hil::services::contact

@@ -1,5 +1,5 @@
 #pragma once
-// The acquisition run behind `hil acquire`, reusable by `hil demo`.
+// The acquisition run behind `hil acquire` and `hil demo`.
 #include <functional>
 #include <ostream>
 #include <string>
@@ -8,9 +8,9 @@
 #include "hil/acquisition/monitor.hpp"
 #include "hil/acquisition/streams.hpp"
 #include "hil/drivers/fake_rig.hpp"
-#include "../commands.hpp"
+#include "hil/dds/bus.hpp"
 
-namespace hil::cli {
+namespace hil::services {
 
 struct AcquireOptions {
   std::string rig, out;
@@ -32,6 +32,7 @@ struct AcquireOptions {
   drivers::ModbusFaults robot_faults;
   bool mcap = false;                     ///< also record run.mcap (docs/mcap.md)
   std::string mcap_compression = "zstd";  ///< none | zstd | lz4
+  dds::ParticipantOptions participant;     ///< the bus participant (unless no_bus)
 };
 
 struct AcquireResult {
@@ -48,6 +49,4 @@ AcquireResult run_acquisition(const AcquireOptions& o, const std::function<void(
 /// \returns 0 when every device answered, 1 otherwise. \throws on a bad rig file.
 int run_check(const AcquireOptions& o, std::ostream& out);
 
-void add_acquire(CLI::App& app);
-
-}  // namespace hil::cli
+}  // namespace hil::services

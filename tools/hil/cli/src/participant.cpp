@@ -1,8 +1,8 @@
-#include "participant.hpp"
+#include "hil/cli/participant.hpp"
 
 #include <filesystem>
 
-#include "commands.hpp"
+#include "hil/cli/commands.hpp"
 #include "hil/keystore/keystore.hpp"
 
 namespace hil::cli {

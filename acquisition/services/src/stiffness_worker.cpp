@@ -1,4 +1,4 @@
-#include "stiffness_worker.hpp"
+#include "hil/services/stiffness_worker.hpp"
 
 #include <spdlog/spdlog.h>
 
@@ -8,7 +8,7 @@
 
 #include "hil/dds/topics.hpp"
 
-namespace hil::cli::stiffness {
+namespace hil::services::stiffness {
 namespace hc = hil::calibration;
 
 namespace {
@@ -116,4 +116,4 @@ std::size_t StiffnessWorker::spin(std::chrono::milliseconds timeout) {
   return n;
 }
 
-}  // namespace hil::cli::stiffness
+}  // namespace hil::services::stiffness

@@ -3,7 +3,7 @@
 #include <gtest/gtest.h>
 
 #include "hil/rig_drivers/drivers_from_rig.hpp"
-#include "test_util.hpp"
+#include "hil/test/drivers.hpp"
 
 using namespace hil;
 using namespace hil::drivers;
