@@ -1,4 +1,5 @@
 #include <gtest/gtest.h>
+#include <gmock/gmock.h>
 #include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -49,7 +50,8 @@ TEST(Recorder, WritesAReadableRunWithQualityColumns) {
   ASSERT_EQ(run.samples.extra_columns.size(), 3u);
   EXPECT_EQ(run.samples.extra_columns[0], "quality");
   EXPECT_NE(run.info.notes.find("samples: 100"), std::string::npos);
-  EXPECT_THROW(RunRecorder(dir, info(), "", kT0, 2), std::runtime_error) << "must not overwrite a run";
+  EXPECT_THAT([&] { RunRecorder(dir, info(), "", kT0, 2); },
+              ::testing::ThrowsMessage<std::runtime_error>(::testing::HasSubstr(dir + ": exists and is not empty; refusing to overwrite a run")));
 }
 
 TEST(Recorder, KillMinus9LosesAtMostTheLastSecond) {

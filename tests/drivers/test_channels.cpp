@@ -1,5 +1,6 @@
 // The in-process loopback bus and the candump -L log channel.
 #include <gtest/gtest.h>
+#include <gmock/gmock.h>
 
 #include <filesystem>
 #include <fstream>
@@ -167,7 +168,8 @@ TEST(CandumpLogChannel, BadLineIsReportedWithFileAndLineThenSkipped) {
 }
 
 TEST(CandumpLogChannel, MissingFileThrows) {
-  EXPECT_THROW(CanLogChannel::open_read("/nonexistent/x.log"), DeviceError);
+  EXPECT_THAT([] { CanLogChannel::open_read("/nonexistent/x.log"); },
+              ::testing::ThrowsMessage<DeviceError>(::testing::HasSubstr("candump log /nonexistent/x.log: cannot open for reading: No such file")));
 }
 
 TEST(RecordingChannel, RecordsBothDirectionsInCandumpFormat) {

@@ -1,5 +1,6 @@
 // The mapping config: every field read, and bad configs refused with file, line and field.
 #include <gtest/gtest.h>
+#include <gmock/gmock.h>
 
 #include "hil/format/error.hpp"
 #include "hil/import/config.hpp"
@@ -206,8 +207,10 @@ TEST(TimeText, BadTextSaysWhatWasExpectedWhere) {
   EXPECT_NE(why.find("end of the time text"), std::string::npos) << why;
   EXPECT_FALSE(parse_datetime_us("2023-09-20_16:40:52.", p, &why));
   EXPECT_FALSE(parse_iso8601_utc_us("2026-11-21T10:00:00"));
-  EXPECT_THROW(check_datetime_pattern("%Y-%m-%d %H:%M:%S %q"), std::invalid_argument);
-  EXPECT_THROW(check_datetime_pattern("%Y-%m-%d %H:%M:%S %Y"), std::invalid_argument);
+  EXPECT_THAT([] { check_datetime_pattern("%Y-%m-%d %H:%M:%S %q"); },
+              ::testing::ThrowsMessage<std::invalid_argument>(::testing::HasSubstr("unknown directive %q (known: %Y %m %d %H %M %S %f %%)")));
+  EXPECT_THAT([] { check_datetime_pattern("%Y-%m-%d %H:%M:%S %Y"); },
+              ::testing::ThrowsMessage<std::invalid_argument>(::testing::HasSubstr("%Y appears twice")));
 }
 }  // namespace
 }  // namespace hil::import

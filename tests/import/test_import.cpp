@@ -12,9 +12,12 @@
 #include "hil/format/run.hpp"
 #include "hil/import/importer.hpp"
 #include "hil/import/rigid_fit.hpp"
+#include "hil/test/files.hpp"
 
 namespace hil::import {
 namespace {
+
+using hil::test::fails_with;
 
 const char* kConfig = R"(format_version: 1
 rig: synthetic_bench
@@ -90,7 +93,7 @@ Synthetic make_rows() {
 
 ImportedRun import_text(const std::string& data, const std::string& config) {
   const auto cfg = parse_import_config(config, "map.yaml");
-  return import_table(parse_delimited(data, "data.csv", cfg.delimiter, cfg.header, cfg.columns), cfg);
+  return import_table(format::parse_csv(data, data_options(cfg.delimiter, cfg.header, cfg.columns, "data.csv")), cfg);
 }
 
 format::FormatError error_of(const std::string& data, const std::string& config = kConfig) {
@@ -248,7 +251,7 @@ TEST(Import, BadInputNamesFileLineAndField) {
     s.cells[12].pop_back();
     const auto e = error_of(s.text());
     EXPECT_EQ(e.where().line, 14u);
-    EXPECT_NE(e.message().find("row has 19 cells, expected 20"), std::string::npos) << e.what();
+    EXPECT_NE(e.message().find("row has 19 cells, header has 20"), std::string::npos) << e.what();
   }
   {
     Synthetic s = good;
@@ -299,35 +302,21 @@ wrench: {force: [F_x, F_y, F_z], moment: [M_x, M_y, M_z]}
 }
 
 TEST(Import, DelimitedTextTabsCrlfByteOrderMarkAndTruncation) {
-  const auto t = parse_delimited("\xEF\xBB\xBF# comment\r\nt\tx y\r\n0\t 1.5 \r\n\r\n1\t\r\n", "d.tsv", '\t', true, {});
-  EXPECT_EQ(t.names, (std::vector<std::string>{"t", "x y"}));
+  auto parse = [](const std::string& text, char delimiter, bool header, const std::vector<std::string>& names) {
+    return format::parse_csv(text, data_options(delimiter, header, names, "d.csv"));
+  };
+  const auto t = parse("\xEF\xBB\xBF# comment\r\nt\tx y\r\n0\t 1.5 \r\n\r\n1\t\r\n", '\t', true, {});
+  EXPECT_EQ(t.header, (std::vector<std::string>{"t", "x y"}));
   EXPECT_EQ(t.header_line, 2u);
-  ASSERT_EQ(t.rows.size(), 2u);
-  EXPECT_EQ(t.rows[0][1], "1.5");
-  EXPECT_EQ(t.rows[1][1], "");
-  EXPECT_EQ(t.line[1], 5u);
-  try {
-    parse_delimited("0;1;2\n3;4", "d.csv", ';', false, {"a", "b", "c"});
-    ADD_FAILURE();
-  } catch (const format::FormatError& e) {
-    EXPECT_EQ(e.where().line, 2u);
-    EXPECT_NE(e.message().find("truncated last line"), std::string::npos) << e.what();
-  }
-  EXPECT_THROW(parse_delimited("# only a comment\n", "d.csv", ',', true, {}), format::FormatError);
-  EXPECT_THROW(parse_delimited("a,b\n", "d.csv", ',', true, {}), format::FormatError);
-  EXPECT_THROW(parse_delimited("a,a\n1,2\n", "d.csv", ',', true, {}), format::FormatError);
-}
-
-TEST(Import, CellParsing) {
-  double v = 0;
-  EXPECT_EQ(parse_cell(" 1.5e-3 ", v), CellKind::number);
-  EXPECT_EQ(v, 1.5e-3);
-  EXPECT_EQ(parse_cell("+2", v), CellKind::number);
-  EXPECT_EQ(parse_cell("", v), CellKind::missing);
-  EXPECT_EQ(parse_cell("NaN", v), CellKind::missing);
-  EXPECT_EQ(parse_cell("-nan", v), CellKind::missing);
-  EXPECT_EQ(parse_cell("inf", v), CellKind::bad);
-  EXPECT_EQ(parse_cell("1,5", v), CellKind::bad);
+  ASSERT_EQ(t.rows(), 2u);
+  EXPECT_EQ(t.text("x y")[0], "1.5");
+  EXPECT_EQ(t.text("x y")[1], "");
+  EXPECT_EQ(t.row_line[1], 5u);
+  EXPECT_TRUE(fails_with([&] { parse("0;1;2\n3;4", ';', false, {"a", "b", "c"}); }, 2, "b", "truncated last line"));
+  EXPECT_TRUE(fails_with([&] { parse("# only a comment\n", ',', true, {}); }, 0, "", "empty file: expected a header line"));
+  EXPECT_TRUE(fails_with([&] { parse("a,a\n1,2\n", ',', true, {}); }, 1, "a", "column name appears twice in header"));
+  const auto cfg = parse_import_config(kConfig, "map.yaml");
+  EXPECT_TRUE(fails_with([&] { import_table(parse("a,b\n", ',', true, {}), cfg); }, 0, "", "no data rows"));
 }
 
 }  // namespace

@@ -1,6 +1,7 @@
 // MCAP codec and hil recording: round trips for every record kind and compression, CRCs, corrupt
 // files refused with file + offset + what, and the export of the shipped run.
 #include <gtest/gtest.h>
+#include <gmock/gmock.h>
 
 #include <cmath>
 #include <cstdio>
@@ -15,9 +16,12 @@
 #include "hil/format/run.hpp"
 #include "hil/mcap/mcap.hpp"
 #include "hil/mcap/recording.hpp"
+#include "hil/test/files.hpp"
 
 namespace fs = std::filesystem;
 using hil::format::FormatError;
+using testing::HasSubstr;
+using testing::ThrowsMessage;
 using namespace hil::mcap;
 
 namespace {
@@ -155,9 +159,10 @@ TEST(Mcap, FileWithoutMessagesReads) {
 
 TEST(Mcap, WriterRefusesUnknownChannelAndCompression) {
   Writer w(temp_path("refuse.mcap"), {});
-  EXPECT_THROW(w.write({3, 0, 0, 0, "x"}), std::invalid_argument);
-  EXPECT_THROW(w.add_channel(9, "/x", "cdr"), std::invalid_argument);
-  EXPECT_THROW(parse_compression("gzip"), std::invalid_argument);
+  EXPECT_THAT([&] { w.write({3, 0, 0, 0, "x"}); }, ThrowsMessage<std::invalid_argument>(HasSubstr("unknown channel id 3")));
+  EXPECT_THAT([&] { w.add_channel(9, "/x", "cdr"); }, ThrowsMessage<std::invalid_argument>(HasSubstr("unknown schema id 9")));
+  EXPECT_THAT([] { parse_compression("gzip"); },
+              ThrowsMessage<std::invalid_argument>(HasSubstr("unknown compression 'gzip' (expected none, zstd or lz4)")));
   EXPECT_EQ(parse_compression("none"), Compression::none);
 }
 
@@ -270,13 +275,15 @@ TEST(Recording, SchemasAreRos2BagStyleWithTheHilMsgsPackageTexts) {
   const auto ds = ros2msg_schema("hil_msgs/msg/DeviceStatus");
   EXPECT_EQ(ds.substr(0, ds.find("\n=====")), slurp(std::string(HIL_SOURCE_DIR) + "/ros/hil_msgs/msg/DeviceStatus.msg"));
   EXPECT_NE(ros2msg_schema("tf2_msgs/msg/TFMessage").find("MSG: geometry_msgs/Transform\n"), std::string::npos);
-  EXPECT_THROW(ros2msg_schema("nav_msgs/msg/Odometry"), std::invalid_argument);
+  EXPECT_THAT([] { ros2msg_schema("nav_msgs/msg/Odometry"); },
+              ThrowsMessage<std::invalid_argument>(HasSubstr("no ros2msg definition for nav_msgs/msg/Odometry")));
 }
 
 TEST(Recording, UtcTimes) {
   EXPECT_EQ(parse_utc_ns("1970-01-01T00:00:01.5Z"), 1'500'000'000);
   EXPECT_EQ(parse_utc_ns("2026-11-21T09:00:00.000Z") - parse_utc_ns("2026-11-21T08:59:59Z"), 1'000'000'000);
-  EXPECT_THROW(parse_utc_ns("2026-11-21 09:00:00"), std::invalid_argument);
+  EXPECT_THAT([] { parse_utc_ns("2026-11-21 09:00:00"); },
+              ThrowsMessage<std::invalid_argument>(HasSubstr("not an ISO 8601 UTC time: '2026-11-21 09:00:00'")));
   const auto t = to_ros_time(1'700'000'000'123'456'789);
   EXPECT_EQ(t.sec(), 1'700'000'000);
   EXPECT_EQ(t.nanosec(), 123'456'789u);
@@ -414,8 +421,10 @@ TEST(Recording, ReadPoseWrenchRefusesAFileWithoutTheChannel) {
 
 TEST(Recording, CorruptPayloadIsNamed) {
   hil_msgs::msg::PoseWrenchSample m;
-  EXPECT_THROW(from_cdr(std::string("\x00\x01\x00\x00\x01", 5), m, "x.mcap: /hil/pose_wrench message 3"), FormatError);
-  EXPECT_THROW(tf_message_from_cdr(std::string("\x00\x01\x00\x00\xff\xff\x00\x00", 8), "x"), FormatError);
+  EXPECT_TRUE(hil::test::fails_with([&] { from_cdr(std::string("\x00\x01\x00\x00\x01", 5), m, "x.mcap: /hil/pose_wrench message 3"); },
+                                    0, "", "x.mcap: /hil/pose_wrench message 3: CDR payload of 5 bytes does not decode"));
+  EXPECT_TRUE(hil::test::fails_with([] { tf_message_from_cdr(std::string("\x00\x01\x00\x00\xff\xff\x00\x00", 8), "x"); }, 0, "",
+                                    "x: CDR payload of 8 bytes does not decode"));
 }
 
 }  // namespace

@@ -257,6 +257,8 @@ class BadKeystore(unittest.TestCase):
         self.assertIn("signature does not verify against the permissions CA", err)
         r = hil("keystore", "check", ks.dir, "echo")
         self.assertEqual(r.returncode, 2, r.stderr)
+        self.assertIn("participants/echo/permissions.p7s", r.stderr)
+        self.assertIn("signature does not verify against the permissions CA", r.stderr)
 
     def test_tampered_governance(self):
         ks = Keystore(self)

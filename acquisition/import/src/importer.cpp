@@ -3,16 +3,11 @@
 #include <fmt/format.h>
 
 #include <algorithm>
-#include <cctype>
-#include <charconv>
 #include <cmath>
 #include <filesystem>
-#include <fstream>
 #include <limits>
 #include <map>
 #include <optional>
-#include <set>
-#include <sstream>
 #include <unordered_map>
 
 #include "hil/format/csv.hpp"
@@ -30,24 +25,6 @@ namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
-std::string_view trim(std::string_view s) {
-  while (!s.empty() && (s.front() == ' ' || s.front() == '\t')) s.remove_prefix(1);
-  while (!s.empty() && (s.back() == ' ' || s.back() == '\t' || s.back() == '\r')) s.remove_suffix(1);
-  return s;
-}
-
-std::vector<std::string> split(std::string_view line, char delim) {
-  std::vector<std::string> cells;
-  std::size_t start = 0;
-  for (;;) {
-    const std::size_t d = line.find(delim, start);
-    const auto cell = d == std::string_view::npos ? line.substr(start) : line.substr(start, d - start);
-    cells.emplace_back(trim(cell));
-    if (d == std::string_view::npos) return cells;
-    start = d + 1;
-  }
-}
-
 double median(std::vector<double> v) {
   if (v.empty()) return 0.0;
   const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
@@ -55,27 +32,39 @@ double median(std::vector<double> v) {
   return *mid;
 }
 
+/// The data's cells by row and column index (data_options reads every column as text).
+class Cells {
+ public:
+  explicit Cells(const format::CsvTable& t) {
+    for (const auto& h : t.header) columns_.push_back(&t.text(h));
+  }
+  const std::string& operator()(std::size_t r, std::size_t c) const { return (*columns_[c])[r]; }
+
+ private:
+  std::vector<const std::vector<std::string>*> columns_;
+};
+
 /// Column lookup with a message naming the data file's header and the closest name.
 struct Columns {
-  const RawTable& data;
+  const format::CsvTable& data;
   const ImportConfig& cfg;
   std::unordered_map<std::string, std::size_t> index;
 
-  Columns(const RawTable& d, const ImportConfig& c) : data(d), cfg(c) {
-    for (std::size_t i = 0; i < d.names.size(); ++i) index.emplace(d.names[i], i);
+  Columns(const format::CsvTable& d, const ImportConfig& c) : data(d), cfg(c) {
+    for (std::size_t i = 0; i < d.header.size(); ++i) index.emplace(d.header[i], i);
   }
   std::size_t operator()(const std::string& name, const std::string& role) const {
     const auto it = index.find(name);
     if (it != index.end()) return it->second;
     std::string hint;
     std::size_t best = 3;
-    for (std::size_t i = 0; i < data.names.size(); ++i) {
-      const auto dist = format::edit_distance(name, data.names[i]);
-      if (dist < best) best = dist, hint = fmt::format(" (column {} is '{}': misspelt?)", i + 1, data.names[i]);
+    for (std::size_t i = 0; i < data.header.size(); ++i) {
+      const auto dist = format::edit_distance(name, data.header[i]);
+      if (dist < best) best = dist, hint = fmt::format(" (column {} is '{}': misspelt?)", i + 1, data.header[i]);
     }
     throw FormatError({data.file, data.header_line, 0, name},
                       fmt::format("column named in {} as {} is not in the data{}; the data has {} columns", cfg.file,
-                                  role, hint, data.names.size()));
+                                  role, hint, data.header.size()));
   }
 };
 
@@ -91,71 +80,20 @@ struct ParsedRow {
 
 }  // namespace
 
-CellKind parse_cell(std::string_view cell, double& value) {
-  cell = trim(cell);
-  if (cell.empty()) return CellKind::missing;
-  std::string_view s = cell;
-  if (s.front() == '+' || s.front() == '-') s.remove_prefix(1);
-  if (s.size() == 3 && std::tolower(static_cast<unsigned char>(s[0])) == 'n' &&
-      std::tolower(static_cast<unsigned char>(s[1])) == 'a' && std::tolower(static_cast<unsigned char>(s[2])) == 'n')
-    return CellKind::missing;
-  const char* first = cell.data();
-  if (*first == '+') ++first;
-  const auto [ptr, ec] = std::from_chars(first, cell.data() + cell.size(), value);
-  if (ec != std::errc() || ptr != cell.data() + cell.size() || !std::isfinite(value)) return CellKind::bad;
-  return CellKind::number;
+format::CsvOptions data_options(char delimiter, bool header, const std::vector<std::string>& names,
+                                const std::string& display_name) {
+  format::CsvOptions o;
+  o.display_name = display_name;
+  o.delimiter = delimiter;
+  if (!header) o.column_names = names;
+  o.missing = format::MissingCells::nan;  // as import_table reads the cells
+  o.skip_blank_lines = true;
+  o.skip_byte_order_mark = true;  // a UTF-8 byte-order mark is not a column name
+  return o;
 }
 
-RawTable parse_delimited(std::string_view text, const std::string& display_name, char delimiter, bool header,
-                         const std::vector<std::string>& names) {
-  RawTable t;
-  t.file = display_name;
-  std::size_t line_no = 0;
-  std::size_t pos = text.substr(0, 3) == "\xEF\xBB\xBF" ? 3 : 0;  // a UTF-8 byte-order mark is not a column name
-  const bool last_terminated = !text.empty() && text.back() == '\n';
-  if (!header) t.names = names;
-  while (pos < text.size()) {
-    const std::size_t nl = text.find('\n', pos);
-    const auto line = text.substr(pos, nl == std::string_view::npos ? std::string_view::npos : nl - pos);
-    pos = nl == std::string_view::npos ? text.size() : nl + 1;
-    ++line_no;
-    const auto tl = trim(line);
-    if (tl.empty() || tl.front() == '#') continue;
-    auto cells = split(line, delimiter);
-    if (header && t.header_line == 0) {
-      t.header_line = line_no;
-      std::set<std::string> seen;
-      for (std::size_t c = 0; c < cells.size(); ++c) {
-        if (cells[c].empty()) throw FormatError({t.file, line_no, c + 1, ""}, "empty column name in header");
-        if (!seen.insert(cells[c]).second)
-          throw FormatError({t.file, line_no, c + 1, cells[c]}, "column name appears twice in header");
-      }
-      t.names = std::move(cells);
-      continue;
-    }
-    const std::size_t ncol = t.names.size();
-    if (cells.size() != ncol) {
-      const bool truncated = pos >= text.size() && !last_terminated && cells.size() < ncol;
-      const std::size_t c = std::min(cells.size(), ncol);
-      throw FormatError({t.file, line_no, c + 1, c < ncol ? t.names[c] : ""},
-                        truncated ? fmt::format("truncated last line: {} of {} cells and no line end", cells.size(), ncol)
-                                  : fmt::format("row has {} cells, expected {} ({})", cells.size(), ncol,
-                                                header ? "as in the header" : "as the config's csv.columns list"));
-    }
-    t.rows.push_back(std::move(cells));
-    t.line.push_back(line_no);
-  }
-  if (t.names.empty()) throw FormatError({t.file, 0, 0, ""}, "empty file: expected a header line");
-  if (t.rows.empty()) throw FormatError({t.file, 0, 0, ""}, "no data rows");
-  return t;
-}
-
-RawTable read_delimited(const std::string& path, char delimiter, bool header, const std::vector<std::string>& names) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw FormatError({path, 0, 0, ""}, "cannot open data file");
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  return parse_delimited(ss.str(), path, delimiter, header, names);
+format::CsvTable read_delimited(const std::string& path, char delimiter, bool header, const std::vector<std::string>& names) {
+  return format::read_csv(path, data_options(delimiter, header, names));
 }
 
 namespace {
@@ -168,7 +106,7 @@ struct ColumnIndex {
   std::vector<std::size_t> joints, extras;
 };
 
-ColumnIndex resolve_columns(const RawTable& data, const ImportConfig& cfg) {
+ColumnIndex resolve_columns(const format::CsvTable& data, const ImportConfig& cfg) {
   const Columns col(data, cfg);
   ColumnIndex c;
   c.time = col(cfg.time.column, "time.column");
@@ -210,25 +148,23 @@ std::vector<std::string> output_extra_names(const ImportConfig& cfg, std::size_t
 }
 
 /// Reads one row: text that is not a number is an error; empty and NaN cells are marked missing.
-ParsedRow parse_row(const RawTable& data, std::size_t r, const ImportConfig& cfg, const ColumnIndex& col) {
+ParsedRow parse_row(const format::CsvTable& data, const Cells& cells, std::size_t r, const ImportConfig& cfg,
+                    const ColumnIndex& col) {
   auto number = [&](std::size_t c, double& v) {
-    const auto kind = parse_cell(data.rows[r][c], v);
-    if (kind == CellKind::bad)
-      throw FormatError({data.file, data.line[r], c + 1, data.names[c]},
-                        fmt::format("expected a number, found '{}'", data.rows[r][c]));
-    return kind == CellKind::number;
+    v = format::read_number(cells(r, c), {data.file, data.row_line[r], c + 1, data.header[c]}, format::MissingCells::nan);
+    return !std::isnan(v);
   };
   ParsedRow p;
-  const auto& time_text = data.rows[r][col.time];
+  const auto& time_text = cells(r, col.time);
   if (cfg.time.format == TimeFormat::datetime) {
     std::string why;
-    const auto us = parse_datetime_us(trim(time_text), cfg.time.pattern, &why);
+    const auto us = parse_datetime_us(time_text, cfg.time.pattern, &why);
     if (!us)
-      throw FormatError({data.file, data.line[r], col.time + 1, data.names[col.time]},
+      throw FormatError({data.file, data.row_line[r], col.time + 1, data.header[col.time]},
                         fmt::format("bad time text '{}': {}", time_text, why));
     p.time_raw = static_cast<double>(*us);  // exact: integers below 2^53 us (year 2255)
   } else if (!number(col.time, p.time_raw)) {
-    throw FormatError({data.file, data.line[r], col.time + 1, data.names[col.time]}, "empty or NaN time");
+    throw FormatError({data.file, data.row_line[r], col.time + 1, data.header[col.time]}, "empty or NaN time");
   }
   for (std::size_t k = 0; k < 3; ++k) {
     p.wrench_ok = number(col.force[k], p.f_data[static_cast<Eigen::Index>(k)]) && p.wrench_ok;
@@ -279,22 +215,22 @@ class DropLog {
 };
 
 /// Rows with strictly increasing time and a complete wrench and joint set, in file order.
-std::vector<std::size_t> usable_rows(const RawTable& data, const std::vector<ParsedRow>& rows, const ImportConfig& cfg,
-                                     std::size_t c_time, DropLog& drops) {
+std::vector<std::size_t> usable_rows(const format::CsvTable& data, const Cells& cells, const std::vector<ParsedRow>& rows,
+                                     const ImportConfig& cfg, std::size_t c_time, DropLog& drops) {
   std::vector<std::size_t> keep;
   for (std::size_t r = 0; r < rows.size(); ++r) {
     if (!keep.empty() && rows[r].time_raw <= rows[keep.back()].time_raw) {
       const bool dup = rows[r].time_raw == rows[keep.back()].time_raw;
       if (cfg.time.non_increasing == NonIncreasingTime::error)
-        throw FormatError({data.file, data.line[r], c_time + 1, data.names[c_time]},
+        throw FormatError({data.file, data.row_line[r], c_time + 1, data.header[c_time]},
                           fmt::format("{} (line {} has '{}'); set time.non_increasing: drop to drop such rows",
-                                      dup ? "duplicated timestamp" : "time goes backwards", data.line[keep.back()],
-                                      data.rows[keep.back()][c_time]));
-      drops.add(dup ? "duplicated timestamp" : "time goes backwards", data.line[r]);
+                                      dup ? "duplicated timestamp" : "time goes backwards", data.row_line[keep.back()],
+                                      cells(keep.back(), c_time)));
+      drops.add(dup ? "duplicated timestamp" : "time goes backwards", data.row_line[r]);
     } else if (!rows[r].wrench_ok) {
-      drops.add("force or moment cell empty or NaN", data.line[r]);
+      drops.add("force or moment cell empty or NaN", data.row_line[r]);
     } else if (!rows[r].joints_ok) {
-      drops.add("joint cell empty or NaN", data.line[r]);
+      drops.add("joint cell empty or NaN", data.row_line[r]);
     } else {
       keep.push_back(r);
     }
@@ -423,7 +359,8 @@ std::string run_notes(const ImportReport& rep, const ImportConfig& cfg, std::siz
 
 }  // namespace
 
-ImportedRun import_table(const RawTable& data, const ImportConfig& cfg, const std::string& rig_name) {
+ImportedRun import_table(const format::CsvTable& data, const ImportConfig& cfg, const std::string& rig_name) {
+  if (data.rows() == 0) throw FormatError({data.file, 0, 0, ""}, "no data rows");
   const std::size_t nb = cfg.bodies.size();
   std::size_t ee = 0;
   for (std::size_t b = 0; b < nb; ++b)
@@ -432,16 +369,17 @@ ImportedRun import_table(const RawTable& data, const ImportConfig& cfg, const st
   const auto extra_names = output_extra_names(cfg, ee);
   const std::size_t n_generated = extra_names.size() - cfg.extras.size();
 
+  const Cells cells(data);
   std::vector<ParsedRow> rows;
-  rows.reserve(data.rows.size());
-  for (std::size_t r = 0; r < data.rows.size(); ++r) rows.push_back(parse_row(data, r, cfg, col));
+  rows.reserve(data.rows());
+  for (std::size_t r = 0; r < data.rows(); ++r) rows.push_back(parse_row(data, cells, r, cfg, col));
 
   ImportReport rep;
   rep.data_file = data.file;
   rep.config_file = cfg.file;
   rep.rows_read = rows.size();
   DropLog drops;
-  const auto keep = usable_rows(data, rows, cfg, col.time, drops);
+  const auto keep = usable_rows(data, cells, rows, cfg, col.time, drops);
 
   std::vector<Eigen::Matrix3Xd> ref_body_m(nb);
   rep.bodies.resize(nb);
@@ -468,7 +406,7 @@ ImportedRun import_table(const RawTable& data, const ImportConfig& cfg, const st
       if (!f.fits[b] && b == ee) ee_why = why;
     }
     if (!f.fits[ee]) {
-      drops.add(fmt::format("body '{}' (the ee): {}", cfg.bodies[ee].name, ee_why), data.line[r]);
+      drops.add(fmt::format("body '{}' (the ee): {}", cfg.bodies[ee].name, ee_why), data.row_line[r]);
       continue;
     }
     out.push_back(std::move(f));
@@ -501,7 +439,7 @@ ImportedRun import_table(const RawTable& data, const ImportConfig& cfg, const st
     const auto& p = rows[out[i].row];
     const auto ii = static_cast<Eigen::Index>(i);
     auto& s = tab.samples[i];
-    tab.line[i] = data.line[out[i].row];
+    tab.line[i] = data.row_line[out[i].row];
     s.t_s = (p.time_raw - t0_raw) / raw_per_s;  // dividing by an exact power of ten keeps 0.006968 short
     s.p_world_ee_m = out[i].fits[ee]->p_world_body_m;
     s.q_world_ee = continuous_quaternion(out[i].fits[ee]->R_world_body, q_prev[ee]);

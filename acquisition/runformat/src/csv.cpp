@@ -1,9 +1,11 @@
 #include "hil/format/csv.hpp"
 
 #include <algorithm>
+#include <cctype>
 #include <charconv>
 #include <cmath>
 #include <fstream>
+#include <limits>
 #include <sstream>
 #include <unordered_set>
 
@@ -19,18 +21,26 @@ std::string_view trim(std::string_view s) {
   return s;
 }
 
-std::vector<std::string_view> split(std::string_view line) {
+std::vector<std::string_view> split(std::string_view line, char delimiter) {
   std::vector<std::string_view> cells;
   std::size_t start = 0;
   for (;;) {
-    const std::size_t comma = line.find(',', start);
-    if (comma == std::string_view::npos) {
+    const std::size_t d = line.find(delimiter, start);
+    if (d == std::string_view::npos) {
       cells.push_back(trim(line.substr(start)));
       return cells;
     }
-    cells.push_back(trim(line.substr(start, comma - start)));
-    start = comma + 1;
+    cells.push_back(trim(line.substr(start, d - start)));
+    start = d + 1;
   }
+}
+
+/// `nan` in any case with an optional sign (what from_chars reads as NaN, without a payload).
+bool is_nan_text(std::string_view s) {
+  if (!s.empty() && (s.front() == '+' || s.front() == '-')) s.remove_prefix(1);
+  if (s.size() != 3) return false;
+  const auto lower = [](char c) { return static_cast<char>(std::tolower(static_cast<unsigned char>(c))); };
+  return lower(s[0]) == 'n' && lower(s[1]) == 'a' && lower(s[2]) == 'n';
 }
 
 bool blank_or_comment(std::string_view line) {
@@ -39,6 +49,20 @@ bool blank_or_comment(std::string_view line) {
 }
 
 }  // namespace
+
+double read_number(std::string_view cell, const Location& where, MissingCells missing) {
+  cell = trim(cell);
+  if (missing == MissingCells::nan && (cell.empty() || is_nan_text(cell))) return std::numeric_limits<double>::quiet_NaN();
+  if (cell.empty()) throw FormatError(where, "empty cell, expected a number");
+  double v = 0.0;
+  const char* first = cell.data();
+  if (*first == '+') ++first;  // from_chars refuses a leading '+', which people do write
+  const auto [ptr, ec] = std::from_chars(first, cell.data() + cell.size(), v);
+  if (ec != std::errc() || ptr != cell.data() + cell.size())
+    throw FormatError(where, "expected a number, found '" + std::string(cell) + "'");
+  if (!std::isfinite(v)) throw FormatError(where, "expected a finite number, found '" + std::string(cell) + "'");
+  return v;
+}
 
 const std::vector<double>& CsvTable::numeric(const std::string& column) const {
   const auto it = numeric_.find(column);
@@ -73,10 +97,12 @@ CsvTable parse_csv(const std::string& text, const CsvOptions& options) {
   CsvTable table;
   table.file = options.display_name;
   const std::string& file = table.file;
+  const char delim = options.delimiter;
 
   // Split into lines, remembering whether the final line was terminated.
   std::vector<std::string_view> lines;
   std::string_view rest(text);
+  if (options.skip_byte_order_mark && rest.substr(0, 3) == "\xEF\xBB\xBF") rest.remove_prefix(3);
   while (!rest.empty()) {
     const std::size_t nl = rest.find('\n');
     if (nl == std::string_view::npos) {
@@ -91,16 +117,22 @@ CsvTable parse_csv(const std::string& text, const CsvOptions& options) {
 
   std::size_t i = 0;
   while (i < lines.size() && blank_or_comment(lines[i])) ++i;
-  if (i == lines.size()) throw FormatError({file, 0, 0, ""}, "empty file: expected a header line");
-
-  const std::size_t header_line = i + 1;
-  for (auto cell : split(lines[i])) table.header.emplace_back(cell);
+  std::size_t header_line = 0;  // the line the names come from, 0 when given in the options
+  if (!options.column_names.empty()) {
+    table.header = options.column_names;  // no header line: the data starts at line i + 1
+  } else {
+    if (i == lines.size()) throw FormatError({file, 0, 0, ""}, "empty file: expected a header line");
+    header_line = i + 1;
+    for (auto cell : split(lines[i++], delim)) table.header.emplace_back(cell);
+  }
+  table.header_line = header_line;
   const std::size_t ncol = table.header.size();
+  const std::string names_from = header_line ? "in header" : "in the given column names";
   std::unordered_set<std::string> seen;
   for (std::size_t c = 0; c < ncol; ++c) {
     const auto& h = table.header[c];
-    if (h.empty()) throw FormatError({file, header_line, c + 1, ""}, "empty column name in header");
-    if (!seen.insert(h).second) throw FormatError({file, header_line, c + 1, h}, "column name appears twice in header");
+    if (h.empty()) throw FormatError({file, header_line, c + 1, ""}, "empty column name " + names_from);
+    if (!seen.insert(h).second) throw FormatError({file, header_line, c + 1, h}, "column name appears twice " + names_from);
   }
   for (const auto& req : options.required) {
     if (seen.count(req)) continue;
@@ -115,6 +147,9 @@ CsvTable parse_csv(const std::string& text, const CsvOptions& options) {
     }
     throw FormatError({file, header_line, 0, req}, "required column is missing from the header" + hint);
   }
+  const std::string expected =
+      header_line ? "header has " + std::to_string(ncol)
+                  : "expected " + std::to_string(ncol) + " (one per given column name)";
 
   std::vector<bool> numeric(ncol);
   std::vector<std::vector<double>*> num_col(ncol, nullptr);
@@ -127,14 +162,15 @@ CsvTable parse_csv(const std::string& text, const CsvOptions& options) {
     else txt_col[c] = &table.text_[h];
   }
 
-  for (++i; i < lines.size(); ++i) {
+  for (; i < lines.size(); ++i) {
     const std::size_t line_no = i + 1;
     if (blank_or_comment(lines[i])) {
-      if (trim(lines[i]).empty() && i + 1 < lines.size() && !blank_or_comment(lines[i + 1]))
+      if (!options.skip_blank_lines && trim(lines[i]).empty() && i + 1 < lines.size() &&
+          !blank_or_comment(lines[i + 1]))
         throw FormatError({file, line_no, 0, ""}, "empty line inside the data");
       continue;
     }
-    const auto cells = split(lines[i]);
+    const auto cells = split(lines[i], delim);
     const bool is_last = (i + 1 == lines.size());
     if (cells.size() < ncol) {
       if (is_last && !last_terminated)
@@ -142,29 +178,13 @@ CsvTable parse_csv(const std::string& text, const CsvOptions& options) {
                           "truncated last line: " + std::to_string(cells.size()) + " of " +
                               std::to_string(ncol) + " cells and no line end (file cut while writing?)");
       throw FormatError({file, line_no, cells.size() + 1, table.header[cells.size()]},
-                        "row has " + std::to_string(cells.size()) + " cells, header has " + std::to_string(ncol));
+                        "row has " + std::to_string(cells.size()) + " cells, " + expected);
     }
     if (cells.size() > ncol)
-      throw FormatError({file, line_no, ncol + 1, ""},
-                        "row has " + std::to_string(cells.size()) + " cells, header has " + std::to_string(ncol));
+      throw FormatError({file, line_no, ncol + 1, ""}, "row has " + std::to_string(cells.size()) + " cells, " + expected);
     for (std::size_t c = 0; c < ncol; ++c) {
-      const auto cell = cells[c];
-      if (!numeric[c]) {
-        txt_col[c]->emplace_back(cell);
-        continue;
-      }
-      if (cell.empty()) throw FormatError({file, line_no, c + 1, table.header[c]}, "empty cell, expected a number");
-      double v = 0.0;
-      const char* first = cell.data();
-      if (*first == '+') ++first;  // from_chars refuses a leading '+', which people do write
-      const auto [ptr, ec] = std::from_chars(first, cell.data() + cell.size(), v);
-      if (ec != std::errc() || ptr != cell.data() + cell.size())
-        throw FormatError({file, line_no, c + 1, table.header[c]},
-                          "expected a number, found '" + std::string(cell) + "'");
-      if (!std::isfinite(v))
-        throw FormatError({file, line_no, c + 1, table.header[c]},
-                          "expected a finite number, found '" + std::string(cell) + "'");
-      num_col[c]->push_back(v);
+      if (numeric[c]) num_col[c]->push_back(read_number(cells[c], {file, line_no, c + 1, table.header[c]}, options.missing));
+      else txt_col[c]->emplace_back(cells[c]);
     }
     table.row_line.push_back(line_no);
   }

@@ -4,34 +4,22 @@
 #include <Eigen/Core>
 #include <cstddef>
 #include <string>
-#include <string_view>
 #include <vector>
 
+#include "hil/format/csv.hpp"
 #include "hil/format/run.hpp"
 #include "hil/format/samples.hpp"
 #include "hil/import/config.hpp"
 
 namespace hil::import {
 
-/// A delimited text table, cells kept as text.
-struct RawTable {
-  std::string file;
-  std::vector<std::string> names;  ///< column names (from the header or the config)
-  std::size_t header_line = 0;     ///< 0 when the file has no header
-  std::vector<std::vector<std::string>> rows;
-  std::vector<std::size_t> line;  ///< 1-based file line of each row
-};
-
-/// Splits `text` into rows. With `header`, the first non-comment line names the columns; without,
-/// `names` do. Lines starting with '#' and blank lines are skipped; ragged rows and a truncated last
-/// line are errors. \throws format::FormatError.
-RawTable parse_delimited(std::string_view text, const std::string& display_name, char delimiter, bool header,
-                         const std::vector<std::string>& names);
-RawTable read_delimited(const std::string& path, char delimiter, bool header, const std::vector<std::string>& names);
-
-/// A cell read as a number: ok, missing (empty or NaN), or not a number.
-enum class CellKind { number, missing, bad };
-CellKind parse_cell(std::string_view cell, double& value);
+/// The options of the one CSV reader (format::parse_csv) for a data file: the config's delimiter,
+/// its header line or its column names, a byte-order mark and blank lines skipped, and every
+/// column kept as text (import_table reads the numbers, an empty or NaN cell being missing).
+format::CsvOptions data_options(char delimiter, bool header, const std::vector<std::string>& names,
+                                const std::string& display_name = "");
+/// format::read_csv with data_options. \throws format::FormatError naming file, line and column.
+format::CsvTable read_delimited(const std::string& path, char delimiter, bool header, const std::vector<std::string>& names);
 
 struct Gap {
   double t_s = 0;   ///< time of the sample after the gap
@@ -78,9 +66,9 @@ struct ImportedRun {
   ImportReport report;
 };
 
-/// Turns the table into a run following the config. `rig_name` overrides the config's `rig`.
+/// Turns the table (read with data_options: every column text) into a run following the config. `rig_name` overrides the config's `rig`.
 /// \throws format::FormatError naming the data file (line, column) or the config.
-ImportedRun import_table(const RawTable& data, const ImportConfig& config, const std::string& rig_name = "");
+ImportedRun import_table(const format::CsvTable& data, const ImportConfig& config, const std::string& rig_name = "");
 
 /// Writes run.yaml and samples.csv (required columns, j1..jN, then the extra columns) into `dir`
 /// (created if needed). Numbers are written in the shortest form that reads back exactly.
