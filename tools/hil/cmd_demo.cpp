@@ -108,6 +108,7 @@ int demo(const DemoOptions& o) {
   ao.play_speed = o.speed;
   ao.output_rate_hz = played.info.output_rate_hz;
   ao.progress = false;
+  ao.participant = participant_options("hil-acquire");  // the monitor's domain, profile and security
   ao.wait_subscribers = 1;  // our own monitor sees the run from its first sample
   ao.mcap = true;            // run.mcap beside the CSV: open it in Foxglove or PlotJuggler (docs/mcap.md)
   std::atomic<std::uint64_t> n{0};

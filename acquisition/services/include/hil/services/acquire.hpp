@@ -32,7 +32,9 @@ struct AcquireOptions {
   drivers::ModbusFaults robot_faults;
   bool mcap = false;                     ///< also record run.mcap (docs/mcap.md)
   std::string mcap_compression = "zstd";  ///< none | zstd | lz4
-  dds::ParticipantOptions participant;     ///< the bus participant (unless no_bus)
+  /// The bus participant (unless no_bus). The default is domain 0 with hil's host-only profile;
+  /// a command passes cli::participant_options() so that --dds-domain, --dds-profile and --secure hold.
+  dds::ParticipantOptions participant;
 };
 
 struct AcquireResult {
