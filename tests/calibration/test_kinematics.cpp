@@ -1,5 +1,6 @@
 // Forward kinematics and Jacobians of the DH robot model, checked against finite differences and
 // hand-computed poses, for both DH conventions and prismatic joints.
+#include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
 #include <random>
@@ -100,5 +101,6 @@ TEST(Kinematics, ToolInBaseIsTheToolPoseWithoutTheBase) {
 }
 
 TEST(Kinematics, WrongJointCountIsRefused) {
-  EXPECT_THROW(hc::forward(hc::kr270_like(), Eigen::VectorXd::Zero(5)), std::invalid_argument);
+  EXPECT_THAT([] { hc::forward(hc::kr270_like(), Eigen::VectorXd::Zero(5)); },
+              ::testing::ThrowsMessage<std::invalid_argument>(::testing::HasSubstr("forward: expected 6 joint values")));
 }
