@@ -22,6 +22,13 @@ using namespace hil;
 
 namespace {
 
+/// Reader options for a CSV that must hold these numeric columns.
+format::CsvOptions requiring(std::vector<std::string> columns) {
+  format::CsvOptions o;
+  o.required = std::move(columns);
+  return o;
+}
+
 std::shared_ptr<const drivers::Scenario> example_scenario(bool loop) {
   const auto run = format::load_run(std::string(HIL_SOURCE_DIR) + "/examples/runs/press_slide");
   return std::make_shared<const drivers::Scenario>(rig_drivers::scenario_from_run(run, Eigen::Isometry3d::Identity(), loop));
@@ -186,7 +193,7 @@ TEST(EndToEnd, InjectedFaultsAreReportedAndRecoveredFrom) {
   // Reads the raw plate stream to find the last good reading before each plate fault.
   std::vector<std::int64_t> plate_t;
   {
-    const auto csv = format::read_csv(dir + "/raw/force_plate.csv", {{"t_ns"}, {}, ""});
+    const auto csv = format::read_csv(dir + "/raw/force_plate.csv", requiring({"t_ns"}));
     for (double t : csv.numeric("t_ns")) plate_t.push_back(static_cast<std::int64_t>(t));
   }
   auto last_before_hole = [&](std::int64_t from_ns) {
@@ -227,7 +234,7 @@ TEST(EndToEnd, InjectedFaultsAreReportedAndRecoveredFrom) {
   const auto& q = run.samples;
   (void)q;
   int flagged = 0;
-  const auto csv = format::read_csv(dir + "/samples.csv", {{"t", "quality"}, {}, ""});
+  const auto csv = format::read_csv(dir + "/samples.csv", requiring({"t", "quality"}));
   for (double v : csv.numeric("quality")) flagged += (static_cast<std::uint32_t>(v) & acquisition::kGapBefore) != 0;
   EXPECT_GE(flagged, 2) << "the silent and bus-off holes must be marked in the recording";
 }
