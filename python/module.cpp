@@ -3,7 +3,7 @@
 #include <pybind11/pybind11.h>
 
 #include "bindings.hpp"
-#include "hil/format/error.hpp"
+#include <hil/format/error.hpp>
 
 namespace py = pybind11;
 

@@ -12,12 +12,12 @@
 
 #include "bindings.hpp"
 #include "convert.hpp"
-#include "hil/calibration/reduction.hpp"
-#include "hil/format/run.hpp"
-#include "hil/services/contact_identify.hpp"
-#include "hil/rig/contact.hpp"
-#include "hil/services/diagnose_run.hpp"
-#include "hil/services/stiffness_io.hpp"
+#include <hil/calibration/reduction.hpp>
+#include <hil/format/run.hpp>
+#include <hil/services/contact_identify.hpp>
+#include <hil/rig/contact.hpp>
+#include <hil/services/diagnose_run.hpp>
+#include <hil/services/stiffness_io.hpp>
 
 namespace hil::python {
 

@@ -8,8 +8,8 @@
 
 #include "bindings.hpp"
 #include "convert.hpp"
-#include "hil/format/csv.hpp"
-#include "hil/format/run.hpp"
+#include <hil/format/csv.hpp>
+#include <hil/format/run.hpp>
 
 namespace hil::python {
 

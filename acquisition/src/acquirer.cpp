@@ -1,4 +1,4 @@
-#include "hil/acquisition/acquirer.hpp"
+#include <hil/acquisition/acquirer.hpp>
 
 #include <fcntl.h>
 #include <fmt/format.h>
@@ -11,11 +11,11 @@
 #include <ctime>
 #include <cstring>
 
-#include "hil/acquisition/ros_msgs.hpp"
-#include "hil/acquisition/sample_msg.hpp"
-#include "hil/dds/topics.hpp"
-#include "hil/drivers/can_channel.hpp"
-#include "hil/drivers/error.hpp"
+#include <hil/acquisition/ros_msgs.hpp>
+#include <hil/acquisition/sample_msg.hpp>
+#include <hil/dds/topics.hpp>
+#include <hil/drivers/can_channel.hpp>
+#include <hil/drivers/error.hpp>
 
 namespace hil::acquisition {
 

@@ -1,4 +1,4 @@
-#include "hil/acquisition/identity.hpp"
+#include <hil/acquisition/identity.hpp>
 
 namespace hil::acquisition {
 

@@ -1,4 +1,4 @@
-#include "hil/acquisition/monitor.hpp"
+#include <hil/acquisition/monitor.hpp>
 
 #include <fmt/format.h>
 

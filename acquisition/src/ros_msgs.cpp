@@ -1,4 +1,4 @@
-#include "hil/acquisition/ros_msgs.hpp"
+#include <hil/acquisition/ros_msgs.hpp>
 
 #include <fmt/format.h>
 

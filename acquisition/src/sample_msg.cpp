@@ -1,4 +1,4 @@
-#include "hil/acquisition/sample_msg.hpp"
+#include <hil/acquisition/sample_msg.hpp>
 
 #include <cmath>
 

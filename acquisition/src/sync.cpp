@@ -1,5 +1,5 @@
-#include "hil/acquisition/sync.hpp"
-#include "hil/so3/so3.hpp"
+#include <hil/acquisition/sync.hpp>
+#include <hil/so3/so3.hpp>
 
 #include <algorithm>
 #include <cmath>

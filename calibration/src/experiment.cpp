@@ -1,4 +1,4 @@
-#include "hil/calibration/experiment.hpp"
+#include <hil/calibration/experiment.hpp>
 
 #include <random>
 #include <stdexcept>

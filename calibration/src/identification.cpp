@@ -1,4 +1,4 @@
-#include "hil/calibration/identification.hpp"
+#include <hil/calibration/identification.hpp>
 
 #include <Eigen/QR>
 #include <Eigen/SVD>

@@ -1,4 +1,4 @@
-#include "hil/calibration/observation.hpp"
+#include <hil/calibration/observation.hpp>
 
 #include <stdexcept>
 

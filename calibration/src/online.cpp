@@ -1,4 +1,4 @@
-#include "hil/calibration/online.hpp"
+#include <hil/calibration/online.hpp>
 
 #include <algorithm>
 #include <cmath>

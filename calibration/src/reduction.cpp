@@ -1,4 +1,4 @@
-#include "hil/calibration/reduction.hpp"
+#include <hil/calibration/reduction.hpp>
 
 #include <Eigen/QR>
 #include <Eigen/SVD>

@@ -1,5 +1,5 @@
-#include "hil/calibration/robot.hpp"
-#include "hil/so3/so3.hpp"
+#include <hil/calibration/robot.hpp>
+#include <hil/so3/so3.hpp>
 
 #include <cmath>
 #include <stdexcept>

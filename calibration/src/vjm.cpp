@@ -1,4 +1,4 @@
-#include "hil/calibration/vjm.hpp"
+#include <hil/calibration/vjm.hpp>
 
 #include <Eigen/Eigenvalues>
 #include <Eigen/QR>

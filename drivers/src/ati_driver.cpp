@@ -2,8 +2,8 @@
 #include <cstdio>
 #include <spdlog/spdlog.h>
 
-#include "hil/drivers/error.hpp"
-#include "hil/drivers/force_plate.hpp"
+#include <hil/drivers/error.hpp>
+#include <hil/drivers/force_plate.hpp>
 
 namespace hil::drivers {
 namespace {

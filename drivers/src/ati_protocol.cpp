@@ -1,4 +1,4 @@
-#include "hil/drivers/ati_protocol.hpp"
+#include <hil/drivers/ati_protocol.hpp>
 
 #include <bit>
 #include <cstring>

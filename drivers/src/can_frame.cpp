@@ -1,4 +1,4 @@
-#include "hil/drivers/can_frame.hpp"
+#include <hil/drivers/can_frame.hpp>
 
 #include <cstdio>
 #include <cstring>

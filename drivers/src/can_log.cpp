@@ -2,9 +2,9 @@
 #include <cstring>
 #include <thread>
 
-#include "hil/drivers/can_channel.hpp"
-#include "hil/drivers/candump.hpp"
-#include "hil/drivers/error.hpp"
+#include <hil/drivers/can_channel.hpp>
+#include <hil/drivers/candump.hpp>
+#include <hil/drivers/error.hpp>
 
 namespace hil::drivers {
 

@@ -4,7 +4,7 @@
 #include <deque>
 #include <mutex>
 
-#include "hil/drivers/can_channel.hpp"
+#include <hil/drivers/can_channel.hpp>
 
 namespace hil::drivers {
 

@@ -1,4 +1,4 @@
-#include "hil/drivers/candump.hpp"
+#include <hil/drivers/candump.hpp>
 
 #include <cinttypes>
 #include <cstdio>

@@ -1,7 +1,7 @@
 #include <cstdio>
 
-#include "hil/drivers/error.hpp"
-#include "hil/drivers/force_plate.hpp"
+#include <hil/drivers/error.hpp>
+#include <hil/drivers/force_plate.hpp>
 
 namespace hil::drivers {
 

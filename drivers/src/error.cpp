@@ -1,4 +1,4 @@
-#include "hil/drivers/error.hpp"
+#include <hil/drivers/error.hpp>
 
 namespace hil::drivers {
 

@@ -1,8 +1,8 @@
 #include <deque>
 #include <random>
 
-#include "hil/drivers/error.hpp"
-#include "hil/drivers/fake_rig.hpp"
+#include <hil/drivers/error.hpp>
+#include <hil/drivers/fake_rig.hpp>
 
 namespace hil::drivers {
 

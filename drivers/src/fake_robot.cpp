@@ -10,8 +10,8 @@
 #include <cstring>
 #include <random>
 
-#include "hil/drivers/error.hpp"
-#include "hil/drivers/fake_rig.hpp"
+#include <hil/drivers/error.hpp>
+#include <hil/drivers/fake_rig.hpp>
 
 namespace hil::drivers {
 

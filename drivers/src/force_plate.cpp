@@ -3,8 +3,8 @@
 #include <set>
 #include <utility>
 
-#include "hil/drivers/error.hpp"
-#include "hil/drivers/force_plate.hpp"
+#include <hil/drivers/error.hpp>
+#include <hil/drivers/force_plate.hpp>
 
 namespace hil::drivers {
 

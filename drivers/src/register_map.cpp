@@ -1,4 +1,4 @@
-#include "hil/drivers/register_map.hpp"
+#include <hil/drivers/register_map.hpp>
 
 #include <algorithm>
 #include <bit>
@@ -8,7 +8,7 @@
 #include <numbers>
 #include <set>
 
-#include "hil/drivers/error.hpp"
+#include <hil/drivers/error.hpp>
 
 namespace hil::drivers {
 

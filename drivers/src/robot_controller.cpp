@@ -1,6 +1,6 @@
 // Read-only Modbus client. Only modbus_read_registers / modbus_read_input_registers are used here;
 // tests/drivers checks that no write function appears in this file.
-#include "hil/drivers/robot_controller.hpp"
+#include <hil/drivers/robot_controller.hpp>
 
 #include <modbus/modbus.h>
 #include <spdlog/spdlog.h>
@@ -10,9 +10,9 @@
 #include <cstdio>
 #include <cstring>
 
-#include "hil/drivers/can_channel.hpp"
-#include "hil/drivers/error.hpp"
-#include "hil/so3/so3.hpp"
+#include <hil/drivers/can_channel.hpp>
+#include <hil/drivers/error.hpp>
+#include <hil/so3/so3.hpp>
 
 namespace hil::drivers {
 

@@ -1,9 +1,9 @@
 #include <algorithm>
 #include <cmath>
 
-#include "hil/drivers/error.hpp"
-#include "hil/drivers/fake_rig.hpp"
-#include "hil/so3/so3.hpp"
+#include <hil/drivers/error.hpp>
+#include <hil/drivers/fake_rig.hpp>
+#include <hil/so3/so3.hpp>
 
 namespace hil::drivers {
 

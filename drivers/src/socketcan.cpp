@@ -1,4 +1,4 @@
-#include "hil/drivers/socketcan.hpp"
+#include <hil/drivers/socketcan.hpp>
 
 #include <linux/can.h>
 #include <linux/can/raw.h>
@@ -13,7 +13,7 @@
 #include <cstring>
 #include <ctime>
 
-#include "hil/drivers/error.hpp"
+#include <hil/drivers/error.hpp>
 
 namespace hil::drivers {
 namespace {

@@ -1,6 +1,6 @@
-#include "hil/dds/bus.hpp"
+#include <hil/dds/bus.hpp>
 
-#include "hil/format/error.hpp"
+#include <hil/format/error.hpp>
 
 #include <fastdds/dds/domain/DomainParticipantFactory.hpp>
 #include <spdlog/spdlog.h>

@@ -9,14 +9,14 @@
 #include <mutex>
 #include <thread>
 
-#include "hil/test/files.hpp"
-#include "hil/acquisition/acquirer.hpp"
-#include "hil/acquisition/sample_msg.hpp"
-#include "hil/dds/topics.hpp"
-#include "hil/drivers/fake_rig.hpp"
-#include "hil/format/csv.hpp"
-#include "hil/format/run.hpp"
-#include "hil/rig_drivers/drivers_from_rig.hpp"
+#include <hil/test/files.hpp>
+#include <hil/acquisition/acquirer.hpp>
+#include <hil/acquisition/sample_msg.hpp>
+#include <hil/dds/topics.hpp>
+#include <hil/drivers/fake_rig.hpp>
+#include <hil/format/csv.hpp>
+#include <hil/format/run.hpp>
+#include <hil/rig_drivers/drivers_from_rig.hpp>
 
 using namespace hil;
 

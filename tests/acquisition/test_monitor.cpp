@@ -1,6 +1,6 @@
 #include <gtest/gtest.h>
 
-#include "hil/acquisition/monitor.hpp"
+#include <hil/acquisition/monitor.hpp>
 
 using namespace hil::acquisition;
 

@@ -6,8 +6,8 @@
 
 #include <filesystem>
 
-#include "hil/test/files.hpp"
-#include "hil/acquisition/recorder.hpp"
+#include <hil/test/files.hpp>
+#include <hil/acquisition/recorder.hpp>
 
 using namespace hil::acquisition;
 

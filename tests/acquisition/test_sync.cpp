@@ -4,7 +4,7 @@
 #include <cmath>
 #include <vector>
 
-#include "hil/acquisition/sync.hpp"
+#include <hil/acquisition/sync.hpp>
 
 using namespace hil::acquisition;
 

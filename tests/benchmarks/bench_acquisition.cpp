@@ -5,9 +5,9 @@
 
 #include <fastrtps/rtps/common/SerializedPayload.h>
 
-#include "hil/acquisition/recorder.hpp"
-#include "hil/acquisition/sample_msg.hpp"
-#include "hil/acquisition/sync.hpp"
+#include <hil/acquisition/recorder.hpp>
+#include <hil/acquisition/sample_msg.hpp>
+#include <hil/acquisition/sync.hpp>
 
 using namespace hil::acquisition;
 

@@ -37,12 +37,12 @@
 
 #include <spdlog/spdlog.h>
 
-#include "hil/acquisition/acquirer.hpp"
-#include "hil/acquisition/sample_msg.hpp"
-#include "hil/dds/topics.hpp"
-#include "hil/drivers/fake_rig.hpp"
-#include "hil/format/run.hpp"
-#include "hil/rig_drivers/drivers_from_rig.hpp"
+#include <hil/acquisition/acquirer.hpp>
+#include <hil/acquisition/sample_msg.hpp>
+#include <hil/dds/topics.hpp>
+#include <hil/drivers/fake_rig.hpp>
+#include <hil/format/run.hpp>
+#include <hil/rig_drivers/drivers_from_rig.hpp>
 
 namespace {
 

@@ -6,8 +6,8 @@
 
 #include <memory>
 
-#include "hil/calibration/experiment.hpp"
-#include "hil/calibration/online.hpp"
+#include <hil/calibration/experiment.hpp>
+#include <hil/calibration/online.hpp>
 
 namespace hc = hil::calibration;
 

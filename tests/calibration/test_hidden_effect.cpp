@@ -3,8 +3,8 @@
 // below the measurement noise.
 #include <gtest/gtest.h>
 
-#include "hil/calibration/experiment.hpp"
-#include "hil/calibration/reduction.hpp"
+#include <hil/calibration/experiment.hpp>
+#include <hil/calibration/reduction.hpp>
 
 namespace hc = hil::calibration;
 

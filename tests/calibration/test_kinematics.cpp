@@ -5,8 +5,8 @@
 
 #include <random>
 
-#include "hil/test/eigen.hpp"
-#include "hil/calibration/robot.hpp"
+#include <hil/test/eigen.hpp>
+#include <hil/calibration/robot.hpp>
 
 namespace hc = hil::calibration;
 

@@ -1,9 +1,9 @@
 // The online identifier: Givens updates give the batch answer after every configuration.
 #include <gtest/gtest.h>
 
-#include "hil/test/eigen.hpp"
-#include "hil/calibration/experiment.hpp"
-#include "hil/calibration/online.hpp"
+#include <hil/test/eigen.hpp>
+#include <hil/calibration/experiment.hpp>
+#include <hil/calibration/online.hpp>
 
 namespace hc = hil::calibration;
 

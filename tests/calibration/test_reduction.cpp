@@ -5,9 +5,9 @@
 #include <numeric>
 #include <random>
 
-#include "hil/test/eigen.hpp"
-#include "hil/calibration/experiment.hpp"
-#include "hil/calibration/reduction.hpp"
+#include <hil/test/eigen.hpp>
+#include <hil/calibration/experiment.hpp>
+#include <hil/calibration/reduction.hpp>
 
 namespace hc = hil::calibration;
 

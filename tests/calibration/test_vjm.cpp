@@ -4,10 +4,10 @@
 
 #include <random>
 
-#include "hil/test/eigen.hpp"
-#include "hil/calibration/experiment.hpp"
-#include "hil/calibration/observation.hpp"
-#include "hil/calibration/reduction.hpp"
+#include <hil/test/eigen.hpp>
+#include <hil/calibration/experiment.hpp>
+#include <hil/calibration/observation.hpp>
+#include <hil/calibration/reduction.hpp>
 
 namespace hc = hil::calibration;
 

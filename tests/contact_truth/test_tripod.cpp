@@ -8,7 +8,7 @@
 #include <limits>
 #include <numeric>
 
-#include "hil/contact_truth/tripod.hpp"
+#include <hil/contact_truth/tripod.hpp>
 
 namespace hil::contact_truth {
 namespace {

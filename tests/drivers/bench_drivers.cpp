@@ -5,11 +5,11 @@
 #include <random>
 #include <vector>
 
-#include "hil/drivers/ati_protocol.hpp"
-#include "hil/drivers/candump.hpp"
-#include "hil/drivers/can_frame.hpp"
-#include "hil/drivers/force_plate.hpp"
-#include "hil/drivers/register_map.hpp"
+#include <hil/drivers/ati_protocol.hpp>
+#include <hil/drivers/candump.hpp>
+#include <hil/drivers/can_frame.hpp>
+#include <hil/drivers/force_plate.hpp>
+#include <hil/drivers/register_map.hpp>
 
 using namespace hil::drivers;
 

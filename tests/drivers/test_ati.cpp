@@ -5,11 +5,11 @@
 #include <numbers>
 #include <thread>
 
-#include "hil/drivers/ati_protocol.hpp"
-#include "hil/drivers/error.hpp"
-#include "hil/drivers/fake_rig.hpp"
-#include "hil/drivers/force_plate.hpp"
-#include "hil/test/drivers.hpp"
+#include <hil/drivers/ati_protocol.hpp>
+#include <hil/drivers/error.hpp>
+#include <hil/drivers/fake_rig.hpp>
+#include <hil/drivers/force_plate.hpp>
+#include <hil/test/drivers.hpp>
 
 using namespace hil::drivers;
 using hil::test::near6;

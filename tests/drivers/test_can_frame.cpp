@@ -4,7 +4,7 @@
 #include <cstring>
 #include <random>
 
-#include "hil/drivers/can_frame.hpp"
+#include <hil/drivers/can_frame.hpp>
 
 using namespace hil::drivers;
 

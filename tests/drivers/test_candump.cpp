@@ -3,7 +3,7 @@
 
 #include <random>
 
-#include "hil/drivers/candump.hpp"
+#include <hil/drivers/candump.hpp>
 
 using namespace hil::drivers;
 

@@ -5,9 +5,9 @@
 #include <filesystem>
 #include <fstream>
 
-#include "hil/drivers/can_channel.hpp"
-#include "hil/drivers/candump.hpp"
-#include "hil/drivers/error.hpp"
+#include <hil/drivers/can_channel.hpp>
+#include <hil/drivers/candump.hpp>
+#include <hil/drivers/error.hpp>
 
 using namespace hil::drivers;
 using namespace std::chrono_literals;

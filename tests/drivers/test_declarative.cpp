@@ -4,9 +4,9 @@
 
 #include <random>
 
-#include "hil/drivers/error.hpp"
-#include "hil/drivers/force_plate.hpp"
-#include "hil/test/drivers.hpp"
+#include <hil/drivers/error.hpp>
+#include <hil/drivers/force_plate.hpp>
+#include <hil/test/drivers.hpp>
 
 using namespace hil::drivers;
 using namespace std::chrono_literals;

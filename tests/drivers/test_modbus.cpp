@@ -10,10 +10,10 @@
 #include <numbers>
 #include <thread>
 
-#include "hil/drivers/error.hpp"
-#include "hil/drivers/fake_rig.hpp"
-#include "hil/drivers/robot_controller.hpp"
-#include "hil/test/drivers.hpp"
+#include <hil/drivers/error.hpp>
+#include <hil/drivers/fake_rig.hpp>
+#include <hil/drivers/robot_controller.hpp>
+#include <hil/test/drivers.hpp>
 
 using namespace hil::drivers;
 using hil::test::eventually;

@@ -4,9 +4,9 @@
 
 #include <sstream>
 
-#include "hil/drivers/fake_rig.hpp"
-#include "hil/drivers/robot_controller.hpp"
-#include "hil/test/drivers.hpp"
+#include <hil/drivers/fake_rig.hpp>
+#include <hil/drivers/robot_controller.hpp>
+#include <hil/test/drivers.hpp>
 
 using namespace hil::drivers;
 

@@ -6,8 +6,8 @@
 #include <numbers>
 #include <sstream>
 
-#include "hil/drivers/register_map.hpp"
-#include "hil/test/drivers.hpp"
+#include <hil/drivers/register_map.hpp>
+#include <hil/test/drivers.hpp>
 
 using namespace hil::drivers;
 

@@ -8,11 +8,11 @@
 #include <cstdlib>
 #include <filesystem>
 
-#include "hil/drivers/candump.hpp"
-#include "hil/drivers/fake_rig.hpp"
-#include "hil/drivers/force_plate.hpp"
-#include "hil/drivers/socketcan.hpp"
-#include "hil/test/drivers.hpp"
+#include <hil/drivers/candump.hpp>
+#include <hil/drivers/fake_rig.hpp>
+#include <hil/drivers/force_plate.hpp>
+#include <hil/drivers/socketcan.hpp>
+#include <hil/test/drivers.hpp>
 
 using namespace hil::drivers;
 using namespace std::chrono_literals;

@@ -12,9 +12,9 @@
 #include <thread>
 #include <vector>
 
-#include "hil/acquisition/sample_msg.hpp"
-#include "hil/dds/bus.hpp"
-#include "hil/dds/topics.hpp"
+#include <hil/acquisition/sample_msg.hpp>
+#include <hil/dds/bus.hpp>
+#include <hil/dds/topics.hpp>
 
 namespace {
 

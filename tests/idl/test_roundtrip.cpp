@@ -3,8 +3,8 @@
 
 #include <fastrtps/rtps/common/SerializedPayload.h>
 
-#include "hil/acquisition/sample_msg.hpp"
-#include "hil/dds/types.hpp"
+#include <hil/acquisition/sample_msg.hpp>
+#include <hil/dds/types.hpp>
 
 namespace {
 

@@ -2,9 +2,9 @@
 #include <gtest/gtest.h>
 #include <gmock/gmock.h>
 
-#include "hil/format/error.hpp"
-#include "hil/import/config.hpp"
-#include "hil/import/timeparse.hpp"
+#include <hil/format/error.hpp>
+#include <hil/import/config.hpp>
+#include <hil/import/timeparse.hpp>
 
 namespace hil::import {
 namespace {

@@ -3,8 +3,8 @@
 
 #include <random>
 
-#include "hil/import/rigid_fit.hpp"
-#include "hil/so3/so3.hpp"
+#include <hil/import/rigid_fit.hpp>
+#include <hil/so3/so3.hpp>
 
 namespace hil::import {
 namespace {

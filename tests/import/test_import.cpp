@@ -8,11 +8,11 @@
 #include <filesystem>
 #include <numbers>
 
-#include "hil/format/error.hpp"
-#include "hil/format/run.hpp"
-#include "hil/import/importer.hpp"
-#include "hil/import/rigid_fit.hpp"
-#include "hil/test/files.hpp"
+#include <hil/format/error.hpp>
+#include <hil/format/run.hpp>
+#include <hil/import/importer.hpp>
+#include <hil/import/rigid_fit.hpp>
+#include <hil/test/files.hpp>
 
 namespace hil::import {
 namespace {

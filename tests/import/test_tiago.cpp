@@ -6,8 +6,8 @@
 
 #include <filesystem>
 
-#include "hil/format/run.hpp"
-#include "hil/import/importer.hpp"
+#include <hil/format/run.hpp>
+#include <hil/import/importer.hpp>
 
 namespace hil::import {
 namespace {

@@ -3,8 +3,8 @@
 #include <cstdio>
 #include <exception>
 
-#include "hil/contact_id/geometry.hpp"
-#include "hil/format/rig.hpp"
+#include <hil/contact_id/geometry.hpp>
+#include <hil/format/rig.hpp>
 
 int main(int argc, char** argv) try {
   if (argc != 2) {

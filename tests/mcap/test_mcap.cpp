@@ -11,12 +11,12 @@
 
 #include <unistd.h>
 
-#include "hil/format/error.hpp"
-#include "hil/format/ros_frames.hpp"
-#include "hil/format/run.hpp"
-#include "hil/mcap/mcap.hpp"
-#include "hil/mcap/recording.hpp"
-#include "hil/test/files.hpp"
+#include <hil/format/error.hpp>
+#include <hil/format/ros_frames.hpp>
+#include <hil/format/run.hpp>
+#include <hil/mcap/mcap.hpp>
+#include <hil/mcap/recording.hpp>
+#include <hil/test/files.hpp>
 
 namespace fs = std::filesystem;
 using hil::format::FormatError;

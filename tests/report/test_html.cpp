@@ -10,7 +10,7 @@
 
 #include <unistd.h>
 
-#include "hil/report/html.hpp"
+#include <hil/report/html.hpp>
 
 namespace hil::report {
 namespace {

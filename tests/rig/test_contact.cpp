@@ -4,9 +4,9 @@
 
 #include <string>
 
-#include "hil/format/rig.hpp"
-#include "hil/rig/contact.hpp"
-#include "hil/test/files.hpp"
+#include <hil/format/rig.hpp>
+#include <hil/rig/contact.hpp>
+#include <hil/test/files.hpp>
 
 namespace hil::test {
 namespace {

@@ -2,8 +2,8 @@
 // driver over Modbus TCP on 127.0.0.1 (the force plate half runs in the vcan suite).
 #include <gtest/gtest.h>
 
-#include "hil/rig_drivers/drivers_from_rig.hpp"
-#include "hil/test/drivers.hpp"
+#include <hil/rig_drivers/drivers_from_rig.hpp>
+#include <hil/test/drivers.hpp>
 
 using namespace hil;
 using namespace hil::drivers;

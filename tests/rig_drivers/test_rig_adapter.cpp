@@ -2,9 +2,9 @@
 // run through the real drivers (loopback CAN, libmodbus on 127.0.0.1).
 #include <gtest/gtest.h>
 
-#include "hil/rig_drivers/drivers_from_rig.hpp"
-#include "hil/format/error.hpp"
-#include "hil/test/drivers.hpp"
+#include <hil/rig_drivers/drivers_from_rig.hpp>
+#include <hil/format/error.hpp>
+#include <hil/test/drivers.hpp>
 
 using namespace hil;
 using namespace hil::drivers;

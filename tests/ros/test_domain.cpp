@@ -7,9 +7,9 @@
 #include <optional>
 #include <string>
 
-#include "hil/dds/bus.hpp"
-#include "hil/format/error.hpp"
-#include "hil/test/files.hpp"
+#include <hil/dds/bus.hpp>
+#include <hil/format/error.hpp>
+#include <hil/test/files.hpp>
 
 using hil::dds::domain_from;
 using testing::HasSubstr;

@@ -14,10 +14,10 @@
 #include <sstream>
 #include <thread>
 
-#include "hil/test/files.hpp"
-#include "hil/acquisition/sample_msg.hpp"
-#include "hil/dds/bus.hpp"
-#include "hil/dds/topics.hpp"
+#include <hil/test/files.hpp>
+#include <hil/acquisition/sample_msg.hpp>
+#include <hil/dds/bus.hpp>
+#include <hil/dds/topics.hpp>
 
 using namespace eprosima::fastdds::dds;
 

@@ -7,8 +7,8 @@
 #include <memory>
 #include <vector>
 
-#include "hil/dds/bus.hpp"
-#include "hil/dds/topics.hpp"
+#include <hil/dds/bus.hpp>
+#include <hil/dds/topics.hpp>
 
 TEST(LocalhostDiscovery, TheSeventhAndEighthParticipantsOfAHostFindEachOther) {
   const int domain = 10 + static_cast<int>(getpid() % 40);

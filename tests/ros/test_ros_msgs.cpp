@@ -6,9 +6,9 @@
 #include <map>
 #include <string>
 
-#include "hil/acquisition/ros_msgs.hpp"
-#include "hil/acquisition/sample_msg.hpp"
-#include "hil/format/rig.hpp"
+#include <hil/acquisition/ros_msgs.hpp>
+#include <hil/acquisition/sample_msg.hpp>
+#include <hil/format/rig.hpp>
 
 using namespace hil;
 namespace level = diagnostic_msgs::msg::DiagnosticStatus_Constants;

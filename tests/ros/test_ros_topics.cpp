@@ -12,14 +12,14 @@
 #include <sstream>
 #include <thread>
 
-#include "hil/acquisition/acquirer.hpp"
-#include "hil/acquisition/ros_msgs.hpp"
-#include "hil/acquisition/sample_msg.hpp"
-#include "hil/dds/topics.hpp"
-#include "hil/drivers/fake_rig.hpp"
-#include "hil/format/rig.hpp"
-#include "hil/format/run.hpp"
-#include "hil/rig_drivers/drivers_from_rig.hpp"
+#include <hil/acquisition/acquirer.hpp>
+#include <hil/acquisition/ros_msgs.hpp>
+#include <hil/acquisition/sample_msg.hpp>
+#include <hil/dds/topics.hpp>
+#include <hil/drivers/fake_rig.hpp>
+#include <hil/format/rig.hpp>
+#include <hil/format/run.hpp>
+#include <hil/rig_drivers/drivers_from_rig.hpp>
 
 using namespace hil;
 namespace level = diagnostic_msgs::msg::DiagnosticStatus_Constants;

@@ -5,8 +5,8 @@
 
 #include <cmath>
 
-#include "hil/format/csv.hpp"
-#include "hil/test/files.hpp"
+#include <hil/format/csv.hpp>
+#include <hil/test/files.hpp>
 
 using hil::format::CsvOptions;
 using hil::format::MissingCells;

@@ -1,7 +1,7 @@
 #include <gtest/gtest.h>
 
-#include "hil/format/rig.hpp"
-#include "hil/test/files.hpp"
+#include <hil/format/rig.hpp>
+#include <hil/test/files.hpp>
 
 using hil::format::parse_rig;
 using hil::test::fails_with;

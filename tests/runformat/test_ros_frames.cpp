@@ -1,6 +1,6 @@
 #include <gtest/gtest.h>
 
-#include "hil/format/ros_frames.hpp"
+#include <hil/format/ros_frames.hpp>
 
 using namespace hil::format;
 

@@ -1,7 +1,7 @@
 #include <gtest/gtest.h>
 
-#include "hil/format/run.hpp"
-#include "hil/test/files.hpp"
+#include <hil/format/run.hpp>
+#include <hil/test/files.hpp>
 
 using hil::test::fails_with;
 

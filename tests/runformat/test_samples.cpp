@@ -1,7 +1,7 @@
 #include <gtest/gtest.h>
 
-#include "hil/format/samples.hpp"
-#include "hil/test/files.hpp"
+#include <hil/format/samples.hpp>
+#include <hil/test/files.hpp>
 
 using hil::format::parse_samples;
 using hil::test::fails_with;

@@ -4,9 +4,9 @@
 
 #include <fstream>
 
-#include "hil/services/contact_identify.hpp"
-#include "hil/test/acu.hpp"
-#include "hil/test/files.hpp"
+#include <hil/services/contact_identify.hpp>
+#include <hil/test/acu.hpp>
+#include <hil/test/files.hpp>
 
 namespace hil::contact_id::test {
 namespace {

@@ -4,11 +4,11 @@
 
 #include <sstream>
 
-#include "hil/test/files.hpp"
-#include "hil/test/eigen.hpp"
-#include "hil/calibration/experiment.hpp"
-#include "hil/format/rig.hpp"
-#include "hil/services/stiffness_io.hpp"
+#include <hil/test/files.hpp>
+#include <hil/test/eigen.hpp>
+#include <hil/calibration/experiment.hpp>
+#include <hil/format/rig.hpp>
+#include <hil/services/stiffness_io.hpp>
 
 namespace hc = hil::calibration;
 namespace io = hil::services::stiffness;

@@ -7,9 +7,9 @@
 #include <mutex>
 #include <thread>
 
-#include "hil/calibration/experiment.hpp"
-#include "hil/dds/topics.hpp"
-#include "hil/services/stiffness_worker.hpp"
+#include <hil/calibration/experiment.hpp>
+#include <hil/dds/topics.hpp>
+#include <hil/services/stiffness_worker.hpp>
 
 namespace hc = hil::calibration;
 namespace st = hil::services::stiffness;

@@ -15,19 +15,19 @@
 #include <mutex>
 #include <sstream>
 
-#include "hil/services/acquire.hpp"
-#include "hil/services/contact_identify.hpp"
-#include "hil/services/contact_simulate.hpp"
-#include "hil/services/contact_worker.hpp"
-#include "hil/services/diagnose_run.hpp"
-#include "hil/cli/commands.hpp"
-#include "hil/cli/participant.hpp"
+#include <hil/services/acquire.hpp>
+#include <hil/services/contact_identify.hpp>
+#include <hil/services/contact_simulate.hpp>
+#include <hil/services/contact_worker.hpp>
+#include <hil/services/diagnose_run.hpp>
+#include <hil/cli/commands.hpp>
+#include <hil/cli/participant.hpp>
 #include "data_dir.hpp"
-#include "hil/acquisition/recorder.hpp"
-#include "hil/dds/bus.hpp"
-#include "hil/dds/topics.hpp"
-#include "hil/diagnose/contact_family.hpp"
-#include "hil/format/run.hpp"
+#include <hil/acquisition/recorder.hpp>
+#include <hil/dds/bus.hpp>
+#include <hil/dds/topics.hpp>
+#include <hil/diagnose/contact_family.hpp>
+#include <hil/format/run.hpp>
 #include "summary.hpp"
 
 namespace hil::cli {

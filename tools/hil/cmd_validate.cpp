@@ -5,10 +5,10 @@
 #include <filesystem>
 #include <iostream>
 
-#include "hil/cli/commands.hpp"
-#include "hil/format/error.hpp"
-#include "hil/format/run.hpp"
-#include "hil/services/output.hpp"
+#include <hil/cli/commands.hpp>
+#include <hil/format/error.hpp>
+#include <hil/format/run.hpp>
+#include <hil/services/output.hpp>
 #include "summary.hpp"
 
 namespace hil::cli {

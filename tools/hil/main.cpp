@@ -6,8 +6,8 @@
 #include <exception>
 #include <iostream>
 
-#include "hil/cli/commands.hpp"
-#include "hil/format/error.hpp"
+#include <hil/cli/commands.hpp>
+#include <hil/format/error.hpp>
 #include "usage.hpp"
 
 int main(int argc, char** argv) {

@@ -4,7 +4,7 @@
 #include <nlohmann/json.hpp>
 #include <ostream>
 
-#include "hil/format/run.hpp"
+#include <hil/format/run.hpp>
 
 namespace hil::cli {
 void print_samples_summary(std::ostream& os, const format::SampleTable& t);

@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <iostream>
 
-#include "hil/format/edit_distance.hpp"
+#include <hil/format/edit_distance.hpp>
 
 namespace hil::cli {
 

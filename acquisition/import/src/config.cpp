@@ -1,4 +1,4 @@
-#include "hil/import/config.hpp"
+#include <hil/import/config.hpp>
 
 #include <yaml-cpp/yaml.h>
 
@@ -12,10 +12,10 @@
 #include <set>
 #include <sstream>
 
-#include "hil/format/csv.hpp"
-#include "hil/format/error.hpp"
-#include "hil/format/yaml.hpp"
-#include "hil/import/timeparse.hpp"
+#include <hil/format/csv.hpp>
+#include <hil/format/error.hpp>
+#include <hil/format/yaml.hpp>
+#include <hil/import/timeparse.hpp>
 
 namespace hil::import {
 namespace {

@@ -1,4 +1,4 @@
-#include "hil/import/importer.hpp"
+#include <hil/import/importer.hpp>
 
 #include <fmt/format.h>
 
@@ -10,12 +10,12 @@
 #include <optional>
 #include <unordered_map>
 
-#include "hil/format/csv.hpp"
-#include "hil/format/edit_distance.hpp"
-#include "hil/format/error.hpp"
-#include "hil/import/rigid_fit.hpp"
-#include "hil/so3/so3.hpp"
-#include "hil/import/timeparse.hpp"
+#include <hil/format/csv.hpp>
+#include <hil/format/edit_distance.hpp>
+#include <hil/format/error.hpp>
+#include <hil/import/rigid_fit.hpp>
+#include <hil/so3/so3.hpp>
+#include <hil/import/timeparse.hpp>
 
 namespace hil::import {
 

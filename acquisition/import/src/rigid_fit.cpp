@@ -1,4 +1,4 @@
-#include "hil/import/rigid_fit.hpp"
+#include <hil/import/rigid_fit.hpp>
 
 #include <fmt/format.h>
 
@@ -7,7 +7,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "hil/so3/so3.hpp"
+#include <hil/so3/so3.hpp>
 
 namespace hil::import {
 

@@ -1,4 +1,4 @@
-#include "hil/import/timeparse.hpp"
+#include <hil/import/timeparse.hpp>
 
 #include <fmt/format.h>
 

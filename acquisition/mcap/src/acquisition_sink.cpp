@@ -1,8 +1,8 @@
-#include "hil/mcap/acquisition_sink.hpp"
+#include <hil/mcap/acquisition_sink.hpp>
 
 #include <cmath>
 
-#include "hil/acquisition/sample_msg.hpp"
+#include <hil/acquisition/sample_msg.hpp>
 
 namespace hil::mcap {
 

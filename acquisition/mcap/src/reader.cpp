@@ -11,8 +11,8 @@
 #include <set>
 #include <sstream>
 
-#include "hil/format/error.hpp"
-#include "hil/mcap/mcap.hpp"
+#include <hil/format/error.hpp>
+#include <hil/mcap/mcap.hpp>
 
 namespace hil::mcap {
 namespace {

@@ -1,5 +1,5 @@
 // hil samples -> ROS 2 channels of an MCAP file.
-#include "hil/mcap/recording.hpp"
+#include <hil/mcap/recording.hpp>
 
 #include <fastcdr/Cdr.h>
 #include <fastcdr/FastBuffer.h>
@@ -14,9 +14,9 @@
 #include <set>
 #include <stdexcept>
 
-#include "hil/acquisition/ros_msgs.hpp"
-#include "hil/acquisition/sample_msg.hpp"
-#include "hil/format/error.hpp"
+#include <hil/acquisition/ros_msgs.hpp>
+#include <hil/acquisition/sample_msg.hpp>
+#include <hil/format/error.hpp>
 #include "hil_msgs_schemas.hpp"
 
 namespace hil::mcap {

@@ -9,7 +9,7 @@
 #include <stdexcept>
 
 #include "bytes.hpp"
-#include "hil/mcap/mcap.hpp"
+#include <hil/mcap/mcap.hpp>
 
 namespace hil::mcap {
 using namespace detail;

@@ -1,4 +1,4 @@
-#include "hil/report/html.hpp"
+#include <hil/report/html.hpp>
 
 #include <algorithm>
 #include <charconv>

@@ -1,13 +1,13 @@
-#include "hil/rig/contact.hpp"
+#include <hil/rig/contact.hpp>
 
 #include <cmath>
 #include <limits>
 #include <stdexcept>
 
-#include "hil/format/csv.hpp"
-#include "hil/format/error.hpp"
-#include "hil/format/yaml.hpp"
-#include "hil/so3/so3.hpp"
+#include <hil/format/csv.hpp>
+#include <hil/format/error.hpp>
+#include <hil/format/yaml.hpp>
+#include <hil/so3/so3.hpp>
 
 namespace hil::rig {
 

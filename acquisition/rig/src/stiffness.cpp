@@ -1,4 +1,4 @@
-#include "hil/rig/stiffness.hpp"
+#include <hil/rig/stiffness.hpp>
 
 #include <fmt/format.h>
 
@@ -6,9 +6,9 @@
 #include <map>
 #include <sstream>
 
-#include "hil/calibration/experiment.hpp"
-#include "hil/format/csv.hpp"
-#include "hil/format/error.hpp"
+#include <hil/calibration/experiment.hpp>
+#include <hil/format/csv.hpp>
+#include <hil/format/error.hpp>
 
 namespace hil::rig {
 namespace hc = hil::calibration;

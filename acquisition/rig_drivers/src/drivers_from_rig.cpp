@@ -1,9 +1,9 @@
-#include "hil/rig_drivers/drivers_from_rig.hpp"
+#include <hil/rig_drivers/drivers_from_rig.hpp>
 
-#include "hil/calibration/robot.hpp"
-#include "hil/drivers/error.hpp"
-#include "hil/format/error.hpp"
-#include "hil/rig/stiffness.hpp"
+#include <hil/calibration/robot.hpp>
+#include <hil/drivers/error.hpp>
+#include <hil/format/error.hpp>
+#include <hil/rig/stiffness.hpp>
 
 namespace hil::rig_drivers {
 namespace {

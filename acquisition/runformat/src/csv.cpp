@@ -1,4 +1,4 @@
-#include "hil/format/csv.hpp"
+#include <hil/format/csv.hpp>
 
 #include <algorithm>
 #include <cctype>
@@ -9,8 +9,8 @@
 #include <sstream>
 #include <unordered_set>
 
-#include "hil/format/edit_distance.hpp"
-#include "hil/format/error.hpp"
+#include <hil/format/edit_distance.hpp>
+#include <hil/format/error.hpp>
 
 namespace hil::format {
 namespace {

@@ -1,4 +1,4 @@
-#include "hil/format/edit_distance.hpp"
+#include <hil/format/edit_distance.hpp>
 
 #include <algorithm>
 #include <cctype>

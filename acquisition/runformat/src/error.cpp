@@ -1,4 +1,4 @@
-#include "hil/format/error.hpp"
+#include <hil/format/error.hpp>
 
 namespace hil::format {
 

@@ -1,4 +1,4 @@
-#include "hil/format/rig.hpp"
+#include <hil/format/rig.hpp>
 
 #include <Eigen/SVD>
 #include <cmath>
@@ -6,8 +6,8 @@
 #include <set>
 #include <sstream>
 
-#include "hil/format/quaternion.hpp"
-#include "hil/format/yaml.hpp"
+#include <hil/format/quaternion.hpp>
+#include <hil/format/yaml.hpp>
 
 namespace hil::format {
 using YNode = YamlNode;

@@ -1,4 +1,4 @@
-#include "hil/format/ros_frames.hpp"
+#include <hil/format/ros_frames.hpp>
 
 #include <set>
 

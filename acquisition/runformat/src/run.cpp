@@ -1,4 +1,4 @@
-#include "hil/format/run.hpp"
+#include <hil/format/run.hpp>
 
 #include <fmt/format.h>
 
@@ -8,8 +8,8 @@
 #include <regex>
 #include <sstream>
 
-#include "hil/format/error.hpp"
-#include "hil/format/yaml.hpp"
+#include <hil/format/error.hpp>
+#include <hil/format/yaml.hpp>
 
 namespace hil::format {
 using YNode = YamlNode;

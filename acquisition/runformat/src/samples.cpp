@@ -1,4 +1,4 @@
-#include "hil/format/samples.hpp"
+#include <hil/format/samples.hpp>
 
 #include <fmt/format.h>
 
@@ -9,9 +9,9 @@
 #include <cstring>
 #include <stdexcept>
 
-#include "hil/format/csv.hpp"
-#include "hil/format/error.hpp"
-#include "hil/format/quaternion.hpp"
+#include <hil/format/csv.hpp>
+#include <hil/format/error.hpp>
+#include <hil/format/quaternion.hpp>
 
 namespace hil::format {
 

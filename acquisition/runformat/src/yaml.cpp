@@ -1,4 +1,4 @@
-#include "hil/format/yaml.hpp"
+#include <hil/format/yaml.hpp>
 
 #include <cctype>
 #include <charconv>
@@ -6,7 +6,7 @@
 #include <fstream>
 #include <sstream>
 
-#include "hil/format/edit_distance.hpp"
+#include <hil/format/edit_distance.hpp>
 
 namespace hil::format {
 namespace {

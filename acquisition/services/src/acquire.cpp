@@ -13,14 +13,14 @@
 #include <sstream>
 #include <thread>
 
-#include "hil/services/acquire.hpp"
-#include "hil/acquisition/acquirer.hpp"
-#include "hil/acquisition/identity.hpp"
-#include "hil/drivers/socketcan.hpp"
-#include "hil/format/error.hpp"
-#include "hil/format/ros_frames.hpp"
-#include "hil/rig_drivers/drivers_from_rig.hpp"
-#include "hil/mcap/acquisition_sink.hpp"
+#include <hil/services/acquire.hpp>
+#include <hil/acquisition/acquirer.hpp>
+#include <hil/acquisition/identity.hpp>
+#include <hil/drivers/socketcan.hpp>
+#include <hil/format/error.hpp>
+#include <hil/format/ros_frames.hpp>
+#include <hil/rig_drivers/drivers_from_rig.hpp>
+#include <hil/mcap/acquisition_sink.hpp>
 
 namespace hil::services {
 namespace {

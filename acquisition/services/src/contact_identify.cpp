@@ -1,7 +1,7 @@
-#include "hil/services/contact_identify.hpp"
-#include "hil/services/output.hpp"
-#include "hil/format/error.hpp"
-#include "hil/rig/contact.hpp"
+#include <hil/services/contact_identify.hpp>
+#include <hil/services/output.hpp>
+#include <hil/format/error.hpp>
+#include <hil/rig/contact.hpp>
 
 #include <fmt/format.h>
 
@@ -12,7 +12,7 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "hil/report/html.hpp"
+#include <hil/report/html.hpp>
 
 namespace hil::services::contact {
 

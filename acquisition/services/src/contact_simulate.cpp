@@ -1,18 +1,18 @@
 // `hil contact simulate` as a library call: a run folder simulated from the rig's contact scene,
 // optionally with hidden effects drawn by seed (and their truth JSON).
-#include "hil/services/contact_simulate.hpp"
+#include <hil/services/contact_simulate.hpp>
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
 #include <filesystem>
 
-#include "hil/diagnose/contact_family.hpp"
-#include "hil/format/error.hpp"
-#include "hil/format/rig.hpp"
-#include "hil/format/run.hpp"
-#include "hil/rig/contact.hpp"
-#include "hil/services/output.hpp"
+#include <hil/diagnose/contact_family.hpp>
+#include <hil/format/error.hpp>
+#include <hil/format/rig.hpp>
+#include <hil/format/run.hpp>
+#include <hil/rig/contact.hpp>
+#include <hil/services/output.hpp>
 
 namespace hil::services::contact {
 

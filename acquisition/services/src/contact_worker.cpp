@@ -1,4 +1,4 @@
-#include "hil/services/contact_worker.hpp"
+#include <hil/services/contact_worker.hpp>
 
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
@@ -8,11 +8,11 @@
 #include <cmath>
 #include <mutex>
 
-#include "hil/acquisition/sample_msg.hpp"
-#include "hil/dds/bus.hpp"
-#include "hil/dds/topics.hpp"
-#include "hil/format/rig.hpp"
-#include "hil/rig/contact.hpp"
+#include <hil/acquisition/sample_msg.hpp>
+#include <hil/dds/bus.hpp>
+#include <hil/dds/topics.hpp>
+#include <hil/format/rig.hpp>
+#include <hil/rig/contact.hpp>
 
 namespace hil::services {
 

@@ -1,4 +1,4 @@
-#include "hil/services/diagnose_run.hpp"
+#include <hil/services/diagnose_run.hpp>
 
 #include <fmt/format.h>
 
@@ -6,11 +6,11 @@
 #include <fstream>
 #include <set>
 
-#include "hil/services/output.hpp"
-#include "hil/format/error.hpp"
-#include "hil/report/html.hpp"
-#include "hil/rig/contact.hpp"
-#include "hil/rig/stiffness.hpp"
+#include <hil/services/output.hpp>
+#include <hil/format/error.hpp>
+#include <hil/report/html.hpp>
+#include <hil/rig/contact.hpp>
+#include <hil/rig/stiffness.hpp>
 
 namespace hil::services::diagnose {
 

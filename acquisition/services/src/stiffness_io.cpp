@@ -1,4 +1,4 @@
-#include "hil/services/stiffness_io.hpp"
+#include <hil/services/stiffness_io.hpp>
 
 #include <fmt/format.h>
 
@@ -7,9 +7,9 @@
 #include <map>
 #include <sstream>
 
-#include "hil/services/output.hpp"
-#include "hil/calibration/experiment.hpp"
-#include "hil/format/error.hpp"
+#include <hil/services/output.hpp>
+#include <hil/calibration/experiment.hpp>
+#include <hil/format/error.hpp>
 
 namespace hil::services::stiffness {
 namespace hc = hil::calibration;

@@ -1,4 +1,4 @@
-#include "hil/services/stiffness_worker.hpp"
+#include <hil/services/stiffness_worker.hpp>
 
 #include <spdlog/spdlog.h>
 
@@ -6,7 +6,7 @@
 #include <cmath>
 #include <stdexcept>
 
-#include "hil/dds/topics.hpp"
+#include <hil/dds/topics.hpp>
 
 namespace hil::services::stiffness {
 namespace hc = hil::calibration;

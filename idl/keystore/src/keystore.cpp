@@ -1,7 +1,7 @@
 // The keystore through Debian's `openssl` command rather than libcrypto: the same commands the
 // DDS Security documents and Fast DDS's examples use, so a lab can redo or audit each step by hand
 // (docs/security.md), and no key handling code of our own.
-#include "hil/keystore/keystore.hpp"
+#include <hil/keystore/keystore.hpp>
 
 #include <fmt/format.h>
 #include <sys/wait.h>
@@ -18,7 +18,7 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "hil/format/error.hpp"
+#include <hil/format/error.hpp>
 
 namespace hil::keystore {
 namespace fs = std::filesystem;

@@ -1,7 +1,7 @@
 // ATI F/T CAN OEM decoders (drivers/src/ati_protocol.cpp) on frames of any id and length.
 // Input: per frame one header byte (length 0..64), a 16-bit id, then the payload.
 #include "fuzz_common.hpp"
-#include "hil/drivers/ati_protocol.hpp"
+#include <hil/drivers/ati_protocol.hpp>
 
 using namespace hil::drivers;
 

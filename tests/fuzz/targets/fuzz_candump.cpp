@@ -2,7 +2,7 @@
 // errors as strings must never throw; a line that parses must format back to the same frame.
 #include <string_view>
 #include "fuzz_common.hpp"
-#include "hil/drivers/candump.hpp"
+#include <hil/drivers/candump.hpp>
 
 using namespace hil::drivers;
 

@@ -5,9 +5,9 @@
 // the payload (extract_raw runs on every frame whose length covers its signals).
 #include <memory>
 #include "fuzz_common.hpp"
-#include "hil/drivers/can_channel.hpp"
-#include "hil/drivers/error.hpp"
-#include "hil/drivers/force_plate.hpp"
+#include <hil/drivers/can_channel.hpp>
+#include <hil/drivers/error.hpp>
+#include <hil/drivers/force_plate.hpp>
 
 using namespace hil::drivers;
 

@@ -1,7 +1,7 @@
 // The `hil import` mapping config (tools/hil/import/src/config.cpp) on arbitrary YAML text.
 #include "fuzz_common.hpp"
-#include "hil/format/error.hpp"
-#include "hil/import/config.hpp"
+#include <hil/format/error.hpp>
+#include <hil/import/config.hpp>
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const std::string text(reinterpret_cast<const char*>(data), size);

@@ -6,8 +6,8 @@
 #include <map>
 #include <vector>
 #include "fuzz_common.hpp"
-#include "hil/drivers/error.hpp"
-#include "hil/drivers/register_map.hpp"
+#include <hil/drivers/error.hpp>
+#include <hil/drivers/register_map.hpp>
 
 using namespace hil::drivers;
 

@@ -1,7 +1,7 @@
 // rig.yaml reader (acquisition/runformat): parse_rig on arbitrary text.
 #include "fuzz_common.hpp"
-#include "hil/format/error.hpp"
-#include "hil/format/rig.hpp"
+#include <hil/format/error.hpp>
+#include <hil/format/rig.hpp>
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const std::string text(reinterpret_cast<const char*>(data), size);

@@ -1,8 +1,8 @@
 // samples.csv reader (acquisition/runformat): parse_samples, then the summary `hil validate` prints.
 #include "fuzz_common.hpp"
-#include "hil/format/error.hpp"
-#include "hil/format/run.hpp"
-#include "hil/format/samples.hpp"
+#include <hil/format/error.hpp>
+#include <hil/format/run.hpp>
+#include <hil/format/samples.hpp>
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const std::string text(reinterpret_cast<const char*>(data), size);

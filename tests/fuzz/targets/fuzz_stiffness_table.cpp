@@ -2,8 +2,8 @@
 // first byte picks the robot's joint count (1..8) and whether dx dy dz are required; the rest is
 // the CSV text. A table that parses must have one line number per row and rows of that width.
 #include "fuzz_common.hpp"
-#include "hil/format/error.hpp"
-#include "hil/rig/stiffness.hpp"
+#include <hil/format/error.hpp>
+#include <hil/rig/stiffness.hpp>
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   hil::fuzz::Bytes in(data, size);

@@ -7,9 +7,9 @@
 
 #include <iostream>
 
-#include "hil/cli/commands.hpp"
-#include "hil/cli/participant.hpp"
-#include "hil/services/acquire.hpp"
+#include <hil/cli/commands.hpp>
+#include <hil/cli/participant.hpp>
+#include <hil/services/acquire.hpp>
 
 namespace hil::cli {
 

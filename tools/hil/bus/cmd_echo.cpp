@@ -9,12 +9,12 @@
 #include <mutex>
 #include <thread>
 
-#include "hil/cli/commands.hpp"
-#include "hil/cli/participant.hpp"
-#include "hil/acquisition/sample_msg.hpp"
-#include "hil/dds/bus.hpp"
-#include "hil/dds/topics.hpp"
-#include "hil/format/error.hpp"
+#include <hil/cli/commands.hpp>
+#include <hil/cli/participant.hpp>
+#include <hil/acquisition/sample_msg.hpp>
+#include <hil/dds/bus.hpp>
+#include <hil/dds/topics.hpp>
+#include <hil/format/error.hpp>
 
 namespace hil::cli {
 namespace {

@@ -8,14 +8,14 @@
 #include <csignal>
 #include <thread>
 
-#include "hil/cli/commands.hpp"
-#include "hil/cli/participant.hpp"
-#include "hil/acquisition/sample_msg.hpp"
-#include "hil/dds/bus.hpp"
-#include "hil/dds/topics.hpp"
-#include "hil/format/error.hpp"
-#include "hil/format/run.hpp"
-#include "hil/mcap/recording.hpp"
+#include <hil/cli/commands.hpp>
+#include <hil/cli/participant.hpp>
+#include <hil/acquisition/sample_msg.hpp>
+#include <hil/dds/bus.hpp>
+#include <hil/dds/topics.hpp>
+#include <hil/format/error.hpp>
+#include <hil/format/run.hpp>
+#include <hil/mcap/recording.hpp>
 
 namespace hil::cli {
 namespace {

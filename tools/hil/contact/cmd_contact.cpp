@@ -13,16 +13,16 @@
 #include <iostream>
 #include <thread>
 
-#include "hil/cli/commands.hpp"
-#include "hil/services/output.hpp"
-#include "hil/format/error.hpp"
-#include "hil/format/run.hpp"
-#include "hil/diagnose/contact_family.hpp"
-#include "hil/services/contact_identify.hpp"
-#include "hil/rig/contact.hpp"
-#include "hil/services/contact_simulate.hpp"
+#include <hil/cli/commands.hpp>
+#include <hil/services/output.hpp>
+#include <hil/format/error.hpp>
+#include <hil/format/run.hpp>
+#include <hil/diagnose/contact_family.hpp>
+#include <hil/services/contact_identify.hpp>
+#include <hil/rig/contact.hpp>
+#include <hil/services/contact_simulate.hpp>
 #include "contact_commands.hpp"
-#include "hil/services/contact_worker.hpp"
+#include <hil/services/contact_worker.hpp>
 
 namespace hil::cli {
 

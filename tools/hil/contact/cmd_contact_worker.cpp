@@ -8,11 +8,11 @@
 #include <iostream>
 #include <thread>
 
-#include "hil/cli/commands.hpp"
-#include "hil/cli/participant.hpp"
-#include "hil/format/rig.hpp"
+#include <hil/cli/commands.hpp>
+#include <hil/cli/participant.hpp>
+#include <hil/format/rig.hpp>
 #include "contact_commands.hpp"
-#include "hil/services/contact_worker.hpp"
+#include <hil/services/contact_worker.hpp>
 
 namespace hil::cli {
 

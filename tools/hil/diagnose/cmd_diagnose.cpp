@@ -7,10 +7,10 @@
 #include <fstream>
 #include <iostream>
 
-#include "hil/cli/commands.hpp"
-#include "hil/services/output.hpp"
-#include "hil/format/run.hpp"
-#include "hil/services/diagnose_run.hpp"
+#include <hil/cli/commands.hpp>
+#include <hil/services/output.hpp>
+#include <hil/format/run.hpp>
+#include <hil/services/diagnose_run.hpp>
 
 namespace hil::cli {
 

@@ -4,11 +4,11 @@
 
 #include <iostream>
 
-#include "hil/cli/commands.hpp"
-#include "hil/format/error.hpp"
-#include "hil/format/run.hpp"
-#include "hil/mcap/mcap.hpp"
-#include "hil/mcap/recording.hpp"
+#include <hil/cli/commands.hpp>
+#include <hil/format/error.hpp>
+#include <hil/format/run.hpp>
+#include <hil/mcap/mcap.hpp>
+#include <hil/mcap/recording.hpp>
 
 namespace hil::cli {
 namespace {

@@ -5,10 +5,10 @@
 #include <filesystem>
 #include <iostream>
 
-#include "hil/cli/commands.hpp"
-#include "hil/format/run.hpp"
-#include "hil/import/config.hpp"
-#include "hil/import/importer.hpp"
+#include <hil/cli/commands.hpp>
+#include <hil/format/run.hpp>
+#include <hil/import/config.hpp>
+#include <hil/import/importer.hpp>
 
 namespace hil::cli {
 namespace fs = std::filesystem;

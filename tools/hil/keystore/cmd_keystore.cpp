@@ -4,8 +4,8 @@
 #include <filesystem>
 #include <iostream>
 
-#include "hil/cli/commands.hpp"
-#include "hil/keystore/keystore.hpp"
+#include <hil/cli/commands.hpp>
+#include <hil/keystore/keystore.hpp>
 
 namespace hil::cli {
 namespace {

@@ -9,12 +9,12 @@
 #include <optional>
 #include <thread>
 
-#include "hil/cli/commands.hpp"
-#include "hil/rig_drivers/drivers_from_rig.hpp"
-#include "hil/drivers/fake_rig.hpp"
-#include "hil/drivers/socketcan.hpp"
-#include "hil/format/error.hpp"
-#include "hil/format/run.hpp"
+#include <hil/cli/commands.hpp>
+#include <hil/rig_drivers/drivers_from_rig.hpp>
+#include <hil/drivers/fake_rig.hpp>
+#include <hil/drivers/socketcan.hpp>
+#include <hil/format/error.hpp>
+#include <hil/format/run.hpp>
 #include "rig_commands.hpp"
 
 namespace hil::cli {

@@ -8,16 +8,16 @@
 #include <iostream>
 #include <thread>
 
-#include "hil/cli/commands.hpp"
-#include "hil/cli/participant.hpp"
-#include "hil/services/output.hpp"
-#include "hil/calibration/experiment.hpp"
-#include "hil/calibration/online.hpp"
-#include "hil/dds/topics.hpp"
-#include "hil/format/error.hpp"
-#include "hil/so3/so3.hpp"
-#include "hil/services/stiffness_io.hpp"
-#include "hil/services/stiffness_worker.hpp"
+#include <hil/cli/commands.hpp>
+#include <hil/cli/participant.hpp>
+#include <hil/services/output.hpp>
+#include <hil/calibration/experiment.hpp>
+#include <hil/calibration/online.hpp>
+#include <hil/dds/topics.hpp>
+#include <hil/format/error.hpp>
+#include <hil/so3/so3.hpp>
+#include <hil/services/stiffness_io.hpp>
+#include <hil/services/stiffness_worker.hpp>
 
 namespace hil::cli {
 namespace hc = hil::calibration;

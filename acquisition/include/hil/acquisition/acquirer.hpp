@@ -13,13 +13,13 @@
 #include <thread>
 #include <vector>
 
-#include "hil/acquisition/monitor.hpp"
-#include "hil/acquisition/recorder.hpp"
-#include "hil/acquisition/sync.hpp"
-#include "hil/dds/bus.hpp"
-#include "hil/drivers/force_plate.hpp"
-#include "hil/drivers/robot_controller.hpp"
-#include "hil/format/ros_frames.hpp"
+#include <hil/acquisition/monitor.hpp>
+#include <hil/acquisition/recorder.hpp>
+#include <hil/acquisition/sync.hpp>
+#include <hil/dds/bus.hpp>
+#include <hil/drivers/force_plate.hpp>
+#include <hil/drivers/robot_controller.hpp>
+#include <hil/format/ros_frames.hpp>
 
 namespace hil::acquisition {
 

@@ -5,8 +5,8 @@
 #include <utility>
 #include <vector>
 
-#include "hil/drivers/force_plate.hpp"
-#include "hil/drivers/robot_controller.hpp"
+#include <hil/drivers/force_plate.hpp>
+#include <hil/drivers/robot_controller.hpp>
 
 namespace hil::acquisition {
 

@@ -8,9 +8,9 @@
 #include <string>
 #include <vector>
 
-#include "hil/acquisition/streams.hpp"
-#include "hil/format/run.hpp"
-#include "hil/format/samples.hpp"
+#include <hil/acquisition/streams.hpp>
+#include <hil/format/run.hpp>
+#include <hil/format/samples.hpp>
 
 namespace hil::acquisition {
 

@@ -6,8 +6,8 @@
 #include <string>
 #include <vector>
 
-#include "hil/dds/types.hpp"
-#include "hil/format/ros_frames.hpp"
+#include <hil/dds/types.hpp>
+#include <hil/format/ros_frames.hpp>
 
 namespace hil::acquisition {
 

@@ -2,9 +2,9 @@
 /// \file Conversions between run-format samples and bus messages.
 #include <Eigen/Core>
 
-#include "hil/acquisition/streams.hpp"
-#include "hil/dds/types.hpp"
-#include "hil/format/samples.hpp"
+#include <hil/acquisition/streams.hpp>
+#include <hil/dds/types.hpp>
+#include <hil/format/samples.hpp>
 
 namespace hil::acquisition {
 

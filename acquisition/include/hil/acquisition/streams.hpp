@@ -5,7 +5,7 @@
 #include <Eigen/Geometry>
 #include <cstdint>
 
-#include "hil/so3/so3.hpp"
+#include <hil/so3/so3.hpp>
 
 namespace hil::acquisition {
 

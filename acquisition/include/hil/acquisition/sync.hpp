@@ -18,7 +18,7 @@
 #include <functional>
 #include <vector>
 
-#include "hil/acquisition/streams.hpp"
+#include <hil/acquisition/streams.hpp>
 
 namespace hil::acquisition {
 

@@ -4,7 +4,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "hil/calibration/observation.hpp"
+#include <hil/calibration/observation.hpp>
 
 namespace hil::calibration {
 

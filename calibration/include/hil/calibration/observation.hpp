@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "hil/calibration/vjm.hpp"
+#include <hil/calibration/vjm.hpp>
 
 namespace hil::calibration {
 

@@ -6,7 +6,7 @@
 #include <array>
 #include <vector>
 
-#include "hil/calibration/reduction.hpp"
+#include <hil/calibration/reduction.hpp>
 
 namespace hil::calibration {
 

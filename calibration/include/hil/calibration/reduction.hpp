@@ -12,8 +12,8 @@
 #include <string>
 #include <vector>
 
-#include "hil/calibration/identification.hpp"
-#include "hil/calibration/observation.hpp"
+#include <hil/calibration/identification.hpp>
+#include <hil/calibration/observation.hpp>
 
 namespace hil::calibration {
 

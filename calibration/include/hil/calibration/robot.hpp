@@ -12,7 +12,7 @@
 #include <string>
 #include <vector>
 
-#include "hil/so3/so3.hpp"
+#include <hil/so3/so3.hpp>
 
 namespace hil::calibration {
 

@@ -22,7 +22,7 @@
 #include <string>
 #include <vector>
 
-#include "hil/calibration/robot.hpp"
+#include <hil/calibration/robot.hpp>
 
 namespace hil::calibration {
 

@@ -14,7 +14,7 @@
 #include <string>
 #include <string_view>
 
-#include "hil/drivers/can_frame.hpp"
+#include <hil/drivers/can_frame.hpp>
 
 namespace hil::drivers::ati {
 

@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "hil/drivers/can_frame.hpp"
+#include <hil/drivers/can_frame.hpp>
 
 namespace hil::drivers {
 

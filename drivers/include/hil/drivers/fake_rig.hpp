@@ -15,10 +15,10 @@
 #include <thread>
 #include <vector>
 
-#include "hil/drivers/ati_protocol.hpp"
-#include "hil/drivers/can_channel.hpp"
-#include "hil/drivers/force_plate.hpp"
-#include "hil/drivers/register_map.hpp"
+#include <hil/drivers/ati_protocol.hpp>
+#include <hil/drivers/can_channel.hpp>
+#include <hil/drivers/force_plate.hpp>
+#include <hil/drivers/register_map.hpp>
 
 namespace hil::drivers {
 

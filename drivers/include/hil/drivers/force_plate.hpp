@@ -13,10 +13,10 @@
 #include <string>
 #include <vector>
 
-#include "hil/drivers/ati_protocol.hpp"
-#include "hil/drivers/can_channel.hpp"
-#include "hil/drivers/status.hpp"
-#include "hil/so3/so3.hpp"
+#include <hil/drivers/ati_protocol.hpp>
+#include <hil/drivers/can_channel.hpp>
+#include <hil/drivers/status.hpp>
+#include <hil/so3/so3.hpp>
 
 namespace hil::drivers {
 

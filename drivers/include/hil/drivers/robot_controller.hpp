@@ -13,8 +13,8 @@
 #include <string>
 #include <vector>
 
-#include "hil/drivers/register_map.hpp"
-#include "hil/drivers/status.hpp"
+#include <hil/drivers/register_map.hpp>
+#include <hil/drivers/status.hpp>
 
 namespace hil::drivers {
 

@@ -4,7 +4,7 @@
 #include <memory>
 #include <string>
 
-#include "hil/drivers/can_channel.hpp"
+#include <hil/drivers/can_channel.hpp>
 
 namespace hil::drivers {
 

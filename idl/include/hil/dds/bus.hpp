@@ -19,7 +19,7 @@
 #include <mutex>
 #include <string>
 
-#include "hil/dds/types.hpp"
+#include <hil/dds/types.hpp>
 
 namespace hil::dds {
 

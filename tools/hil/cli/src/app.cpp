@@ -1,4 +1,4 @@
-#include "hil/cli/commands.hpp"
+#include <hil/cli/commands.hpp>
 
 namespace hil::cli {
 

@@ -1,9 +1,9 @@
-#include "hil/cli/participant.hpp"
+#include <hil/cli/participant.hpp>
 
 #include <filesystem>
 
-#include "hil/cli/commands.hpp"
-#include "hil/keystore/keystore.hpp"
+#include <hil/cli/commands.hpp>
+#include <hil/keystore/keystore.hpp>
 
 namespace hil::cli {
 

@@ -6,10 +6,10 @@
 #include <string>
 #include <vector>
 
-#include "hil/format/csv.hpp"
-#include "hil/format/run.hpp"
-#include "hil/format/samples.hpp"
-#include "hil/import/config.hpp"
+#include <hil/format/csv.hpp>
+#include <hil/format/run.hpp>
+#include <hil/format/samples.hpp>
+#include <hil/import/config.hpp>
 
 namespace hil::import {
 

@@ -6,10 +6,10 @@
 #include <string>
 #include <vector>
 
-#include "hil/acquisition/monitor.hpp"
-#include "hil/acquisition/streams.hpp"
-#include "hil/format/rig.hpp"
-#include "hil/mcap/recording.hpp"
+#include <hil/acquisition/monitor.hpp>
+#include <hil/acquisition/streams.hpp>
+#include <hil/format/rig.hpp>
+#include <hil/mcap/recording.hpp>
 
 namespace hil::mcap {
 

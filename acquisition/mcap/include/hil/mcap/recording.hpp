@@ -7,9 +7,9 @@
 #include <string>
 #include <vector>
 
-#include "hil/format/ros_frames.hpp"
-#include "hil/format/run.hpp"
-#include "hil/mcap/mcap.hpp"
+#include <hil/format/ros_frames.hpp>
+#include <hil/format/run.hpp>
+#include <hil/mcap/mcap.hpp>
 
 // Generated bus types (hil::idl): the payloads are their CDR.
 #include "geometry_msgs.h"

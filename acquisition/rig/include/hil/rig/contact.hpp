@@ -4,9 +4,9 @@
 #include <string>
 #include <vector>
 
-#include "hil/contact_id/identification.hpp"
-#include "hil/format/rig.hpp"
-#include "hil/format/samples.hpp"
+#include <hil/contact_id/identification.hpp>
+#include <hil/format/rig.hpp>
+#include <hil/format/samples.hpp>
 
 namespace hil::rig {
 

@@ -5,9 +5,9 @@
 #include <string>
 #include <vector>
 
-#include "hil/calibration/observation.hpp"
-#include "hil/calibration/robot.hpp"
-#include "hil/format/rig.hpp"
+#include <hil/calibration/observation.hpp>
+#include <hil/calibration/robot.hpp>
+#include <hil/format/rig.hpp>
 
 namespace hil::rig {
 

@@ -3,11 +3,11 @@
 /// (hil::drivers). Errors name the rig file and the field, as hil::format::FormatError.
 #include <Eigen/Geometry>
 
-#include "hil/drivers/fake_rig.hpp"
-#include "hil/drivers/force_plate.hpp"
-#include "hil/drivers/robot_controller.hpp"
-#include "hil/format/rig.hpp"
-#include "hil/format/run.hpp"
+#include <hil/drivers/fake_rig.hpp>
+#include <hil/drivers/force_plate.hpp>
+#include <hil/drivers/robot_controller.hpp>
+#include <hil/format/rig.hpp>
+#include <hil/format/run.hpp>
 
 namespace hil::rig_drivers {
 

@@ -5,7 +5,7 @@
 #include <string>
 #include <vector>
 
-#include "hil/format/rig.hpp"
+#include <hil/format/rig.hpp>
 
 namespace hil::format {
 

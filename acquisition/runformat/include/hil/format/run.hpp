@@ -5,8 +5,8 @@
 #include <utility>
 #include <vector>
 
-#include "hil/format/rig.hpp"
-#include "hil/format/samples.hpp"
+#include <hil/format/rig.hpp>
+#include <hil/format/samples.hpp>
 
 namespace hil::format {
 

@@ -12,7 +12,7 @@
 #include <utility>
 #include <vector>
 
-#include "hil/format/error.hpp"
+#include <hil/format/error.hpp>
 
 namespace hil::format {
 

@@ -5,10 +5,10 @@
 #include <string>
 #include <vector>
 
-#include "hil/acquisition/monitor.hpp"
-#include "hil/acquisition/streams.hpp"
-#include "hil/drivers/fake_rig.hpp"
-#include "hil/dds/bus.hpp"
+#include <hil/acquisition/monitor.hpp>
+#include <hil/acquisition/streams.hpp>
+#include <hil/drivers/fake_rig.hpp>
+#include <hil/dds/bus.hpp>
 
 namespace hil::services {
 

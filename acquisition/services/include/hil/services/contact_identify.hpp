@@ -5,8 +5,8 @@
 #include <ostream>
 #include <string>
 
-#include "hil/contact_id/identification.hpp"
-#include "hil/format/run.hpp"
+#include <hil/contact_id/identification.hpp>
+#include <hil/format/run.hpp>
 
 namespace hil::services::contact {
 

@@ -4,9 +4,9 @@
 #include <memory>
 #include <mutex>
 
-#include "hil/contact_id/online.hpp"
-#include "hil/dds/bus.hpp"
-#include "hil/format/rig.hpp"
+#include <hil/contact_id/online.hpp>
+#include <hil/dds/bus.hpp>
+#include <hil/format/rig.hpp>
 #include "hil_msgsPubSubTypes.h"
 
 namespace hil::services {

@@ -6,11 +6,11 @@
 #include <ostream>
 #include <string>
 
-#include "hil/diagnose/contact_family.hpp"
-#include "hil/diagnose/deflection_family.hpp"
-#include "hil/diagnose/stiffness_family.hpp"
-#include "hil/diagnose/diagnose.hpp"
-#include "hil/format/run.hpp"
+#include <hil/diagnose/contact_family.hpp>
+#include <hil/diagnose/deflection_family.hpp>
+#include <hil/diagnose/stiffness_family.hpp>
+#include <hil/diagnose/diagnose.hpp>
+#include <hil/format/run.hpp>
 
 namespace hil::services::diagnose {
 

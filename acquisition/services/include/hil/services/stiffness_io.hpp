@@ -7,9 +7,9 @@
 #include <string>
 #include <vector>
 
-#include "hil/calibration/reduction.hpp"
-#include "hil/format/rig.hpp"
-#include "hil/rig/stiffness.hpp"
+#include <hil/calibration/reduction.hpp>
+#include <hil/format/rig.hpp>
+#include <hil/rig/stiffness.hpp>
 
 namespace hil::services::stiffness {
 

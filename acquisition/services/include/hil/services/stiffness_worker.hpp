@@ -8,8 +8,8 @@
 #include <memory>
 #include <mutex>
 
-#include "hil/calibration/online.hpp"
-#include "hil/dds/bus.hpp"
+#include <hil/calibration/online.hpp>
+#include <hil/dds/bus.hpp>
 
 namespace hil::services::stiffness {
 

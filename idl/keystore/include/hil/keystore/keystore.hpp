@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "hil/dds/bus.hpp"
+#include <hil/dds/bus.hpp>
 
 namespace hil::keystore {
 

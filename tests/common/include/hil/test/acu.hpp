@@ -3,8 +3,8 @@
 // and the trajectories, simulated as `hil contact simulate` does.
 #include <string>
 
-#include "hil/format/rig.hpp"
-#include "hil/rig/contact.hpp"
+#include <hil/format/rig.hpp>
+#include <hil/rig/contact.hpp>
 
 namespace hil::contact_id::test {
 

@@ -6,9 +6,9 @@
 #include <functional>
 #include <string>
 
-#include "hil/drivers/error.hpp"
-#include "hil/drivers/force_plate.hpp"
-#include "hil/test/process.hpp"
+#include <hil/drivers/error.hpp>
+#include <hil/drivers/force_plate.hpp>
+#include <hil/test/process.hpp>
 
 namespace hil::test {
 

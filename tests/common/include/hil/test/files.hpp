@@ -8,7 +8,7 @@
 #include <functional>
 #include <string>
 
-#include "hil/format/error.hpp"
+#include <hil/format/error.hpp>
 
 namespace hil::test {
 

@@ -3,7 +3,7 @@
 // --secure): every command that joins the bus makes its participant through this.
 #include <string>
 
-#include "hil/dds/bus.hpp"
+#include <hil/dds/bus.hpp>
 
 namespace hil::cli {
 
