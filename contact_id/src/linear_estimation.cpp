@@ -1,10 +1,5 @@
 // Linear estimation of θ = (K, K μ) at given geometry: solve_theta, the running least squares, the
 // global and the instantaneous estimates.
-// GCC 12 reports a false -Wmaybe-uninitialized inside Eigen's triangular matrix-vector product
-// (instantiated by the Householder QR below); Eigen 3.4 + GCC 12 known issue.
-#if defined(__GNUC__) && !defined(__clang__)
-#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
-#endif
 #include "hil/contact_id/identification.hpp"
 #include "identification_detail.hpp"
 

@@ -1,9 +1,4 @@
 // Geometric identification by variable projection: identify_geometry and projected_objective.
-// GCC 12 reports a false -Wmaybe-uninitialized inside Eigen's triangular matrix-vector product
-// (instantiated by the Householder QR below); Eigen 3.4 + GCC 12 known issue.
-#if defined(__GNUC__) && !defined(__clang__)
-#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
-#endif
 #include "hil/contact_id/identification.hpp"
 #include "identification_detail.hpp"
 
