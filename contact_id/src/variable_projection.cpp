@@ -1,6 +1,7 @@
 // Geometric identification by variable projection: identify_geometry and projected_objective.
 #include "hil/contact_id/identification.hpp"
 #include "identification_detail.hpp"
+#include "hil/solver/levenberg_marquardt.hpp"
 
 #include <Eigen/QR>
 #include <Eigen/SVD>
@@ -126,7 +127,8 @@ GeometricEstimate identify_geometry(const ContactProblem& p, const GeometricOpti
   double f = vp.residual(z, R, th);
 
   if (o.solver == Solver::levenberg_marquardt) {
-    // Levenberg-Marquardt in prior-std units (z), damping μ D with a per-parameter diagonal D.
+    // Levenberg-Marquardt in prior-std units (z) by hil::solver, damping μ D with a per-parameter
+    // diagonal D.
     //
     // Where the max-depth δ has a kink (a face turning through parallel: the deepest vertex jumps
     // to the other end) the objective is V-shaped along that parameter and its minimum sits on the
@@ -139,79 +141,35 @@ GeometricEstimate identify_geometry(const ContactProblem& p, const GeometricOpti
     //
     // Stopping: besides the relative tolerance, progress is statistically meaningless once an
     // accepted step lowers the objective by less than statistical_tolerance × σ²/(6L), σ² ≈ the force
-    // cost (a change of Δχ² = 6L Δf/σ² < statistical_tolerance), twice in a row.
-    const double n_data = static_cast<double>(p.rows());
-    Eigen::MatrixXd J;
-    vp.jacobian(z, R, th, o.jacobian, J);
-    Eigen::VectorXd grad = J.transpose() * R;
-    const double jmax = J.colwise().squaredNorm().maxCoeff();
-    const double mu0 = 1e-3 * (jmax > 0.0 ? jmax : 1.0);  // Madsen-Nielsen-Tingleff start and update
-    double mu = mu0, nu = 2.0;
-    Eigen::VectorXd D = Eigen::VectorXd::Ones(m);
-    std::vector<double> history{f};
-    int small_gains = 0;
-    for (g.iterations = 0; g.iterations < o.max_iterations; ++g.iterations) {
-      // Stall: five iterations together gained less than 100 x tolerance.
-      if (history.size() > 5 && history[history.size() - 6] - f <= 100.0 * o.tolerance * f) {
-        g.converged = true;
-        break;
-      }
-      if (grad.lpNorm<Eigen::Infinity>() < 1e-14 * std::max(1.0, f)) {
-        g.converged = true;
-        break;
-      }
-      // J = Q [Rj; 0]: each damped trial solves a small (2m x m) problem.
-      Eigen::HouseholderQR<Eigen::MatrixXd> qr(J);
-      const Eigen::MatrixXd Rj = qr.matrixQR().topRows(m).triangularView<Eigen::Upper>();
-      const Eigen::VectorXd c = -(qr.householderQ().transpose() * R).head(m);
-      bool accepted = false;
-      for (int tries = 0; tries < 30 && !accepted; ++tries) {
-        Eigen::MatrixXd Aug(2 * m, m);
-        Aug << Rj, Eigen::MatrixXd((mu * D).cwiseSqrt().asDiagonal());
-        Eigen::VectorXd rhs = Eigen::VectorXd::Zero(2 * m);
-        rhs.head(m) = c;
-        const Eigen::VectorXd step = Aug.colPivHouseholderQr().solve(rhs);
-        // Decrease predicted by the undamped linear model.
-        const double predicted = c.squaredNorm() - (c - Rj * step).squaredNorm();
-        Eigen::VectorXd Rn;
-        Eigen::Vector2d thn;
-        const Eigen::VectorXd zn = z + step;
-        const double fn = vp.residual(zn, Rn, thn);
-        if (fn < f) {
-          const double df = f - fn;
-          const double rho = predicted > 0.0 ? df / predicted : 0.0;
-          z = zn;
-          R = Rn;
-          th = thn;
-          f = fn;
-          mu = std::max(mu * std::max(1.0 / 3.0, 1.0 - std::pow(2.0 * rho - 1.0, 3)), 1e-12 * mu0);
-          nu = 2.0;
-          accepted = true;
-          history.push_back(f);
-          const double sigma2 = R.head(R.size() - m).squaredNorm();  // force cost ≈ weighted noise variance
-          small_gains = df <= o.statistical_tolerance * sigma2 / n_data ? small_gains + 1 : 0;
-          if (df <= o.tolerance * f || small_gains >= 2 || step.norm() <= o.x_tolerance * (1.0 + z.norm())) {
-            g.converged = true;
-          } else {
-            vp.jacobian(z, R, th, o.jacobian, J);
-            const Eigen::VectorXd gn = J.transpose() * R;
-            for (int i = 0; i < m; ++i) D[i] = gn[i] * grad[i] < 0.0 ? 8.0 * D[i] : std::max(1.0, 0.5 * D[i]);
-            grad = gn;
-          }
-        } else {
-          mu *= nu;
-          nu *= 2.0;
-          if (step.norm() <= o.x_tolerance * (1.0 + z.norm())) {
-            g.converged = true;
-            break;
-          }
-        }
-      }
-      if (g.converged || !accepted) {
-        g.converged = true;
-        break;
-      }
-    }
+    // cost (a change of Δχ² = 6L Δf/σ² < statistical_tolerance), twice in a row; or when five
+    // iterations together gained less than 100 x tolerance.
+    Eigen::VectorXd Rn;
+    Eigen::Vector2d thn;
+    solver::Problem pb;
+    pb.residual = [&](const Eigen::VectorXd& zt, Eigen::VectorXd& r) { return vp.residual(zt, r, thn); };
+    pb.accepted = [&] { th = thn; };
+    pb.jacobian = [&](const Eigen::VectorXd& zc, const Eigen::VectorXd& r, Eigen::MatrixXd& J) { vp.jacobian(zc, r, th, o.jacobian, J); };
+    solver::Options so;
+    so.max_iterations = o.max_iterations;
+    so.damping = solver::Damping::gain_ratio;
+    so.max_trials = 30;
+    so.kink_damping = true;
+    so.relative_decrease = o.tolerance / (1.0 + o.tolerance);  // f_old - f_new <= tolerance × f_new
+    so.statistical_tolerance = o.statistical_tolerance;
+    so.data_rows = p.rows();  // the force rows; the last m are the prior's
+    so.degrees_of_freedom = static_cast<double>(p.rows());
+    so.statistical_repeats = 2;
+    so.step_absolute = so.step_relative = o.x_tolerance;
+    so.stop_on_small_rejected_step = true;
+    so.stall_iterations = 5;
+    so.stall_tolerance = 100.0 * o.tolerance;
+    so.gradient_tolerance = 1e-14;
+    const auto sr = solver::levenberg_marquardt(pb, z, so, f, &R);
+    z = sr.x;
+    R = sr.r;
+    f = sr.cost;
+    g.iterations = sr.iterations;
+    g.converged = sr.converged;
   } else {
     // Nelder-Mead with the adaptive coefficients of Gao and Han (2012).
     const double n = m;
