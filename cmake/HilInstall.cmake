@@ -12,6 +12,7 @@ include(CMakePackageConfigHelpers)
 # Target -> exported name (hil::<name>). Exported ones must only link exported or imported targets.
 set(_hil_exports
   hil_so3 so3
+  hil_solver solver
   hil_calibration calibration
   hil_contact_id contact_id
   hil_runformat runformat

@@ -1,4 +1,5 @@
 #include "hil/diagnose/engine.hpp"
+#include "hil/solver/levenberg_marquardt.hpp"
 
 #include <Eigen/QR>
 #include <Eigen/SVD>
@@ -311,70 +312,49 @@ Fit fit_with(const ModelFamily& m, const Observations& obs, const std::vector<in
   // steps, where the Jacobian hardly changes: most iterations then cost one or two designs, not q + 1.
   auto levenberg_marquardt = [&]() {
     if (q == 0) return;
-    Eigen::VectorXd scale(q);
-    for (Eigen::Index j = 0; j < q; ++j) scale(j) = nl[static_cast<std::size_t>(j)].scale;
-    double mu = -1.0;
-    f.converged = false;
-    Eigen::MatrixXd J;
-    int secant = 0;       // secant updates since J was last computed by finite differences
-    bool refresh = true;  // recompute J by finite differences before the next iteration
-    for (int it = 0; it < o.max_iterations; ++it) {
-      const bool by_fd = refresh || secant >= o.secant_updates;
-      if (by_fd) {
-        J.resize(cur.r.size(), q);
-        for (Eigen::Index j = 0; j < q; ++j) {
-          if (f.fixed[static_cast<std::size_t>(p + j)]) {
-            J.col(j).setZero();
-            continue;
-          }
-          Eigen::VectorXd ph = phi;
-          const double h = fd_step(nl[static_cast<std::size_t>(j)], phi(j));
-          ph(j) += h;
-          J.col(j) = (ev.project(ph).r - cur.r) / (h / scale(j));
-        }
-        secant = 0;
-        refresh = false;
-      }
-      Eigen::JacobiSVD<Eigen::MatrixXd> svd(J, Eigen::ComputeThinU | Eigen::ComputeThinV);
-      const Eigen::VectorXd sv = svd.singularValues();
-      const Eigen::VectorXd g = svd.matrixU().transpose() * cur.r;
-      if (mu < 0) mu = 1e-3 * (sv.size() > 0 && sv(0) > 0 ? sv(0) * sv(0) : 1.0);
-      const double mu_before = mu;
-      bool accepted = false;
-      double decrease = 0.0, step_norm = 0.0;
-      for (int tries = 0; tries < (by_fd ? 12 : 3) && !accepted; ++tries) {
-        Eigen::VectorXd d = Eigen::VectorXd::Zero(q);
-        for (Eigen::Index i = 0; i < sv.size(); ++i)
-          if (sv(i) > 1e-9 * sv(0)) d -= (sv(i) * g(i) / (sv(i) * sv(i) + mu)) * svd.matrixV().col(i);
-        const Eigen::VectorXd trial = hold(clamp(phi + d.cwiseProduct(scale), nl));
-        Projected pr = ev.project(trial);
-        if (pr.cost < cur.cost) {
-          decrease = (cur.cost - pr.cost) / std::max(cur.cost, 1e-300);
-          step_norm = d.norm();
-          const Eigen::VectorXd du = (trial - phi).cwiseQuotient(scale);  // the step taken (after the bounds)
-          if (du.squaredNorm() > 0) {
-            J += ((pr.r - cur.r) - J * du) * (du.transpose() / du.squaredNorm());
-            ++secant;
-          }
-          cur = pr;
-          phi = trial;
-          mu = std::max(mu / 3.0, 1e-12);
-          accepted = true;
-        } else {
-          mu *= 4.0;
-        }
-      }
-      const double dof = static_cast<double>(std::max<Eigen::Index>(1, cur.r.size() - p - q));
-      if (!accepted || decrease < std::max(o.tolerance, o.noise_tolerance / dof) || step_norm < 1e-8) {
-        if (!by_fd) {  // confirm with a finite-difference Jacobian
-          if (!accepted) mu = mu_before;
-          refresh = true;
+    solver::Problem pb;
+    pb.scale.resize(q);
+    pb.lower.resize(q);
+    pb.upper.resize(q);
+    for (Eigen::Index j = 0; j < q; ++j) {
+      const auto& b = nl[static_cast<std::size_t>(j)];
+      pb.scale(j) = b.scale;
+      pb.lower(j) = b.lower;
+      pb.upper(j) = b.upper;
+    }
+    pb.fixed.assign(f.fixed.begin() + p, f.fixed.end());
+    Projected trial;
+    pb.residual = [&](const Eigen::VectorXd& x, Eigen::VectorXd& r) {
+      trial = ev.project(x);
+      r = trial.r;
+      return trial.cost;
+    };
+    pb.accepted = [&] { cur = std::move(trial); };
+    pb.jacobian = [&](const Eigen::VectorXd& x, const Eigen::VectorXd& r, Eigen::MatrixXd& J) {
+      J.resize(r.size(), q);
+      for (Eigen::Index j = 0; j < q; ++j) {
+        if (f.fixed[static_cast<std::size_t>(p + j)]) {
+          J.col(j).setZero();
           continue;
         }
-        f.converged = true;
-        break;
+        Eigen::VectorXd ph = x;
+        const double h = fd_step(nl[static_cast<std::size_t>(j)], x(j));
+        ph(j) += h;
+        J.col(j) = (ev.project(ph).r - r) / (h / pb.scale(j));
       }
-    }
+    };
+    solver::Options so;
+    so.max_iterations = o.max_iterations;
+    so.damping = solver::Damping::fixed_factors;
+    so.max_trials = 12;
+    so.max_trials_secant = 3;
+    so.secant_updates = o.secant_updates;
+    const double dof = static_cast<double>(std::max<Eigen::Index>(1, cur.r.size() - p - q));
+    so.relative_decrease = std::max(o.tolerance, o.noise_tolerance / dof);
+    so.step_absolute = 1e-8;
+    const auto sr = solver::levenberg_marquardt(pb, phi, so, cur.cost, &cur.r);
+    phi = sr.x;
+    f.converged = sr.converged;
   };
   levenberg_marquardt();
 
