@@ -15,7 +15,7 @@ set(_hil_exports
   hil_solver solver
   hil_calibration calibration
   hil_contact_id contact_id
-  hil_runformat runformat
+  hil_format format
   hil_idl_types idl_types
   hil_idl idl
   hil_drivers drivers

@@ -1,4 +1,4 @@
-#include "hil/contact_id/geometry.hpp"
+#include <hil/contact_id/geometry.hpp>
 
 #include <algorithm>
 #include <cmath>

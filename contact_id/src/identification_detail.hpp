@@ -2,7 +2,7 @@
 // linear_estimation.cpp, variable_projection.cpp, observability.cpp, l_curve.cpp).
 #pragma once
 
-#include "hil/contact_id/identification.hpp"
+#include <hil/contact_id/identification.hpp>
 
 #include <Eigen/Core>
 

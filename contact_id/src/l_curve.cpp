@@ -1,5 +1,5 @@
 // The L-curve of the regularised geometric identification over λ: l_curve.
-#include "hil/contact_id/identification.hpp"
+#include <hil/contact_id/identification.hpp>
 
 #include <algorithm>
 #include <cmath>

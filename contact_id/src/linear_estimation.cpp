@@ -1,6 +1,6 @@
 // Linear estimation of θ = (K, K μ) at given geometry: solve_theta, the running least squares, the
 // global and the instantaneous estimates.
-#include "hil/contact_id/identification.hpp"
+#include <hil/contact_id/identification.hpp>
 #include "identification_detail.hpp"
 
 #include <Eigen/QR>

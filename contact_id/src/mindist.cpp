@@ -1,4 +1,4 @@
-#include "hil/contact_id/mindist.hpp"
+#include <hil/contact_id/mindist.hpp>
 
 #include <algorithm>
 #include <cmath>

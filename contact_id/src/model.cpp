@@ -1,4 +1,4 @@
-#include "hil/contact_id/model.hpp"
+#include <hil/contact_id/model.hpp>
 
 #include <cmath>
 #include <random>

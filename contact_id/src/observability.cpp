@@ -1,5 +1,5 @@
 // Observability of the geometric uncertainties on a run: analyse_observability.
-#include "hil/contact_id/identification.hpp"
+#include <hil/contact_id/identification.hpp>
 #include "identification_detail.hpp"
 
 #include <Eigen/SVD>

@@ -1,4 +1,4 @@
-#include "hil/contact_id/online.hpp"
+#include <hil/contact_id/online.hpp>
 
 #include <cmath>
 #include <limits>

@@ -1,7 +1,7 @@
 // The contact identification problem (hil/contact_id/identification.hpp): the data, the regressor
 // A(x) of y = A(x) θ and its sensitivities to the geometric uncertainties.
-#include "hil/contact_id/identification.hpp"
-#include "hil/so3/so3.hpp"
+#include <hil/contact_id/identification.hpp>
+#include <hil/so3/so3.hpp>
 
 #include <algorithm>
 #include <cmath>

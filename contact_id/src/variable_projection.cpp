@@ -1,7 +1,7 @@
 // Geometric identification by variable projection: identify_geometry and projected_objective.
-#include "hil/contact_id/identification.hpp"
+#include <hil/contact_id/identification.hpp>
 #include "identification_detail.hpp"
-#include "hil/solver/levenberg_marquardt.hpp"
+#include <hil/solver/levenberg_marquardt.hpp>
 
 #include <Eigen/QR>
 #include <Eigen/SVD>

@@ -9,7 +9,7 @@
 #include <cstdio>
 #include <string>
 
-#include "hil/test/acu.hpp"
+#include <hil/test/acu.hpp>
 
 namespace cid = hil::contact_id;
 

@@ -3,7 +3,7 @@
 #include <cmath>
 #include <vector>
 
-#include "hil/contact_id/identification.hpp"
+#include <hil/contact_id/identification.hpp>
 
 namespace hil::contact_id::test {
 

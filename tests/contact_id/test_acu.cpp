@@ -4,8 +4,8 @@
 #include <filesystem>
 #include <fstream>
 
-#include "hil/test/files.hpp"
-#include "hil/test/acu.hpp"
+#include <hil/test/files.hpp>
+#include <hil/test/acu.hpp>
 
 namespace hil::contact_id::test {
 namespace {

@@ -1,4 +1,5 @@
 // Geometry and mindist on analytic cases with known answers.
+#include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
 #include <random>
@@ -7,6 +8,9 @@
 
 namespace hil::contact_id::test {
 namespace {
+
+using ::testing::HasSubstr;
+using ::testing::ThrowsMessage;
 
 ::testing::AssertionResult near_vec(const Vec3& a, const Vec3& b, double tol) {
   if ((a - b).norm() <= tol) return ::testing::AssertionSuccess();
@@ -31,8 +35,10 @@ TEST(Polyhedron, DropsInteriorPointsAndRejectsFlat) {
   auto v = box({0, 0, 0}, {1, 1, 1});
   v.emplace_back(0.5, 0.5, 0.5);
   EXPECT_EQ(Polyhedron::from_vertices(v).vertices().size(), 8u);
-  EXPECT_THROW(Polyhedron::from_vertices({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 1, 0}}), std::invalid_argument);
-  EXPECT_THROW(Polyhedron::from_vertices({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}), std::invalid_argument);
+  EXPECT_THAT([] { Polyhedron::from_vertices({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 1, 0}}); },
+              ThrowsMessage<std::invalid_argument>(HasSubstr("coplanar (no volume)")));
+  EXPECT_THAT([] { Polyhedron::from_vertices({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}); },
+              ThrowsMessage<std::invalid_argument>(HasSubstr("at least 4 vertices")));
 }
 
 TEST(Mindist, FaceFace) {

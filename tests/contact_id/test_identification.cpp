@@ -1,11 +1,15 @@
 // Contact model, regressor and identification: oracle tests, noise-free recovery, bad input.
+#include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
-#include "hil/contact_id/online.hpp"
+#include <hil/contact_id/online.hpp>
 #include "scenes.hpp"
 
 namespace hil::contact_id::test {
 namespace {
+
+using ::testing::HasSubstr;
+using ::testing::ThrowsMessage;
 
 TEST(Model, PlateWrenchMatchesHandComputation) {
   // Cube pressed d into the block, sliding along +x faster than v_t,m: the plate feels the normal
@@ -40,8 +44,10 @@ TEST(Model, WrenchTransformsAreInverse) {
 }
 
 TEST(Model, RejectsNonPhysicalParameters) {
-  EXPECT_THROW((ContactModel{0.0, 0.2, 1e-3}.check()), std::invalid_argument);
-  EXPECT_THROW((ContactModel{1e5, -0.1, 1e-3}.check()), std::invalid_argument);
+  EXPECT_THAT(([] { ContactModel{0.0, 0.2, 1e-3}.check(); }),
+              ThrowsMessage<std::invalid_argument>(HasSubstr("contact stiffness K must be > 0, got 0")));
+  EXPECT_THAT(([] { ContactModel{1e5, -0.1, 1e-3}.check(); }),
+              ThrowsMessage<std::invalid_argument>(HasSubstr("friction coefficient mu must be >= 0, got -0.1")));
   EXPECT_NO_THROW((ContactModel{1e5, 0.0, 1e-3}.check()));
 }
 

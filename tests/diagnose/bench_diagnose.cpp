@@ -7,8 +7,8 @@
 #include <set>
 #include <string>
 
-#include "hil/diagnose/contact_family.hpp"
-#include "hil/diagnose/diagnose.hpp"
+#include <hil/diagnose/contact_family.hpp>
+#include <hil/diagnose/diagnose.hpp>
 #include "scenes.hpp"
 
 namespace dg = hil::diagnose;

@@ -4,9 +4,9 @@
 // `hil contact simulate --inject` does.
 #include <string>
 
-#include "hil/diagnose/contact_family.hpp"
-#include "hil/format/rig.hpp"
-#include "hil/rig/contact.hpp"
+#include <hil/diagnose/contact_family.hpp>
+#include <hil/format/rig.hpp>
+#include <hil/rig/contact.hpp>
 
 namespace hil::diagnose::test {
 

@@ -25,8 +25,8 @@
 #include <set>
 #include <sstream>
 
-#include "hil/diagnose/contact_family.hpp"
-#include "hil/diagnose/diagnose.hpp"
+#include <hil/diagnose/contact_family.hpp>
+#include <hil/diagnose/diagnose.hpp>
 #include "tripod_scene.hpp"
 
 namespace hil::diagnose::test {

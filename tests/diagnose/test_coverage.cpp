@@ -13,8 +13,8 @@
 #include <sstream>
 #include <string>
 
-#include "hil/diagnose/contact_family.hpp"
-#include "hil/diagnose/engine.hpp"
+#include <hil/diagnose/contact_family.hpp>
+#include <hil/diagnose/engine.hpp>
 #include "tripod_scene.hpp"
 
 namespace hil::diagnose::test {

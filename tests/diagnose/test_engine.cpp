@@ -1,4 +1,5 @@
 // The diagnosis' engine, contact family, generator and deflection family on small exact cases.
+#include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -6,13 +7,16 @@
 #include <memory>
 #include <random>
 
-#include "hil/diagnose/contact_family.hpp"
-#include "hil/diagnose/deflection_family.hpp"
-#include "hil/diagnose/diagnose.hpp"
+#include <hil/diagnose/contact_family.hpp>
+#include <hil/diagnose/deflection_family.hpp>
+#include <hil/diagnose/diagnose.hpp>
 #include "scenes.hpp"
 
 namespace hil::diagnose {
 namespace {
+
+using ::testing::HasSubstr;
+using ::testing::ThrowsMessage;
 
 /// y_c(t) = θ_0 sin(2π f t + c) + θ_1, f nonlinear: a small separable family with a known optimum.
 class SineFamily : public ModelFamily {
@@ -571,7 +575,7 @@ TEST(ContactFamily, ComplianceOfTheGeneratorIsSelfConsistent) {
 TEST(ContactFamily, UnknownExtensionsAndRunsWithoutContactAreClearErrors) {
   const auto r = test::scene_run("press_slide");
   const auto d = data_of(r, {});
-  EXPECT_THROW(ContactFamily(d, {"gravity"}), std::invalid_argument);
+  EXPECT_THAT([&] { ContactFamily(d, {"gravity"}); }, ThrowsMessage<std::invalid_argument>(HasSubstr("unknown extension 'gravity'")));
   auto m = test::measure(r, {}, 1, false);
   for (auto& s : m) s.kin.T_world_ee.translation().z() += 0.5;  // far above the block
   try {
@@ -629,7 +633,8 @@ TEST(Generator, DrawsSeededEffectsAndRefusesUnknownOnes) {
   EXPECT_EQ(a.viscous_n_s_per_m, b.viscous_n_s_per_m);
   EXPECT_NE(a.viscous_n_s_per_m, c.viscous_n_s_per_m);
   EXPECT_EQ(a.names(), std::vector<std::string>{"viscous_friction"});
-  EXPECT_THROW(draw_effect("magnetism", 1, r.scene, a), std::invalid_argument);
+  EXPECT_THAT([&] { draw_effect("magnetism", 1, r.scene, a); },
+              ThrowsMessage<std::invalid_argument>(HasSubstr("unknown effect 'magnetism' (expected one of the diagnosis' candidates)")));
 }
 
 TEST(Diagnose, CandidatesFailingWithoutHeldOutDataAreScreenedAndSaySo) {

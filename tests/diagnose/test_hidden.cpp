@@ -7,8 +7,8 @@
 #include <cmath>
 #include <set>
 
-#include "hil/diagnose/contact_family.hpp"
-#include "hil/diagnose/diagnose.hpp"
+#include <hil/diagnose/contact_family.hpp>
+#include <hil/diagnose/diagnose.hpp>
 #include "scenes.hpp"
 
 namespace hil::diagnose {

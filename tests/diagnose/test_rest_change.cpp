@@ -1,6 +1,7 @@
 // rest_change (issue 12, item 6): a rest pose that steps at events located from the data. The data
 // are generated here from the deflection equations (y = C w + Σ H(t - t_e) Δ_e + noise), never by the
 // family's design.
+#include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
@@ -9,11 +10,14 @@
 #include <limits>
 #include <random>
 
-#include "hil/diagnose/deflection_family.hpp"
-#include "hil/diagnose/diagnose.hpp"
+#include <hil/diagnose/deflection_family.hpp>
+#include <hil/diagnose/diagnose.hpp>
 
 namespace hil::diagnose {
 namespace {
+
+using ::testing::HasSubstr;
+using ::testing::ThrowsMessage;
 
 namespace cid = hil::contact_id;
 
@@ -185,13 +189,17 @@ TEST(RestChange, AFoldLocatesAnEventInItsGapFromTheTrainingSamplesOnly) {
 // (d) Bad input and edge cases of the search, and a rigid base: no event, the candidate is the
 // nominal model and not supported.
 TEST(RestChange, SearchEdgeCases) {
-  EXPECT_THROW(locate_changes(Eigen::MatrixXd::Zero(100, 5)), std::invalid_argument);
+  EXPECT_THAT([] { locate_changes(Eigen::MatrixXd::Zero(100, 5)); },
+              ThrowsMessage<std::invalid_argument>(HasSubstr("the residual has 5 columns, expected 6")));
   Eigen::MatrixXd bad = Eigen::MatrixXd::Zero(100, 6);
   bad(40, 2) = std::numeric_limits<double>::quiet_NaN();
-  EXPECT_THROW(locate_changes(bad), std::invalid_argument);
-  EXPECT_THROW(locate_changes(Eigen::MatrixXd::Zero(100, 6), {}, 8, 1), std::invalid_argument);
-  EXPECT_THROW(locate_changes(Eigen::MatrixXd::Zero(100, 6), std::vector<double>(99, 0.0)), std::invalid_argument);
-  EXPECT_THROW(locate_changes(Eigen::MatrixXd::Zero(3, 6), {0.0, 0.2, 0.1}), std::invalid_argument);
+  EXPECT_THAT([&] { locate_changes(bad); }, ThrowsMessage<std::invalid_argument>(HasSubstr("the residual is not finite")));
+  EXPECT_THAT([] { locate_changes(Eigen::MatrixXd::Zero(100, 6), {}, 8, 1); },
+              ThrowsMessage<std::invalid_argument>(HasSubstr("locate_changes: min_segment must be at least 2")));
+  EXPECT_THAT([] { locate_changes(Eigen::MatrixXd::Zero(100, 6), std::vector<double>(99, 0.0)); },
+              ThrowsMessage<std::invalid_argument>(HasSubstr("locate_changes: 99 times for 100")));
+  EXPECT_THAT([] { locate_changes(Eigen::MatrixXd::Zero(3, 6), {0.0, 0.2, 0.1}); },
+              ThrowsMessage<std::invalid_argument>(HasSubstr("the times do not increase at row 2")));
   EXPECT_TRUE(locate_changes(Eigen::MatrixXd::Zero(5, 6)).position.empty());   // too few samples
   EXPECT_TRUE(locate_changes(Eigen::MatrixXd::Zero(100, 6)).position.empty());  // nothing varies
   EXPECT_TRUE(locate_changes(Eigen::MatrixXd::Ones(100, 6), {}, 0).position.empty());

@@ -1,17 +1,21 @@
 // The diagnosis of a stiffness table (issue 6, "the same for a stiffness-experiment table"): a
 // table simulated by the calibration module with a hidden effect; the diagnosis runs blind against
 // the joint-compliance model and must name the effect, or `none` on a clean table.
+#include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
 #include <random>
 
-#include "hil/calibration/experiment.hpp"
-#include "hil/calibration/robot.hpp"
-#include "hil/diagnose/diagnose.hpp"
-#include "hil/diagnose/stiffness_family.hpp"
+#include <hil/calibration/experiment.hpp>
+#include <hil/calibration/robot.hpp>
+#include <hil/diagnose/diagnose.hpp>
+#include <hil/diagnose/stiffness_family.hpp>
 
 namespace hil::diagnose {
 namespace {
+
+using ::testing::HasSubstr;
+using ::testing::ThrowsMessage;
 
 namespace hc = hil::calibration;
 
@@ -127,11 +131,13 @@ TEST(StiffnessTable, BadInputNamesTheRow) {
   // Joint values of another robot.
   auto q = table(joints_only(), 18);
   q[0].q_rad.conservativeResize(5);
-  EXPECT_THROW(make_stiffness_data(robot(), q), std::runtime_error);
+  EXPECT_THAT([&] { make_stiffness_data(robot(), q); }, ThrowsMessage<std::runtime_error>(HasSubstr(": 5 joint values for a 6-joint robot")));
   rows.resize(5);
-  EXPECT_THROW(make_stiffness_data(robot(), rows), std::runtime_error);
+  EXPECT_THAT([&] { make_stiffness_data(robot(), rows); },
+              ThrowsMessage<std::runtime_error>(HasSubstr("too few rows to diagnose a stiffness table (5 < 10)")));
   const auto d = make_stiffness_data(robot(), table(joints_only(), 16));
-  EXPECT_THROW(StiffnessFamily(d, {"time_offset"}), std::invalid_argument);
+  EXPECT_THAT([&] { StiffnessFamily(d, {"time_offset"}); },
+              ThrowsMessage<std::invalid_argument>(HasSubstr("'time_offset' does not apply to a stiffness table")));
 }
 
 }  // namespace

@@ -1,17 +1,21 @@
 // The truth's tripod as a hil rig (tripod_scene.hpp): before the blind suite trusts it, the scene
 // and the converter must reproduce the truth's own law where the two models agree, and the nominal
 // fit of a clean run must return the truth's K and μ.
+#include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <set>
 
-#include "hil/diagnose/contact_family.hpp"
-#include "hil/diagnose/engine.hpp"
+#include <hil/diagnose/contact_family.hpp>
+#include <hil/diagnose/engine.hpp>
 #include "tripod_scene.hpp"
 
 namespace hil::diagnose::test {
 namespace {
+
+using ::testing::HasSubstr;
+using ::testing::ThrowsMessage;
 
 // A run with no sensor chain at all: the measured wrench is the true one.
 ct::Scenario noiseless(double duration_s) {
@@ -96,7 +100,8 @@ TEST(TripodScene, TheConverterQuantisesTheReportedPositionAndVelocityOnly) {
     }
   }
   EXPECT_TRUE(moved);
-  EXPECT_THROW(to_measurements(samples, {-1.0, 0.0}), std::invalid_argument);
+  EXPECT_THAT([&] { to_measurements(samples, {-1.0, 0.0}); },
+              ThrowsMessage<std::invalid_argument>(HasSubstr("to_measurements: resolutions must be finite and >= 0")));
 }
 
 TEST(TripodScene, ACleanRunsNominalFitReturnsTheTruthsStiffnessAndFriction) {

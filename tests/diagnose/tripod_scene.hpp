@@ -5,9 +5,9 @@
 // and what the rig reports (time, commanded pose and twist, plate wrench), never from the law.
 #include <vector>
 
-#include "hil/contact_id/identification.hpp"
-#include "hil/contact_id/model.hpp"
-#include "hil/contact_truth/tripod.hpp"
+#include <hil/contact_id/identification.hpp>
+#include <hil/contact_id/model.hpp>
+#include <hil/contact_truth/tripod.hpp>
 
 namespace hil::diagnose::test {
 

@@ -1,5 +1,5 @@
-#include "hil/diagnose/contact_family.hpp"
-#include "hil/so3/so3.hpp"
+#include <hil/diagnose/contact_family.hpp>
+#include <hil/so3/so3.hpp>
 
 #include <Eigen/Eigenvalues>
 #include <Eigen/SVD>

@@ -1,4 +1,4 @@
-#include "hil/diagnose/diagnose.hpp"
+#include <hil/diagnose/diagnose.hpp>
 
 #include <algorithm>
 #include <chrono>

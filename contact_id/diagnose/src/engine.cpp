@@ -1,5 +1,5 @@
-#include "hil/diagnose/engine.hpp"
-#include "hil/solver/levenberg_marquardt.hpp"
+#include <hil/diagnose/engine.hpp>
+#include <hil/solver/levenberg_marquardt.hpp>
 
 #include <Eigen/QR>
 #include <Eigen/SVD>

@@ -1,4 +1,4 @@
-#include "hil/diagnose/stiffness_family.hpp"
+#include <hil/diagnose/stiffness_family.hpp>
 
 #include <Eigen/QR>
 #include <Eigen/SVD>

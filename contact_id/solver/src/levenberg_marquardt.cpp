@@ -1,4 +1,4 @@
-#include "hil/solver/levenberg_marquardt.hpp"
+#include <hil/solver/levenberg_marquardt.hpp>
 
 #include <Eigen/SVD>
 #include <algorithm>

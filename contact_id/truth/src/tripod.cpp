@@ -1,4 +1,4 @@
-#include "hil/contact_truth/tripod.hpp"
+#include <hil/contact_truth/tripod.hpp>
 
 #include <cmath>
 #include <random>

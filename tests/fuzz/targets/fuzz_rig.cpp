@@ -1,4 +1,4 @@
-// rig.yaml reader (acquisition/runformat): parse_rig on arbitrary text.
+// rig.yaml reader (acquisition/format): parse_rig on arbitrary text.
 #include "fuzz_common.hpp"
 #include <hil/format/error.hpp>
 #include <hil/format/rig.hpp>

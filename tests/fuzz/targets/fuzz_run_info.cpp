@@ -1,4 +1,4 @@
-// run.yaml reader (acquisition/runformat): parse_run_info on arbitrary text.
+// run.yaml reader (acquisition/format): parse_run_info on arbitrary text.
 #include "fuzz_common.hpp"
 #include <hil/format/error.hpp>
 #include <hil/format/run.hpp>

@@ -1,4 +1,4 @@
-// samples.csv reader (acquisition/runformat): parse_samples, then the summary `hil validate` prints.
+// samples.csv reader (acquisition/format): parse_samples, then the summary `hil validate` prints.
 #include "fuzz_common.hpp"
 #include <hil/format/error.hpp>
 #include <hil/format/run.hpp>

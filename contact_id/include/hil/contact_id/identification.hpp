@@ -16,7 +16,7 @@
 #include <string>
 #include <vector>
 
-#include "hil/contact_id/model.hpp"
+#include <hil/contact_id/model.hpp>
 
 namespace hil::contact_id {
 

@@ -18,7 +18,7 @@
 ///   pairs), so the result is deterministic.
 #include <vector>
 
-#include "hil/contact_id/geometry.hpp"
+#include <hil/contact_id/geometry.hpp>
 
 namespace hil::contact_id {
 

@@ -15,9 +15,9 @@
 #include <array>
 #include <vector>
 
-#include "hil/contact_id/geometry.hpp"
-#include "hil/contact_id/mindist.hpp"
-#include "hil/so3/so3.hpp"
+#include <hil/contact_id/geometry.hpp>
+#include <hil/contact_id/mindist.hpp>
+#include <hil/so3/so3.hpp>
 
 namespace hil::contact_id {
 

@@ -1,7 +1,7 @@
 #pragma once
 /// \file Online estimation, one sample at a time: instantaneous and running global estimates of
 /// θ = (K, μK) at the design geometry. Pure numerics (the DDS worker wraps it).
-#include "hil/contact_id/identification.hpp"
+#include <hil/contact_id/identification.hpp>
 
 namespace hil::contact_id {
 

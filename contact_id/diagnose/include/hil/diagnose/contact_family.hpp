@@ -29,9 +29,9 @@
 #include <string>
 #include <vector>
 
-#include "hil/contact_id/identification.hpp"
-#include "hil/contact_id/model.hpp"
-#include "hil/diagnose/engine.hpp"
+#include <hil/contact_id/identification.hpp>
+#include <hil/contact_id/model.hpp>
+#include <hil/diagnose/engine.hpp>
 
 namespace hil::diagnose {
 

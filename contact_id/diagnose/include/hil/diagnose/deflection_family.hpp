@@ -19,8 +19,8 @@
 #include <string>
 #include <vector>
 
-#include "hil/contact_id/model.hpp"
-#include "hil/diagnose/engine.hpp"
+#include <hil/contact_id/model.hpp>
+#include <hil/diagnose/engine.hpp>
 
 namespace hil::diagnose {
 

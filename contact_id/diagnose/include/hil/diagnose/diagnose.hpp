@@ -12,7 +12,7 @@
 #include <string>
 #include <vector>
 
-#include "hil/diagnose/engine.hpp"
+#include <hil/diagnose/engine.hpp>
 
 namespace hil::diagnose {
 

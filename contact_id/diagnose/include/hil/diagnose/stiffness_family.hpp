@@ -20,8 +20,8 @@
 #include <string>
 #include <vector>
 
-#include "hil/calibration/observation.hpp"
-#include "hil/diagnose/engine.hpp"
+#include <hil/calibration/observation.hpp>
+#include <hil/diagnose/engine.hpp>
 
 namespace hil::diagnose {
 
