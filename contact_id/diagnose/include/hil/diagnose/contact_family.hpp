@@ -88,6 +88,10 @@ class ContactFamily : public ModelFamily {
   const std::set<std::string>& extensions() const { return ext_; }
   /// The compliance directions (21 symmetric coordinates -> 6x6) kept for robot_compliance.
   const std::vector<Matrix6d>& compliance_basis() const { return basis_; }
+  /// The measured kinematics at time t (time_offset's pose at t - τ): windowed-sinc (Lanczos, 8
+  /// lobes) interpolation of the samples, which keeps a quantised pose stream's noise level at every
+  /// fraction of a sample (docs/diagnosis.md); exact at the samples, the ends held beyond the run.
+  cid::Kinematics kinematics_at(double t) const;
 
  private:
   struct PairTable;
@@ -103,10 +107,8 @@ class ContactFamily : public ModelFamily {
   int gain_ref_ = 2;
   // offsets into φ
   int i_geo_ = -1, i_cmp_ = -1, i_exp_ = -1, i_tau_ = -1, i_gain_ = -1;
-  int j_visc_ = -1, j_damp_ = -1, j_bias_ = -1;
+  int j_visc_ = -1, j_damp_ = -1, j_bias_ = -1, j_depth_ = 2;
   std::vector<Matrix6d> all_basis() const;
-  /// The measured kinematics interpolated at time t (slerp; held at the ends).
-  cid::Kinematics kinematics_at(double t) const;
 
   // Contacts recomputed for φ (docs/diagnosis.md, "Cost"). mindist on every pair of every sample is
   // what a design costs; most pairs are provably apart or unchanged, and are skipped:
