@@ -267,8 +267,11 @@ std::string known_failure(const std::string& effect, const std::string& resoluti
   // tip, 3δ/4 below hil's contact point (the interference's centroid); the nominal model's friction
   // depth finds that (TripodScene.ThePointFeets...), and with it kept the gains are right (gain_mx
   // 0.0291 ± 0.0020, gain_my -0.0402 ± 0.0009; with μ = 0 in the truth 0.0299 and -0.0406), but on
-  // this run it is collinear with muK and the gains within the engine's threshold and gives way to
-  // them (Param::gives_way), so it is fixed at the centroid.
+  // this run it cannot stay: on a level plate with the wrench about its surface origin, muK's column
+  // is the friction in fx, fy, mz plus its moment in mx, my, and that moment is the depth's column,
+  // so {muK, gain_fx, gain_fy, gain_mz, depth} have one exact degeneracy. The depth gives way
+  // (Param::gives_way) at the start; at the optimum gain_fy runs to its bound and is fixed too. The
+  // friction gains are then told from μ only by the centroid's moment arm, which is the bias.
   if (effect == "sensor_gain") return "gain_mx, gain_my 2.1 std from the truth (the friction depth gives way to the gains)";
   // At 2e-4 m/s the reported twist hardly carries the penetration rate (<= 1.7e-4 m/s): the cause
   // named is time_offset, τ -24.0 ± 0.25 ms (friction on the total normal force) and -21.9 ± 0.6 ms
