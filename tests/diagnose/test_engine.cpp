@@ -164,53 +164,6 @@ TEST(Engine, InseparableParametersAreFixedListedByNameAndNeverReported) {
   }
 }
 
-/// y = a sin(2π f t + c) + level + bias, level a nominal parameter, bias an extension's: the two
-/// constant columns cannot be told apart. `gives_way` marks the level as one that gives way.
-class LevelAndBias : public ModelFamily {
- public:
-  LevelAndBias(const Observations& o, bool gives_way) : o_(o), gives_way_(gives_way) {}
-  std::string name() const override { return "level+bias"; }
-  std::vector<Param> linear() const override {
-    Param level{"level", "", 1, false};
-    level.gives_way = gives_way_;
-    return {{"amplitude", "", 1, false}, level, {"bias", "", 1, true}};
-  }
-  std::vector<Param> nonlinear() const override { return {}; }
-  void design(const Eigen::VectorXd&, Eigen::MatrixXd& A) const override {
-    A.setZero(static_cast<Eigen::Index>(6 * o_.size()), 3);
-    for (std::size_t k = 0; k < o_.size(); ++k)
-      for (int c = 0; c < 6; ++c) {
-        const auto r = static_cast<Eigen::Index>(6 * k) + c;
-        A(r, 0) = std::sin(2 * M_PI * 1.23 * o_.t_s[k] + c);
-        A(r, 1) = A(r, 2) = 1.0;
-      }
-  }
-
- private:
-  const Observations& o_;
-  bool gives_way_;
-};
-
-TEST(Engine, ANominalParameterThatGivesWayIsFixedBeforeTheExtensions) {
-  const auto o = sine_data(1.23, 2.5, 0.4, 0.05, 4);
-  {
-    const Fit f = fit(LevelAndBias(o, true), o, all(o.size()));
-    ASSERT_TRUE(listed(f, "level"));
-    EXPECT_FALSE(listed(f, "bias"));
-    EXPECT_EQ(f.theta(1), 0.0);
-    EXPECT_NEAR(f.theta(2), 0.4, 0.02);  // the extension's bias takes the offset
-    EXPECT_TRUE(reported(f, "bias"));
-  }
-  {
-    // An ordinary nominal parameter is kept first: the extension's bias is the one fixed.
-    const Fit f = fit(LevelAndBias(o, false), o, all(o.size()));
-    ASSERT_TRUE(listed(f, "bias"));
-    EXPECT_FALSE(listed(f, "level"));
-    EXPECT_NEAR(f.theta(1), 0.4, 0.02);
-    EXPECT_FALSE(reported(f, "bias"));
-  }
-}
-
 /// y = θ_0 + φ t (one "gain" φ bounded to ±0.05) on data whose slope is 0.3: the fit runs to the
 /// bound, which is no estimate.
 class BoundedSlope : public ModelFamily {
@@ -463,10 +416,7 @@ TEST(ContactFamily, NominalDesignTimesThetaIsTheForwardSimulation) {
   const auto d = data_of(r, {});
   ContactFamily m(d, {});
   Fit f;
-  // (K, μK) of the paper's model; the friction's depth 0: at the interference's centroid.
-  ASSERT_EQ(m.linear().size(), 3u);
-  EXPECT_EQ(m.linear()[2].name, "friction_depth_muK");
-  f.theta = Eigen::Vector3d(r.model.theta()(0), r.model.theta()(1), 0.0);
+  f.theta = r.model.theta();
   f.phi.resize(0);
   const Eigen::MatrixXd pred = predict(m, f, d.obs.size());
   cid::MindistWorkspace ws;

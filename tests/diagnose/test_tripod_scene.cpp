@@ -133,28 +133,5 @@ TEST(TripodScene, ACleanRunsNominalFitReturnsTheTruthsStiffnessAndFriction) {
   std::cout << "clean nominal fit: K = " << K << " N/m, mu = " << mu << ", relative error = " << err << "\n";
 }
 
-
-TEST(TripodScene, ThePointFeetsFrictionActsThreeQuartersOfTheInterferenceBelowTheCentroid) {
-  // hil's contact point is the centroid of the interference volume: for a foot's pyramid tip
-  // pressed δ into the plate, 3δ/4 from the tip along the normal. The truth's point foot takes its
-  // friction at the tip. The nominal model's friction depth (κ: the friction acts κ δ along the
-  // normal force on the feet, from the centroid) must find the tip, κ = -3/4, on a clean run with
-  // exact poses (any other foot shape, a wrong sign or a lever about the wrong point misses it).
-  const ct::Scenario sc = noiseless(16.0);
-  const cid::Scene scene = tripod_scene(sc.plate, sc.tripod);
-  const auto data = make_contact_data(scene, kVtm_m_per_s, to_measurements(ct::simulate(sc), {0.0, 0.0}));
-  const ContactFamily nominal(data, {});
-  std::vector<int> all(data.obs.size());
-  for (std::size_t k = 0; k < all.size(); ++k) all[k] = static_cast<int>(k);
-  const Fit f = fit(nominal, data.obs, all);
-  const Reported* depth = nullptr;
-  for (const auto& r : f.reported)
-    if (r.name == "friction_depth") depth = &r;
-  ASSERT_NE(depth, nullptr) << "friction_depth not reported";
-  EXPECT_FALSE(depth->extension);
-  std::cout << "friction depth of point feet: " << depth->value << " +- " << depth->std << "\n";
-  EXPECT_NEAR(depth->value, -0.75, 0.02);
-}
-
 }  // namespace
 }  // namespace hil::diagnose::test

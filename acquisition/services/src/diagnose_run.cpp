@@ -273,7 +273,7 @@ void print_summary(std::ostream& out, const RunDiagnosis& r) {
                        d.gain_percent);
   }
   for (const auto& q : ext.full.reported)
-    if (!q.extension && (q.name == "K" || q.name == "mu" || q.name == "friction_depth"))
+    if (!q.extension && (q.name == "K" || q.name == "mu"))
       out << fmt::format("    {:<28} {}\n", q.name, fmt_value(q.value, q.std, q.unit));
   out << "  candidates (held-out error, gain, verdict):\n";
   for (const auto& c : d.candidates)

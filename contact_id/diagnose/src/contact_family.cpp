@@ -185,8 +185,6 @@ ContactFamily::ContactFamily(const ContactData& d, std::set<std::string> extensi
       throw std::invalid_argument("unknown extension '" + e + "'");
   linear_.push_back({"K", "N/m", 1e5, false});
   linear_.push_back({"muK", "N/m", 1e4, false});
-  j_depth_ = static_cast<int>(linear_.size());
-  linear_.push_back({"friction_depth_muK", "N/m", 1e4, false, -1e300, 1e300, true});
   if (has("viscous_friction")) {
     j_visc_ = static_cast<int>(linear_.size());
     linear_.push_back({"viscous_n_s_per_m", "N s/m", 100, true});
@@ -322,7 +320,6 @@ void ContactFamily::columns(const std::vector<cid::ContactPoint>& cs, const cid:
     const double de = p == 1.0 ? c.delta : d_.delta_ref_m * std::pow(c.delta / d_.delta_ref_m, p);
     out.col(0) += plate_wrench_of(T, de * c.normal, c.point);
     out.col(1) += plate_wrench_of(T, de * c.tangent, c.point);
-    out.col(j_depth_) += plate_wrench_of(T, de * c.tangent, c.point + c.delta * c.normal) - plate_wrench_of(T, de * c.tangent, c.point);
     if (j_visc_ >= 0) out.col(j_visc_) += plate_wrench_of(T, c.slip_speed * c.tangent, c.point);
     if (j_damp_ >= 0) {
       const double rate = -cid::relative_velocity(d_.scene, k, c.point).dot(c.normal);
@@ -576,14 +573,7 @@ std::vector<Reported> ContactFamily::report(const Fit& f) const {
   const double vmu = (f.cov(1, 1) - 2 * mu * f.cov(0, 1) + mu * mu * f.cov(0, 0)) / (K * K);
   if (!f.is_fixed(1)) out.push_back({"mu", "", mu, std::sqrt(std::max(0.0, vmu)), false});  // fixed: nothing slides
   const Eigen::Index p = static_cast<Eigen::Index>(linear_.size());
-  if (!f.is_fixed(j_depth_) && !f.is_fixed(1) && muK != 0) {
-    const Eigen::Index d = j_depth_;
-    const double kappa = f.theta(d) / muK;
-    const double v = (f.cov(d, d) - 2 * kappa * f.cov(d, 1) + kappa * kappa * f.cov(1, 1)) / (muK * muK);
-    out.push_back({"friction_depth", "", kappa, std::sqrt(std::max(0.0, v)), false});
-  }
   for (Eigen::Index j = 2; j < p; ++j) {
-    if (j == j_depth_) continue;
     const auto& q = linear_[static_cast<std::size_t>(j)];
     double var = std::max(0.0, f.cov(j, j));
     if (j_bias_ >= 0 && j >= j_bias_ && j < j_bias_ + 6) var += d_.resolution(j - j_bias_) * d_.resolution(j - j_bias_) / 12.0;

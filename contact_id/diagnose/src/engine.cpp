@@ -200,14 +200,9 @@ std::vector<Unidentifiable> unidentifiable_columns(const Eigen::MatrixXd& J, con
                                                    const std::vector<bool>& bounded, std::vector<bool>& fixed) {
   const Eigen::Index n = J.cols();
   std::vector<Eigen::Index> order;
-  // Kept first: the nominal parameters, then the extension's, then those that give way.
-  auto pass_of = [&](Eigen::Index j) {
-    const auto& q = params[static_cast<std::size_t>(j)];
-    return q.gives_way ? 2 : (q.extension ? 1 : 0);
-  };
-  for (int pass = 0; pass < 3; ++pass)
+  for (int pass = 0; pass < 2; ++pass)
     for (Eigen::Index j = 0; j < n; ++j)
-      if (pass_of(j) == pass) order.push_back(j);
+      if (params[static_cast<std::size_t>(j)].extension == (pass == 1)) order.push_back(j);
   Eigen::MatrixXd Q(J.rows(), 0);
   std::vector<Eigen::Index> kept;
   std::vector<Unidentifiable> out;

@@ -107,7 +107,7 @@ class ContactFamily : public ModelFamily {
   int gain_ref_ = 2;
   // offsets into φ
   int i_geo_ = -1, i_cmp_ = -1, i_exp_ = -1, i_tau_ = -1, i_gain_ = -1;
-  int j_visc_ = -1, j_damp_ = -1, j_bias_ = -1, j_depth_ = 2;
+  int j_visc_ = -1, j_damp_ = -1, j_bias_ = -1;
   std::vector<Matrix6d> all_basis() const;
 
   // Contacts recomputed for φ (docs/diagnosis.md, "Cost"). mindist on every pair of every sample is

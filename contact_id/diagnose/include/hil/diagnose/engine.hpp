@@ -33,9 +33,6 @@ struct Param {
   double scale = 1.0;       ///< typical magnitude: finite-difference steps, LM scaling
   bool extension = false;   ///< belongs to the extension (PNR-checked), not to the nominal model
   double lower = -1e300, upper = 1e300;  ///< bounds (nonlinear parameters only)
-  /// A nominal parameter that gives way: when the design cannot separate it from the others, it is
-  /// the one fixed (at 0), before any extension's (the contact model's friction depth).
-  bool gives_way = false;
 };
 
 /// A reported (possibly derived) parameter with its standard deviation.
