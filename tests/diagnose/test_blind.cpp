@@ -254,26 +254,21 @@ TEST_P(Blind, TheRightCauseWithItsMagnitude) {
 // is the outcome observed on the 15 s runs (run them with HIL_RUN_KNOWN_FAILURES=1).
 // Measured causes (2026-11-26, one change at a time on the 15 s runs): hil's contact point is the
 // centroid of the interference volume, 3δ/4 above the truth's point foot, where the truth applies
-// its friction. That lever moves the friction's moments in mx, my, which biases the delay and the
-// tilting moments' gains; with μ = 0 in the truth both come out right (τ 20.04 ± 0.12 ms; gain_mx
-// 0.0299 ± 0.0013, gain_my -0.0406 ± 0.0012). A nominal "friction depth" (the friction's line of
-// action κ δ along the normal, fitted) found κ = -0.750 on these feet and passed the delay cases, but
-// on the shipped ACU 2a run it was ill-determined (κ = 69 ± 140) and brought back a spurious second
-// cause (sensor_gain): not kept (docs/diagnosis.md).
+// its friction. That lever moves the friction's moments in mx, my, which biased the delay (τ 20.95
+// ms for 20) and the tilting moments' gains; with μ = 0 in the truth both come out right. Where the
+// friction acts is a model form the run cannot decide (on a level plate its lever is exactly
+// collinear with muK and the friction gains), so the intervals account for it: the fit is repeated
+// with the friction's line of action ± 3δ/4 from the centroid and the shifts widen the intervals
+// (ModelFamily::model_forms, docs/diagnosis.md). The delay and the tilting gains now pass.
 std::string known_failure(const std::string& effect, const std::string& resolution) {
   const bool paper = resolution == kPaper.name;
   // Friction lives in fx, fy and mz only (contacts in the plate plane, fp = P), so a common factor
   // of their gains trades against μ: the engine fixes gain_fy as not identifiable ("collinear with
-  // muK, gain_fx") and the others come out right relative to it (gain_fx 0.0717 ± 0.0026, truth
-  // 0.0722; gain_mz 0.047 ± 0.0037, truth 0.052), but the tilting moments' gains are 2.1 std off:
-  // gain_mx 0.0252 ± 0.0023 (truth 0.03), gain_my -0.0388 ± 0.0006 (truth -0.04): the friction's
-  // lever (above).
-  if (effect == "sensor_gain") return "gain_mx, gain_my 2.1 std from the truth (the friction's lever)";
-  // τ 20.95 ± 0.19 ms (paper), 20.91 ± 0.16 ms (fine), truth 20: 5-6 std. With the poses blended
-  // linearly between two samples it was 22.1 and 21.95 (13 std): a blend of two quantised poses has
-  // half the quantisation noise at a half-sample shift, which made fractional delays fit better;
-  // the windowed sinc took that part away. The rest is the friction's lever (above).
-  if (effect == "time_offset" || effect == "sensor_bias_and_time_offset") return "time_offset_s 5-6 std above the truth (the friction's lever)";
+  // muK, gain_fx") and the others come out relative to it. gain_fx 0.0717 ± 0.0026 (truth 0.0722),
+  // gain_mx 0.0252 ± 0.0035 (0.03), gain_my -0.0388 ± 0.0011 (-0.04) are right, but gain_mz is
+  // 0.0473 ± 0.0019 for 0.0515 (2.2 std). mz is friction alone on this level plate, and the model
+  // forms do not move its lever (they act along the normal); the cause is not measured yet.
+  if (effect == "sensor_gain") return "gain_mz 2.2 std below the truth";
   // At 2e-4 m/s the reported twist hardly carries the penetration rate (<= 1.7e-4 m/s): named are
   // time_offset + robot_compliance (τ -23.9 ± 0.25 ms: the wrench leading the poses by about
   // D/K = 25 ms mimics D δ̇ from the pose stream) with the friction on the total normal force, and

@@ -77,19 +77,13 @@ INSTANTIATE_TEST_SUITE_P(
                  200.0},
         // The rig declares the plate 20 µm low: the fitted height is the truth's, 0.
         Coverage{"geometric_offset", kPlateHeight, [](ct::Scenario&, TripodRigOptions& o) { o.declared_plate_height_m = -2e-5; }, 0.0},
-        // 17 of 20 (52 of 60 seeds); 0 of 20 before the windowed-sinc pose interpolation
-        // (docs/diagnosis.md): the interval now covers the friction's lever's bias on 8 s runs.
-        Coverage{"time_offset", "time_offset_s", [](ct::Scenario& s, TripodRigOptions&) { s.sensor.delay_s = 0.02; }, 0.02}),
-    name_of);
-
-// Known not to cover (biased beyond its intervals; docs/diagnosis.md, the blind suite), measured
-// 2026-11-26: a tilting moment's gain, 13 of 20 (30 of 60; gain_my -0.037 to -0.038 for -0.04, the
-// intervals ± 0.0015-0.003): the friction's lever (hil's contact point 3δ/4 above the truth's
-// foot tip; 19 of 20 with the friction's depth fitted). Run with --gtest_also_run_disabled_tests.
-INSTANTIATE_TEST_SUITE_P(
-    DISABLED_Biased, IntervalCoverage,
-    ::testing::Values(Coverage{"sensor_gain", "gain_my",
-                               [](ct::Scenario& s, TripodRigOptions&) { s.sensor.gain << 0.0, 0.0, 0.0, 0.03, -0.04, 0.0; }, -0.04}),
+        // 20 of 20; 17 of 20 (52 of 60 seeds) without the friction's model forms, 0 of 20 before
+        // the windowed-sinc pose interpolation (docs/diagnosis.md).
+        Coverage{"time_offset", "time_offset_s", [](ct::Scenario& s, TripodRigOptions&) { s.sensor.delay_s = 0.02; }, 0.02},
+        // A tilting moment's gain: 20 of 20; 13 of 20 (30 of 60) without the friction's model forms
+        // (its lever: hil's contact point 3δ/4 above the truth's foot tip).
+        Coverage{"sensor_gain", "gain_my", [](ct::Scenario& s, TripodRigOptions&) { s.sensor.gain << 0.0, 0.0, 0.0, 0.03, -0.04, 0.0; },
+                 -0.04}),
     name_of);
 
 }  // namespace

@@ -261,6 +261,71 @@ TEST(Engine, IntervalsCoverTheTruthUnderStronglyCorrelatedErrorsOverManySeeds) {
   EXPECT_LT(covered_a_asymptotic, 0.85 * seeds) << covered_a_asymptotic << " of " << seeds;
 }
 
+/// A line whose slope's regressor is t - 2 + shift: `shift` is a model form (where the time origin
+/// lies) that moves the intercept by -b shift and leaves the slope alone.
+class ShiftedLine : public ModelFamily {
+ public:
+  ShiftedLine(const Observations& o, double shift, bool with_forms) : o_(o), shift_(shift), forms_(with_forms) {}
+  std::string name() const override { return "shifted line"; }
+  std::vector<Param> linear() const override { return {{"a", "", 1, false}, {"b", "", 1, true}}; }
+  void design(const Eigen::VectorXd&, Eigen::MatrixXd& A) const override {
+    A.setZero(static_cast<Eigen::Index>(6 * o_.size()), 2);
+    for (std::size_t k = 0; k < o_.size(); ++k)
+      for (int c = 0; c < 6; ++c) {
+        A(static_cast<Eigen::Index>(6 * k) + c, 0) = 1.0;
+        A(static_cast<Eigen::Index>(6 * k) + c, 1) = o_.t_s[k] - 2.0 + shift_;
+      }
+  }
+  std::vector<ModelForm> model_forms() const override {
+    std::vector<ModelForm> out;
+    if (!forms_) return out;
+    for (const double s : {-0.3, 0.2}) out.push_back({"origin moved by " + std::to_string(s), std::make_unique<ShiftedLine>(o_, s, false)});
+    return out;
+  }
+
+ private:
+  const Observations& o_;
+  double shift_;
+  bool forms_;
+};
+
+TEST(Engine, ModelFormsWidenTheIntervalsByTheLargestShiftAndKeepThePnr) {
+  std::mt19937 rng(5);
+  std::normal_distribution<double> g(0, 1);
+  Observations o;
+  for (int k = 0; k < 400; ++k) o.t_s.push_back(0.01 * k);
+  o.y.resize(400, 6);
+  for (int k = 0; k < 400; ++k)
+    for (int c = 0; c < 6; ++c) o.y(k, c) = 1.0 + 0.5 * (o.t_s[static_cast<std::size_t>(k)] - 2.0) + 0.01 * g(rng);
+  const ShiftedLine plain(o, 0.0, false), with(o, 0.0, true);
+  const Score a = score(plain, o), b = score(with, o);
+  CvOptions off;
+  off.model_forms = false;
+  const Score c = score(with, o, off);
+  ASSERT_EQ(a.full.reported.size(), 2u);
+  ASSERT_EQ(b.full.reported.size(), 2u);
+  EXPECT_TRUE(a.model_forms.empty());
+  EXPECT_TRUE(c.model_forms.empty());
+  ASSERT_EQ(b.model_forms.size(), 2u);
+  EXPECT_THAT(b.model_forms[0], HasSubstr("origin moved"));
+  for (std::size_t i = 0; i < 2; ++i) {
+    const Reported &ra = a.full.reported[i], &rb = b.full.reported[i];
+    EXPECT_EQ(c.full.reported[i].std, ra.std);
+    EXPECT_EQ(ra.std_model_form, 0.0);
+    EXPECT_NEAR(rb.value, ra.value, 1e-12);
+    EXPECT_NEAR(rb.pnr(), ra.pnr(), 1e-9 * ra.pnr());
+    if (ra.name == "a") {
+      // The intercept moves by -b shift: the largest shift is 0.3 b = 0.15, uniform over ± 0.15.
+      EXPECT_NEAR(rb.std_model_form, 0.3 * 0.5 / std::sqrt(3.0), 2e-3);
+      EXPECT_NEAR(rb.std, std::hypot(ra.std, rb.std_model_form), 1e-12);
+      EXPECT_GT(rb.std, 10 * ra.std);
+    } else {
+      EXPECT_LT(rb.std_model_form, 1e-9);  // the slope does not depend on the origin
+      EXPECT_NEAR(rb.std, ra.std, 1e-9);
+    }
+  }
+}
+
 TEST(Engine, AScreenAfterTheFullFitSkipsTheFolds) {
   const auto o = sine_data(1.23, 2.5, 0.4, 0.05, 2);
   SineFamily m(o);
@@ -428,6 +493,45 @@ TEST(ContactFamily, NominalDesignTimesThetaIsTheForwardSimulation) {
     peak = std::max(peak, w.norm());
   }
   EXPECT_GT(peak, 10.0);  // the scene is in contact
+}
+
+TEST(ContactFamily, TheFrictionsModelFormsMoveItsLineOfActionAlongTheNormalOnly) {
+  const auto r = test::scene_run("press_slide");
+  const auto d = data_of(r, {});
+  const ContactFamily m(d, {"viscous_friction"});
+  const auto forms = m.model_forms();
+  ASSERT_EQ(forms.size(), 2u);
+  Eigen::MatrixXd A0;
+  m.design(Eigen::VectorXd(0), A0);
+  const Eigen::Matrix3d R_fp_world = d.scene.T_world_fp.linear().transpose();
+  double moved = 0.0;
+  for (const auto& form : forms) {
+    const auto* f = dynamic_cast<const ContactFamily*>(form.model.get());
+    ASSERT_NE(f, nullptr);
+    EXPECT_EQ(std::abs(f->friction_lever()), 0.75) << form.assumption;
+    EXPECT_EQ(f->linear().size(), m.linear().size());
+    Eigen::MatrixXd A;
+    f->design(Eigen::VectorXd(0), A);
+    ASSERT_EQ(A.rows(), A0.rows());
+    EXPECT_EQ((A.col(0) - A0.col(0)).norm(), 0.0);  // the normal force stays at the centroid
+    for (std::size_t k = 0; k < d.obs.size(); ++k) {
+      // The tangential forces' moment about the new point: the plate feels -f at p + κ δ n.
+      Eigen::Vector3d dm_friction = Eigen::Vector3d::Zero(), dm_viscous = Eigen::Vector3d::Zero();
+      for (const auto& c : d.contacts[k]) {
+        const Eigen::Vector3d lever = f->friction_lever() * c.delta * c.normal;
+        dm_friction += R_fp_world * lever.cross(-c.delta * c.tangent);
+        dm_viscous += R_fp_world * lever.cross(-c.slip_speed * c.tangent);
+      }
+      const Eigen::Index row = static_cast<Eigen::Index>(6 * k);
+      for (int j = 1; j <= 2; ++j) {
+        const Eigen::Vector3d want = j == 1 ? dm_friction : dm_viscous;
+        EXPECT_LT((A.block(row, j, 3, 1) - A0.block(row, j, 3, 1)).norm(), 1e-15) << k;  // forces unchanged
+        EXPECT_LT((A.block(row + 3, j, 3, 1) - A0.block(row + 3, j, 3, 1) - want).norm(), 1e-12 * (1 + want.norm())) << k;
+      }
+      moved = std::max(moved, dm_friction.norm());
+    }
+  }
+  EXPECT_GT(moved, 0.0);  // the run slides: the forms change something
 }
 
 TEST(ContactFamily, PrunedAndIncrementalContactsAreMindistsOnEveryPair) {

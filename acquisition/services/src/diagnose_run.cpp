@@ -88,6 +88,7 @@ nlohmann::json params_json(const dg::Fit& f, bool extension_only) {
                  {"std", q.std},
                  {"std_asymptotic", q.std_asymptotic > 0 ? q.std_asymptotic : q.std},
                  {"std_folds", q.std_folds},
+                 {"std_model_form", q.std_model_form},
                  {"unit", q.unit},
                  {"pnr", q.pnr()},
                  {"extension", q.extension}};
@@ -258,8 +259,10 @@ void print_summary(std::ostream& out, const RunDiagnosis& r) {
   if (!d.second_cause.empty())
     out << fmt::format("  second cause:    {} — {}\n", d.second_cause, dg::describe_extension(d.second_cause));
   if (d.extended) {
-    out << "    (value ± 95 % interval, i.e. 1.96 std, the wider of the asymptotic and the folds' spread;\n"
-           "     PNR = |value - nominal| / asymptotic std)\n";
+    out << "    (value ± 95 % interval, i.e. 1.96 std, the wider of the asymptotic and the folds' spread,\n"
+           "     with the model forms' shifts added; PNR = |value - nominal| / asymptotic std)\n";
+    for (const auto& f : ext.model_forms)
+      out << "    model form covered: " << f << "\n";
     for (const auto& q : ext.full.reported)
       if (q.extension)
         out << fmt::format("    {:<28} {}  (PNR {:.1f})\n", q.name, fmt_value(q.value, q.std, q.unit), q.pnr());
@@ -340,6 +343,7 @@ nlohmann::json to_json(const RunDiagnosis& r) {
                    {"train_relative_error", ext.train_error},
                    {"parameters", params_json(ext.full, false)},
                    {"unidentifiable", unidentifiable_json(ext.full)},
+                   {"model_forms", ext.model_forms},
                    {"residuals", res(d.extended_residuals)}};
   add_events(j["extended"]["parameters"], rest_events(r, extended_set(r)));
   j["gain_percent"] = d.gain_percent;

@@ -169,6 +169,19 @@ std::unique_ptr<ModelFamily> ContactFamily::restricted(const std::vector<int>& t
   return std::unique_ptr<ModelFamily>(new ContactFamily(d_, ext_, train, pairs_));
 }
 
+std::vector<ModelFamily::ModelForm> ContactFamily::model_forms() const {
+  std::vector<ModelForm> out;
+  for (const double kappa : {-0.75, 0.75}) {
+    auto m = std::make_unique<ContactFamily>(*this);
+    m->friction_lever_ = kappa;
+    m->base_ = Base{};  // contacts are the same, but the cached design columns are not
+    out.push_back({std::string("the friction's line of action 3/4 of the interference's depth from its centroid ") +
+                       (kappa < 0 ? "against" : "along") + " the normal",
+                   std::move(m)});
+  }
+  return out;
+}
+
 ContactFamily::ContactFamily(const ContactData& d, std::set<std::string> extensions, const std::vector<int>& samples)
     : ContactFamily(d, std::move(extensions), samples, nullptr) {}
 
@@ -318,13 +331,14 @@ void ContactFamily::columns(const std::vector<cid::ContactPoint>& cs, const cid:
   const auto& T = d_.scene.T_world_fp;
   for (const auto& c : cs) {
     const double de = p == 1.0 ? c.delta : d_.delta_ref_m * std::pow(c.delta / d_.delta_ref_m, p);
+    const Eigen::Vector3d pt = c.point + friction_lever_ * c.delta * c.normal;  // the tangential forces' point
     out.col(0) += plate_wrench_of(T, de * c.normal, c.point);
-    out.col(1) += plate_wrench_of(T, de * c.tangent, c.point);
-    if (j_visc_ >= 0) out.col(j_visc_) += plate_wrench_of(T, c.slip_speed * c.tangent, c.point);
+    out.col(1) += plate_wrench_of(T, de * c.tangent, pt);
+    if (j_visc_ >= 0) out.col(j_visc_) += plate_wrench_of(T, c.slip_speed * c.tangent, pt);
     if (j_damp_ >= 0) {
       const double rate = -cid::relative_velocity(d_.scene, k, c.point).dot(c.normal);
       out.col(j_damp_) += plate_wrench_of(T, rate * c.normal, c.point);
-      out.col(j_damp_ + 1) += plate_wrench_of(T, rate * c.tangent, c.point);  // zero while sticking
+      out.col(j_damp_ + 1) += plate_wrench_of(T, rate * c.tangent, pt);  // zero while sticking
     }
   }
 }

@@ -545,6 +545,38 @@ void honest_intervals(Score& s, const std::map<std::string, std::vector<double>>
   }
 }
 
+/// Intervals that hold whichever of the family's alternative model forms is right, within the range
+/// they bound (e.g. the friction acting anywhere between the interference's deepest point and its
+/// surface): the full fit is repeated under each, from the full fit's optimum with the same
+/// parameters fixed, and each reported value's largest shift d widens its interval as an
+/// uncertainty uniform over ± d (std d / √3, added in quadrature). The PNR keeps the asymptotic std:
+/// the alternatives move the estimate, they do not make the run less informative.
+void model_form_intervals(Score& s, const ModelFamily& m, const Observations& obs, const std::vector<int>& all, const FitOptions& o) {
+  std::vector<ModelFamily::ModelForm> forms = m.model_forms();
+  if (forms.empty()) return;
+  std::map<std::string, double> shift;
+  for (const auto& form : forms) {
+    const ModelFamily& fm = *form.model;
+    DesignCache cache(fm, obs.size());
+    const Eigen::VectorXd warm = mapped(fm.nonlinear(), s.full.phi_names, s.full.phi);
+    const std::vector<bool> fixed = fixed_by_name(m, s.full.fixed, fm);
+    Fit f = fit_with(fm, obs, all, o, cache, &warm, false, &fixed);
+    f.cov = Eigen::MatrixXd::Zero(f.theta.size() + f.phi.size(), f.theta.size() + f.phi.size());
+    f.unidentifiable = s.full.unidentifiable;
+    for (const auto& r : reported_of(fm, f))
+      for (const auto& q : s.full.reported)
+        if (q.name == r.name && std::isfinite(r.value)) shift[q.name] = std::max(shift[q.name], std::abs(r.value - q.value));
+    s.model_forms.push_back(form.assumption);
+  }
+  for (auto& r : s.full.reported) {
+    const auto it = shift.find(r.name);
+    if (it == shift.end()) continue;
+    r.std_model_form = it->second / std::sqrt(3.0);
+    if (r.std_asymptotic == 0.0) r.std_asymptotic = r.std;
+    r.std = std::hypot(r.std, r.std_model_form);
+  }
+}
+
 }  // namespace
 
 Score score(const ModelFamily& m, const Observations& obs, const CvOptions& o, const Score* extends) {
@@ -607,6 +639,7 @@ Score score(const ModelFamily& m, const Observations& obs, const CvOptions& o, c
   }
   s.cv_error = relative_error(obs, s.cv_prediction, all);
   honest_intervals(s, by_name, fold);
+  if (o.model_forms) model_form_intervals(s, m, obs, all, o.fit);
   s.full.invalid = m.check(s.full);
   s.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return s;

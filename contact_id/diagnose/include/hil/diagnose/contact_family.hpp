@@ -85,6 +85,15 @@ class ContactFamily : public ModelFamily {
   std::string check(const Fit& f) const override;
   /// With robot_compliance or sensor_gain: the family with its basis and reference chosen from `train`.
   std::unique_ptr<ModelFamily> restricted(const std::vector<int>& train) const override;
+  /// Where the friction acts is a model form the data rarely decide: hil's contact point is the
+  /// centroid of the interference, a real contact's friction acts at its surface or, on a point
+  /// foot, at the tip. The two alternatives put the tangential forces' line of action ± 3δ/4 along
+  /// the normal from the centroid: a convex interference's centroid lies between 1/4 and 3/4 of its
+  /// depth from either side (Grünbaum), so that range holds every point of the interference on the
+  /// normal through the centroid (docs/diagnosis.md, "Model-form intervals").
+  std::vector<ModelForm> model_forms() const override;
+  /// κ: the tangential forces act at the centroid + κ δ e_n (0: the contact paper's model).
+  double friction_lever() const { return friction_lever_; }
   const std::set<std::string>& extensions() const { return ext_; }
   /// The compliance directions (21 symmetric coordinates -> 6x6) kept for robot_compliance.
   const std::vector<Matrix6d>& compliance_basis() const { return basis_; }
@@ -105,6 +114,7 @@ class ContactFamily : public ModelFamily {
   std::vector<Matrix6d> basis_;
   std::vector<Matrix6d> null_basis_;  ///< the symmetric directions the data cannot see (the rest of the 21)
   int gain_ref_ = 2;
+  double friction_lever_ = 0.0;
   // offsets into φ
   int i_geo_ = -1, i_cmp_ = -1, i_exp_ = -1, i_tau_ = -1, i_gain_ = -1;
   int j_visc_ = -1, j_damp_ = -1, j_bias_ = -1;

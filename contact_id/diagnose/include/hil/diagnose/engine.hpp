@@ -47,6 +47,10 @@ struct Reported {
   double std_folds = 0.0;
   /// The asymptotic standard deviation, σ² (JᵀJ)⁻¹ inflated for autocorrelation (0: same as std).
   double std_asymptotic = 0.0;
+  /// The model-form part (0: none): the largest shift of the value when the fit is repeated under
+  /// the family's alternative assumptions (ModelFamily::model_forms), taken as uniform over ± that
+  /// shift (shift / √3). `std` includes it in quadrature; the PNR does not.
+  double std_model_form = 0.0;
   /// false: the value's meaning depends on data-derived choices a fold makes anew (e.g. the
   /// coordinates of a compliance basis chosen from its samples), so the folds cannot measure its spread.
   bool fold_comparable = true;
@@ -86,6 +90,15 @@ class ModelFamily {
     (void)train;
     return nullptr;
   }
+  /// The family under each alternative assumption the run cannot decide (e.g. where in the
+  /// interference the friction acts), the ends of the plausible range: the same parameters, another
+  /// model form. score() refits under each and widens the intervals by the shifts
+  /// (Reported::std_model_form). Default: none.
+  struct ModelForm {
+    std::string assumption;
+    std::unique_ptr<ModelFamily> model;
+  };
+  virtual std::vector<ModelForm> model_forms() const { return {}; }
 };
 
 /// A parameter the run cannot determine: fixed at its nominal value (0) and not reported.
@@ -155,6 +168,9 @@ struct CvOptions {
   /// Called after the full fit: a non-empty answer (why) skips the folds (Score::screened), for a
   /// model that already fails a criterion needing no held-out data.
   std::function<std::string(const Score&)> screen;
+  /// Refit the full model under the family's alternative model forms and widen the intervals by
+  /// the shifts (after the folds; a screened model is not refitted).
+  bool model_forms = true;
 };
 
 /// The score of one model.
@@ -177,6 +193,8 @@ struct Score {
   /// The names of each fold's φ: a fold's own model (ModelFamily::restricted) may have other parameters
   /// than the full one (e.g. rest-pose events located from the training blocks alone).
   std::vector<std::vector<std::string>> fold_phi_names;
+  /// The alternative assumptions the intervals account for (ModelFamily::model_forms).
+  std::vector<std::string> model_forms;
   double seconds = 0.0;
 };
 
