@@ -55,6 +55,17 @@ struct Case {
   std::string known_failure;  ///< non-empty: skipped, with the outcome observed (see known_failure())
 };
 
+/// The two-sided normal quantile that holds m intervals jointly at 95 % (Bonferroni): Φ⁻¹(1 - 0.025/m).
+double joint_z(std::size_t m) {
+  const double tail = 0.05 / static_cast<double>(std::max<std::size_t>(1, m));
+  double lo = 0.0, hi = 10.0;  // erfc(z/√2) falls from 1 to 0 on [0, 10]
+  for (int i = 0; i < 100; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    (std::erfc(mid / std::sqrt(2.0)) > tail ? lo : hi) = mid;
+  }
+  return 0.5 * (lo + hi);
+}
+
 std::string label(const Case& c) { return c.effect.name + "_" + c.resolution.name; }
 void PrintTo(const Case& c, std::ostream* os) { *os << label(c); }
 
@@ -230,22 +241,41 @@ TEST_P(Blind, TheRightCauseWithItsMagnitude) {
   EXPECT_GT(d.gain_percent, 0.0);
   ASSERT_TRUE(d.extended.has_value());
   // Each expected cause's parameters that the diagnosis calls practically identifiable: the truth
-  // inside the reported 95 % interval. At least one per expected cause that was named.
+  // inside the reported intervals, jointly at 95 % (Bonferroni: m parameters at 1 - 0.05/m each;
+  // m = 1: ± 1.96 std). Each parameter alone at 95 % would let a case with m of them fail in
+  // 1 - 0.95^m of the runs (19 % for the four gains) although every interval is honest: the
+  // coverage suite checks the single intervals over 20 seeds. At least one per expected cause.
+  struct Checked {
+    std::string name;
+    double value, std, truth;
+  };
+  std::vector<Checked> checked;
   for (const auto& cause : want) {
     if (cause != d.cause && cause != d.second_cause) continue;
-    int checked = 0;
+    int of_cause = 0;
     for (const auto& q : d.extended->full.reported) {
       if (!q.extension || !belongs_to(q.name, cause)) continue;
       const auto t = truth_of(q.name, sc, d.extended->full);
       if (!t) continue;
       line << "; " << q.name << " = " << q.value << " ± " << q.std << " (truth " << *t << ", pnr " << q.pnr() << ")";
       if (q.pnr() < 5.0) continue;
-      ++checked;
-      EXPECT_LE(std::abs(q.value - *t), 1.96 * q.std) << q.name << " = " << q.value << " ± " << q.std << ", truth " << *t;
+      ++of_cause;
+      checked.push_back({q.name, q.value, q.std, *t});
     }
-    EXPECT_GE(checked, 1) << cause << ": no parameter is practically identifiable";
+    EXPECT_GE(of_cause, 1) << cause << ": no parameter is practically identifiable";
   }
+  const double z = joint_z(checked.size());
+  for (const auto& q : checked)
+    EXPECT_LE(std::abs(q.value - q.truth), z * q.std)
+        << q.name << " = " << q.value << " ± " << q.std << ", truth " << q.truth << " (" << checked.size() << " checked, z = " << z << ")";
   std::cout << line.str() << "\n";
+}
+
+TEST(BlindSuite, JointQuantileIsBonferronisNormalQuantile) {
+  EXPECT_NEAR(joint_z(1), 1.95996, 1e-4);
+  EXPECT_NEAR(joint_z(4), 2.49771, 1e-4);  // Φ⁻¹(1 - 0.00625)
+  EXPECT_NEAR(joint_z(6), 2.63826, 1e-4);
+  EXPECT_EQ(joint_z(0), joint_z(1));
 }
 
 // Cases that fail because of the diagnosis engine, not of the scene or the converter (TripodScene.*
@@ -260,15 +290,13 @@ TEST_P(Blind, TheRightCauseWithItsMagnitude) {
 // collinear with muK and the friction gains), so the intervals account for it: the fit is repeated
 // with the friction's line of action ± 3δ/4 from the centroid and the shifts widen the intervals
 // (ModelFamily::model_forms, docs/diagnosis.md). The delay and the tilting gains now pass.
+// sensor_gain: gain_fy is fixed as not identifiable (friction lives in fx, fy and mz only, so a
+// common factor of their gains trades against μ) and the others come out relative to it; gain_mz is
+// 0.0473 ± 0.0019 for 0.0515, 2.2 std, inside the joint interval of the four gains (z = 2.50). Over
+// 20 seeds of 15 s runs its single interval covers 19 of 20 (test_coverage's gain_mz: 20 of 20 on
+// 8 s runs): a miss at the rate a 95 % interval has, not a bias.
 std::string known_failure(const std::string& effect, const std::string& resolution) {
   const bool paper = resolution == kPaper.name;
-  // Friction lives in fx, fy and mz only (contacts in the plate plane, fp = P), so a common factor
-  // of their gains trades against μ: the engine fixes gain_fy as not identifiable ("collinear with
-  // muK, gain_fx") and the others come out relative to it. gain_fx 0.0717 ± 0.0026 (truth 0.0722),
-  // gain_mx 0.0252 ± 0.0035 (0.03), gain_my -0.0388 ± 0.0011 (-0.04) are right, but gain_mz is
-  // 0.0473 ± 0.0019 for 0.0515 (2.2 std). mz is friction alone on this level plate, and the model
-  // forms do not move its lever (they act along the normal); the cause is not measured yet.
-  if (effect == "sensor_gain") return "gain_mz 2.2 std below the truth";
   // At 2e-4 m/s the reported twist hardly carries the penetration rate (<= 1.7e-4 m/s): named are
   // time_offset + robot_compliance (τ -23.9 ± 0.25 ms: the wrench leading the poses by about
   // D/K = 25 ms mimics D δ̇ from the pose stream) with the friction on the total normal force, and

@@ -60,7 +60,7 @@ TEST_P(IntervalCoverage, AtLeast85PercentOver20Seeds) {
   EXPECT_GE(covered, static_cast<int>(std::ceil(0.85 * runs))) << covered << " of " << runs << misses.str();
 }
 
-std::string name_of(const ::testing::TestParamInfo<Coverage>& i) { return i.param.candidate; }
+std::string name_of(const ::testing::TestParamInfo<Coverage>& i) { return i.param.candidate + "_" + i.param.parameter; }
 
 INSTANTIATE_TEST_SUITE_P(
     Truth, IntervalCoverage,
@@ -83,7 +83,9 @@ INSTANTIATE_TEST_SUITE_P(
         // A tilting moment's gain: 20 of 20; 13 of 20 (30 of 60) without the friction's model forms
         // (its lever: hil's contact point 3δ/4 above the truth's foot tip).
         Coverage{"sensor_gain", "gain_my", [](ct::Scenario& s, TripodRigOptions&) { s.sensor.gain << 0.0, 0.0, 0.0, 0.03, -0.04, 0.0; },
-                 -0.04}),
+                 -0.04},
+        Coverage{"sensor_gain", "gain_mz", [](ct::Scenario& s, TripodRigOptions&) { s.sensor.gain << 0.04, -0.03, 0.0, 0.03, -0.04, 0.02; },
+                 1.02 / 0.97 - 1}),
     name_of);
 
 }  // namespace
