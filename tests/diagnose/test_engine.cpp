@@ -204,7 +204,8 @@ TEST(Engine, AParameterAtItsBoundIsListedNotPrinted) {
 /// (Measured over these 60 seeds: 56 and 53 covered with the folds, 38 without.)
 class Line : public ModelFamily {
  public:
-  explicit Line(const Observations& o) : o_(o) {}
+  /// \param shift moves the slope's regressor: t - 2 + shift
+  explicit Line(const Observations& o, double shift = 0.0) : o_(o), shift_(shift) {}
   std::string name() const override { return "line"; }
   std::vector<Param> linear() const override { return {{"a", "", 1, false}, {"b", "", 1, true}}; }
   void design(const Eigen::VectorXd&, Eigen::MatrixXd& A) const override {
@@ -212,12 +213,13 @@ class Line : public ModelFamily {
     for (std::size_t k = 0; k < o_.size(); ++k)
       for (int c = 0; c < 6; ++c) {
         A(static_cast<Eigen::Index>(6 * k) + c, 0) = 1.0;
-        A(static_cast<Eigen::Index>(6 * k) + c, 1) = o_.t_s[k] - 2.0;
+        A(static_cast<Eigen::Index>(6 * k) + c, 1) = o_.t_s[k] - 2.0 + shift_;
       }
   }
 
  private:
   const Observations& o_;
+  double shift_;
 };
 
 TEST(Engine, IntervalsCoverTheTruthUnderStronglyCorrelatedErrorsOverManySeeds) {
@@ -261,32 +263,19 @@ TEST(Engine, IntervalsCoverTheTruthUnderStronglyCorrelatedErrorsOverManySeeds) {
   EXPECT_LT(covered_a_asymptotic, 0.85 * seeds) << covered_a_asymptotic << " of " << seeds;
 }
 
-/// A line whose slope's regressor is t - 2 + shift: `shift` is a model form (where the time origin
-/// lies) that moves the intercept by -b shift and leaves the slope alone.
-class ShiftedLine : public ModelFamily {
+/// The line with model forms: the time origin moved by -0.3 and +0.2 moves the intercept by
+/// -b shift and leaves the slope alone.
+class LineWithForms : public Line {
  public:
-  ShiftedLine(const Observations& o, double shift, bool with_forms) : o_(o), shift_(shift), forms_(with_forms) {}
-  std::string name() const override { return "shifted line"; }
-  std::vector<Param> linear() const override { return {{"a", "", 1, false}, {"b", "", 1, true}}; }
-  void design(const Eigen::VectorXd&, Eigen::MatrixXd& A) const override {
-    A.setZero(static_cast<Eigen::Index>(6 * o_.size()), 2);
-    for (std::size_t k = 0; k < o_.size(); ++k)
-      for (int c = 0; c < 6; ++c) {
-        A(static_cast<Eigen::Index>(6 * k) + c, 0) = 1.0;
-        A(static_cast<Eigen::Index>(6 * k) + c, 1) = o_.t_s[k] - 2.0 + shift_;
-      }
-  }
+  explicit LineWithForms(const Observations& o) : Line(o), o_(o) {}
   std::vector<ModelForm> model_forms() const override {
     std::vector<ModelForm> out;
-    if (!forms_) return out;
-    for (const double s : {-0.3, 0.2}) out.push_back({"origin moved by " + std::to_string(s), std::make_unique<ShiftedLine>(o_, s, false)});
+    for (const double s : {-0.3, 0.2}) out.push_back({"origin moved by " + std::to_string(s), std::make_unique<Line>(o_, s)});
     return out;
   }
 
  private:
   const Observations& o_;
-  double shift_;
-  bool forms_;
 };
 
 TEST(Engine, ModelFormsWidenTheIntervalsByTheLargestShiftAndKeepThePnr) {
@@ -297,7 +286,8 @@ TEST(Engine, ModelFormsWidenTheIntervalsByTheLargestShiftAndKeepThePnr) {
   o.y.resize(400, 6);
   for (int k = 0; k < 400; ++k)
     for (int c = 0; c < 6; ++c) o.y(k, c) = 1.0 + 0.5 * (o.t_s[static_cast<std::size_t>(k)] - 2.0) + 0.01 * g(rng);
-  const ShiftedLine plain(o, 0.0, false), with(o, 0.0, true);
+  const Line plain(o);
+  const LineWithForms with(o);
   const Score a = score(plain, o), b = score(with, o);
   CvOptions off;
   off.model_forms = false;
