@@ -40,7 +40,7 @@ class Diagnose(unittest.TestCase):
     def test_help(self):
         r = hil("diagnose", "--help")
         self.assertEqual(r.returncode, 0)
-        for opt in ("RUN", "--rig", "--json", "--report", "--candidates", "--folds"):
+        for opt in ("RUN", "--rig", "--json", "--report", "--candidates", "--folds", "--damping-rates"):
             self.assertIn(opt, r.stdout)
 
     def test_hidden_sensor_bias_is_named_with_its_magnitude(self):
@@ -64,6 +64,9 @@ class Diagnose(unittest.TestCase):
         for i, c in enumerate(["fx", "fy", "fz", "mx", "my", "mz"]):
             p = d["cause"]["parameters"]["bias_" + c]
             self.assertLessEqual(abs(p["value"] - truth["sensor_bias"][i]), 3 * p["std"], c)
+        # Where the damping's penetration rates came from is said (this simulation's twist is not
+        # quantised: the reported twist).
+        self.assertIn("contact_damping takes its penetration rates from the reported twist", d["notes"])
         names = {c["name"] for c in d["candidates"]}
         self.assertEqual(names, {"geometric_offset", "robot_compliance", "time_offset", "sensor_bias", "sensor_gain",
                                  "viscous_friction", "contact_damping", "nonlinear_stiffness"})
@@ -153,6 +156,11 @@ class Diagnose(unittest.TestCase):
         r = hil("diagnose", table, "--rig", rig, "--folds", "1", "--quiet")
         self.assertEqual(r.returncode, 2, r.stderr)  # a usage error
         self.assertIn("--folds: Value 1 not in range 2 to", r.stderr)
+        # An unknown source of the damping's penetration rates.
+        r = hil("diagnose", table, "--rig", rig, "--damping-rates", "imu", "--quiet")
+        self.assertEqual(r.returncode, 2, r.stderr)
+        self.assertIn("--damping-rates", r.stderr)
+        self.assertIn("imu", r.stderr)
 
     @unittest.skipUnless(os.path.exists(TIAGO), "../shared/data/tiago-suspension is not beside this checkout")
     def test_tiago_deflection_mode(self):

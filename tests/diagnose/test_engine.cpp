@@ -463,7 +463,9 @@ TEST(Engine, PairedZIsZeroForEqualPredictionsAndLargeForAConsistentGain) {
 // --- the contact family against the generator --------------------------------------------------
 
 ContactData data_of(const test::SceneRun& r, const Effects& e, bool noise = false) {
-  return make_contact_data(r.scene, r.model.v_tm, test::measure(r, e, 1, noise), r.force_scale_n, r.moment_scale_nm);
+  // Without noise the generator's twist is the truth's: the family takes its rates from it.
+  return make_contact_data(r.scene, r.model.v_tm, test::measure(r, e, 1, noise), r.force_scale_n, r.moment_scale_nm,
+                           noise ? RateSource::automatic : RateSource::twist);
 }
 
 TEST(ContactFamily, NominalDesignTimesThetaIsTheForwardSimulation) {
@@ -696,6 +698,151 @@ TEST(ContactFamily, KinematicsBetweenSamplesFollowTheMotionAndKeepTheNoiseLevel)
   ASSERT_GT(count, 100u);
   EXPECT_GT(halfway / at_samples, 0.85) << "over " << count << " samples";
   EXPECT_LT(halfway / at_samples, 1.15) << "over " << count << " samples";
+}
+
+TEST(ContactFamily, AQuantumIsSeenOnlyWhenEveryValueLiesOnItsGrid) {
+  std::mt19937 rng(5);
+  std::normal_distribution<double> noise(0.0, 3e-6);
+  std::vector<double> quantised, continuous;
+  for (int k = 0; k < 500; ++k) {
+    const double x = 0.1234567 + 1e-5 * std::sin(0.01 * k) + noise(rng);
+    quantised.push_back(2e-6 * std::round(x / 2e-6));
+    continuous.push_back(x);
+  }
+  EXPECT_NEAR(quantum_of(quantised), 2e-6, 1e-15);
+  EXPECT_EQ(quantum_of(continuous), 0.0);
+  EXPECT_EQ(quantum_of({1.0, 1.0, 1.0}), 0.0);   // one level: no step to see
+  EXPECT_EQ(quantum_of({0.0, 2e-4, 0.0}), 0.0);  // two levels
+  EXPECT_NEAR(quantum_of({0.0, 2e-4, 4e-4, -2e-4}), 2e-4, 1e-18);
+  EXPECT_EQ(quantum_of({0.0, 2e-4, 4e-4, 5e-4}, 5), 0.0);  // fewer levels than asked for
+  EXPECT_EQ(quantum_of({0.0, 2e-4, 5e-4}), 0.0);           // 5e-4 is off the 2e-4 grid
+}
+
+TEST(ContactFamily, AWindowedSlopeIsExactOnQuadraticsAndAveragesQuantisationNoise) {
+  std::vector<double> t, x;
+  for (int k = 0; k < 200; ++k) {
+    t.push_back(0.01 * k);
+    x.push_back(0.3 + 0.02 * t.back() - 0.5 * t.back() * t.back());
+  }
+  const auto slope = windowed_slope(t, x, 8);
+  for (std::size_t k = 8; k + 8 < t.size(); ++k) EXPECT_NEAR(slope[k], 0.02 - 1.0 * t[k], 1e-12) << k;
+  // A ramp quantised at 2 µm: the slope's error has the std (q/√12)/√Σt² of white noise, 2.9e-6 m/s.
+  std::vector<double> tq, xq;
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> phase(0.0, 2e-6);
+  const double x0 = phase(rng);
+  for (int k = 0; k < 4000; ++k) {
+    tq.push_back(0.01 * k);
+    xq.push_back(2e-6 * std::round((x0 + 1.234e-4 * tq.back()) / 2e-6));
+  }
+  const auto sq = windowed_slope(tq, xq, 8);
+  double ss = 0.0;
+  for (std::size_t k = 8; k + 8 < tq.size(); ++k) ss += (sq[k] - 1.234e-4) * (sq[k] - 1.234e-4);
+  const double rms = std::sqrt(ss / static_cast<double>(tq.size() - 16));
+  EXPECT_LT(rms, 1.5 * 2e-6 / std::sqrt(12.0 * 0.01 * 0.01 * 408.0)) << rms;
+  EXPECT_LT(rms, 0.1 * 2e-4 / std::sqrt(12.0));  // a tenth of a 2e-4 m/s twist step's noise
+}
+
+// contact_damping's penetration rates: from the pose slope on an axis only where it has less error
+// than the reported twist (a coarse twist on a smooth motion), from the twist where the twist is
+// finer, unquantised, or the motion turns within the slope's window.
+TEST(ContactFamily, DampingRatesComeFromThePosesOnlyWhereTheyBeatTheTwist) {
+  constexpr double pi = 3.14159265358979323846;
+  // 4000 samples at 100 Hz of a smooth press (0.3 Hz, 1 mm) plus, optionally, a fast zig-zag.
+  std::vector<double> t, truth_v;
+  std::vector<double> x_exact;
+  const auto motion = [&](double zigzag_m_per_s) {
+    t.clear();
+    truth_v.clear();
+    x_exact.clear();
+    double x = 0.0123;
+    for (int k = 0; k < 4000; ++k) {
+      t.push_back(0.01 * k);
+      const double zz = zigzag_m_per_s * ((k / 5) % 2 == 0 ? 1.0 : -1.0);
+      const double v = 1e-3 * 2 * pi * 0.3 * std::cos(2 * pi * 0.3 * t.back()) + zz;
+      if (k > 0) x += 0.5 * (v + truth_v.back()) * 0.01;  // trapezoid: the slope's truth is the mean
+      x_exact.push_back(x);
+      truth_v.push_back(v);
+    }
+  };
+  const auto quantise_all = [](std::vector<double> s, double q) {
+    if (q > 0)
+      for (auto& e : s) e = q * std::round(e / q);
+    return s;
+  };
+  const auto rms_error = [&](const std::vector<double>& v) {
+    double ss = 0.0;
+    for (std::size_t k = 8; k + 8 < v.size(); ++k) ss += (v[k] - truth_v[k]) * (v[k] - truth_v[k]);
+    return std::sqrt(ss / static_cast<double>(v.size() - 16));
+  };
+  motion(0.0);
+  const auto x = quantise_all(x_exact, 2e-6);
+  // A 2e-4 m/s twist (the paper's sensor): the slope, with a tenth of the twist's error.
+  const RateChoice coarse = choose_rate(t, x, quantise_all(truth_v, 2e-4));
+  EXPECT_TRUE(coarse.from_poses) << coarse.mse_ratio;
+  EXPECT_NEAR(coarse.position_quantum_m, 2e-6, 1e-15);
+  EXPECT_NEAR(coarse.velocity_quantum_m_per_s, 2e-4, 1e-15);
+  EXPECT_LT(coarse.mse_ratio, 0.05);
+  EXPECT_LT(rms_error(coarse.v_m_per_s), 0.1 * rms_error(quantise_all(truth_v, 2e-4)));
+  // A 2e-5 m/s twist (the fine one): the estimated ratio is the slope's actual mean square error
+  // over q²/12 (the twist's, as this motion crosses its levels). Quantisation is not white noise
+  // where the motion turns slowly: the slope's error is 0.57 of the twist's, not the 0.25 of white
+  // noise, so the estimate is taken from the data, not from the step.
+  const RateChoice fine = choose_rate(t, x, quantise_all(truth_v, 2e-5), RateSource::poses);
+  const double var_fine = 2e-5 * 2e-5 / 12.0;
+  EXPECT_NEAR(fine.mse_ratio, std::pow(rms_error(fine.v_m_per_s), 2) / var_fine, 0.1);  // measured 0.59 for 0.57
+  EXPECT_NEAR(std::pow(rms_error(quantise_all(truth_v, 2e-5)), 2) / var_fine, 1.0, 0.1);
+  // Above half the twist's: left to the twist (the margin the choice keeps).
+  EXPECT_FALSE(choose_rate(t, x, quantise_all(truth_v, 2e-5)).from_poses);
+  EXPECT_NEAR(coarse.mse_ratio, std::pow(rms_error(coarse.v_m_per_s), 2) / (2e-4 * 2e-4 / 12.0), 0.02);
+  // A 1e-6 m/s twist is finer than the slope's noise (2.9e-6 m/s): the twist, as reported.
+  const auto v_finest = quantise_all(truth_v, 1e-6);
+  const RateChoice finest = choose_rate(t, x, v_finest);
+  EXPECT_FALSE(finest.from_poses);
+  EXPECT_EQ(finest.v_m_per_s, v_finest);
+  // An unquantised twist or unquantised positions: the noise is unknown, the twist stays.
+  EXPECT_FALSE(choose_rate(t, x, truth_v).from_poses);
+  EXPECT_FALSE(choose_rate(t, x_exact, quantise_all(truth_v, 2e-4)).from_poses);
+  // A fast zig-zag (4 mm/s, reversing every 5 samples) the ± 8-sample window smooths away: the
+  // smoothing bias is seen and the coarse twist, which follows it, stays.
+  motion(4e-3);
+  const auto zx = quantise_all(x_exact, 2e-6);
+  const auto zv = quantise_all(truth_v, 2e-4);
+  const RateChoice zigzag = choose_rate(t, zx, zv);
+  EXPECT_FALSE(zigzag.from_poses) << zigzag.mse_ratio;
+  EXPECT_GT(zigzag.mse_ratio, 0.5);
+  EXPECT_GT(rms_error(windowed_slope(t, zx, kRateHalfWindow)), rms_error(zv));  // and rightly so
+  // Forced either way.
+  EXPECT_FALSE(choose_rate(t, x, quantise_all(truth_v, 2e-4), RateSource::twist).from_poses);
+  EXPECT_TRUE(choose_rate(t, x, v_finest, RateSource::poses).from_poses);
+  EXPECT_THROW(choose_rate(t, x, {1.0}), std::invalid_argument);
+  EXPECT_THROW(choose_rate(t, x, truth_v, RateSource::automatic, 1), std::invalid_argument);
+}
+
+// The same choice inside make_contact_data, per axis, on the ACU press: its commanded speeds sit on
+// the 2e-4 m/s grid (the reported twist is nearly exact) and stop and reverse within the window, so
+// the twist stays; forced, the slope is used, and the report says which.
+TEST(ContactFamily, TheContactDataTakeTheirDampingRatesPerAxis) {
+  const auto r = test::scene_run("acu_2a");
+  auto m = test::measure(r, Effects{}, 1, false);
+  const auto exact = m;
+  for (auto& s : m)
+    for (int a = 0; a < 3; ++a) {
+      s.kin.T_world_ee.translation()(a) = 2e-6 * std::round(s.kin.T_world_ee.translation()(a) / 2e-6);
+      s.kin.v_world_ee(a) = 2e-4 * std::round(s.kin.v_world_ee(a) / 2e-4);
+    }
+  const ContactData d = make_contact_data(r.scene, r.model.v_tm, m);
+  EXPECT_EQ(d.rate_source(), "penetration rates from the reported twist");
+  double twist_ss = 0.0, slope_ss = 0.0;
+  const ContactData forced = make_contact_data(r.scene, r.model.v_tm, m, 0, 0, RateSource::poses);
+  for (std::size_t k = 0; k < m.size(); ++k) {
+    EXPECT_EQ(d.v_rate_world[k], d.kin[k].v_world_ee);
+    twist_ss += (d.v_rate_world[k] - exact[k].kin.v_world_ee).squaredNorm();
+    slope_ss += (forced.v_rate_world[k] - exact[k].kin.v_world_ee).squaredNorm();
+  }
+  EXPECT_LT(twist_ss, slope_ss);  // the choice was right
+  for (std::size_t a = 0; a < 3; ++a) EXPECT_TRUE(forced.rate_from_poses[a]);
+  EXPECT_THAT(forced.rate_source(), HasSubstr("penetration rates along x, y, z from the slope of the reported positions over +-8 samples"));
 }
 
 TEST(ContactFamily, ComplianceOfTheGeneratorIsSelfConsistent) {

@@ -203,9 +203,11 @@ RunDiagnosis diagnose_run(const format::Run& run, const Options& o) {
       const auto scene = rig::scene_from_rig(rig);
       const auto model = rig::model_from_rig(rig);
       r.contact = std::make_unique<dg::ContactData>(dg::make_contact_data(
-          scene, model.v_tm, rig::measurements(run.samples), rig.model.contact->force_scale_n, rig.model.contact->moment_scale_nm));
+          scene, model.v_tm, rig::measurements(run.samples), rig.model.contact->force_scale_n, rig.model.contact->moment_scale_nm,
+          o.damping_rates));
       r.context = contact_context(*r.contact);
       for (const auto& u : r.contact->unfit_uncertainties) r.notes.push_back("geometric_offset does not fit " + u);
+      r.notes.push_back("contact_damping takes its " + r.contact->rate_source());
       const dg::ContactData* d = r.contact.get();
       make = [d](const std::set<std::string>& e) { return std::make_unique<dg::ContactFamily>(*d, e); };
     } else {

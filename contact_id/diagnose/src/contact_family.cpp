@@ -6,6 +6,7 @@
 #include <Eigen/SVD>
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <random>
 #include <stdexcept>
@@ -70,6 +71,103 @@ std::string describe_extension(const std::string& n) {
   return "";
 }
 
+double quantum_of(std::vector<double> v, std::size_t min_levels) {
+  std::sort(v.begin(), v.end());
+  v.erase(std::unique(v.begin(), v.end()), v.end());
+  if (v.size() < std::max<std::size_t>(3, min_levels)) return 0.0;
+  double step = 0.0;
+  for (std::size_t i = 1; i < v.size(); ++i) {
+    const double g = v[i] - v[i - 1];
+    if (g > 1e-12 * std::max(1.0, std::abs(v[i])) && (step == 0.0 || g < step)) step = g;
+  }
+  const double scale = std::max(std::abs(v.front()), std::abs(v.back()));
+  if (step == 0.0 || step < 1e-9 * scale) return 0.0;
+  for (const double x : v) {
+    const double r = (x - v.front()) / step;
+    if (std::abs(r - std::round(r)) > 1e-3) return 0.0;  // not on the grid: not quantised
+  }
+  return step;
+}
+
+std::vector<double> windowed_slope(const std::vector<double>& t_s, const std::vector<double>& x, int half_window) {
+  const auto n = static_cast<std::ptrdiff_t>(x.size());
+  std::vector<double> out(x.size(), 0.0);
+  for (std::ptrdiff_t k = 0; k < n; ++k) {
+    const std::ptrdiff_t lo = std::max<std::ptrdiff_t>(0, k - half_window), hi = std::min<std::ptrdiff_t>(n - 1, k + half_window);
+    double tm = 0.0, xm = 0.0;
+    for (std::ptrdiff_t j = lo; j <= hi; ++j) {
+      tm += t_s[static_cast<std::size_t>(j)];
+      xm += x[static_cast<std::size_t>(j)];
+    }
+    tm /= static_cast<double>(hi - lo + 1);
+    xm /= static_cast<double>(hi - lo + 1);
+    double stt = 0.0, stx = 0.0;
+    for (std::ptrdiff_t j = lo; j <= hi; ++j) {
+      const double dt = t_s[static_cast<std::size_t>(j)] - tm;
+      stt += dt * dt;
+      stx += dt * (x[static_cast<std::size_t>(j)] - xm);
+    }
+    out[static_cast<std::size_t>(k)] = stt > 0 ? stx / stt : 0.0;
+  }
+  return out;
+}
+
+RateChoice choose_rate(const std::vector<double>& t_s, const std::vector<double>& x_m, const std::vector<double>& v_m_per_s,
+                       RateSource rates, int half_window) {
+  const std::size_t n = t_s.size();
+  if (x_m.size() != n || v_m_per_s.size() != n || n < 2 || half_window < 2)
+    throw std::invalid_argument("choose_rate: needs as many positions and velocities as times (>= 2), and a half-window >= 2");
+  RateChoice c;
+  c.v_m_per_s = v_m_per_s;
+  c.position_quantum_m = quantum_of(x_m);
+  c.velocity_quantum_m_per_s = quantum_of(v_m_per_s);
+  std::vector<double> dts(n - 1);
+  for (std::size_t k = 1; k < n; ++k) dts[k - 1] = t_s[k] - t_s[k - 1];
+  std::nth_element(dts.begin(), dts.begin() + static_cast<long>(dts.size() / 2), dts.end());
+  const double dt = dts[dts.size() / 2];
+  // White noise of variance σ² on the positions gives a slope over ± h samples the variance σ²/Σt².
+  // The two streams' errors are independent: E(slope - twist)² = mse_slope + mse_twist. A twist
+  // quantised at q has mse_twist = q²/12 when the motion crosses its levels (the error is then
+  // uniform), less where the motion sits on the grid (a commanded speed may). So:
+  //  * E(slope - twist)² < 3/4 q²/12: the twist's error is below its bound and its size unknown:
+  //    the reported twist is kept (the conservative choice);
+  //  * else mse_slope = E(slope - twist)² - q²/12 (noise and smoothing bias together), and the
+  //    slope is taken when that is below half the twist's.
+  const double var_twist = c.velocity_quantum_m_per_s * c.velocity_quantum_m_per_s / 12.0;
+  const double var_x = c.position_quantum_m * c.position_quantum_m / 12.0;
+  const double var_slope = var_x / (dt * dt * half_window * (half_window + 1.0) * (2.0 * half_window + 1.0) / 3.0);
+  const bool quantised = c.position_quantum_m > 0 && var_twist > 0;
+  if (rates == RateSource::twist || (rates == RateSource::automatic && !(quantised && var_slope < 0.5 * var_twist))) return c;
+  const std::vector<double> slope = windowed_slope(t_s, x_m, half_window);
+  double msd = 0.0;
+  for (std::size_t k = 0; k < n; ++k) msd += (slope[k] - v_m_per_s[k]) * (slope[k] - v_m_per_s[k]);
+  msd /= static_cast<double>(n);
+  const double mse = std::max(var_slope, msd - var_twist);
+  if (var_twist > 0) c.mse_ratio = mse / var_twist;
+  c.from_poses = rates == RateSource::poses || (msd >= 0.75 * var_twist && mse < 0.5 * var_twist);
+  if (c.from_poses) c.v_m_per_s = slope;
+  return c;
+}
+
+std::string ContactData::rate_source() const {
+  static const char* axis[] = {"x", "y", "z"};
+  std::string from_poses, detail;
+  char buf[160];
+  for (int a = 0; a < 3; ++a) {
+    if (!rate_from_poses[static_cast<std::size_t>(a)]) continue;
+    from_poses += std::string(from_poses.empty() ? "" : ", ") + axis[a];
+    if (std::isnan(rate_mse_ratio(a)))
+      std::snprintf(buf, sizeof buf, "%s%s: chosen", detail.empty() ? "" : "; ", axis[a]);
+    else
+      std::snprintf(buf, sizeof buf, "%s%s: position step %.3g m, twist step %.3g m/s, the slope's estimated mean square error %.2f of the twist's bound",
+                    detail.empty() ? "" : "; ", axis[a], position_quantum_m(a), velocity_quantum_m_per_s(a), rate_mse_ratio(a));
+    detail += buf;
+  }
+  if (from_poses.empty()) return "penetration rates from the reported twist";
+  return "penetration rates along " + from_poses + " from the slope of the reported positions over +-" +
+         std::to_string(kRateHalfWindow) + " samples (" + detail + ")";
+}
+
 Vector6d plate_wrench_of(const Eigen::Isometry3d& T_world_fp, const Vec3& f, const Vec3& p) {
   // The plate feels -f applied at p; moment about the plate origin, both in the plate frame.
   const Vec3 o = T_world_fp.translation();
@@ -80,7 +178,7 @@ Vector6d plate_wrench_of(const Eigen::Isometry3d& T_world_fp, const Vec3& f, con
 }
 
 ContactData make_contact_data(const cid::Scene& scene, double v_tm, const std::vector<cid::Measurement>& m,
-                              double force_scale_n, double moment_scale_nm) {
+                              double force_scale_n, double moment_scale_nm, RateSource rates) {
   ContactData d;
   d.scene = scene;
   d.v_tm = v_tm;
@@ -110,17 +208,24 @@ ContactData make_contact_data(const cid::Scene& scene, double v_tm, const std::v
   }
   if (d.samples_in_contact == 0)
     throw std::runtime_error("no sample brings the objects into contact under the nominal geometry: nothing to diagnose");
-  for (int c = 0; c < 6; ++c) {
-    std::vector<double> v(d.obs.y.col(c).data(), d.obs.y.col(c).data() + n);
-    std::sort(v.begin(), v.end());
-    v.erase(std::unique(v.begin(), v.end()), v.end());
-    double step = 0.0;
-    for (std::size_t i = 1; i < v.size(); ++i) {
-      const double g = v[i] - v[i - 1];
-      if (g > 1e-12 * std::max(1.0, std::abs(v[i])) && (step == 0.0 || g < step)) step = g;
+  for (int c = 0; c < 6; ++c) d.resolution(c) = quantum_of({d.obs.y.col(c).data(), d.obs.y.col(c).data() + n});
+
+  // The damping's penetration rates. Their noise attenuates the fitted D (errors in variables) and,
+  // at a coarse twist step, hides the rate altogether; a quantised pose stream's slope is often far
+  // less noisy than a quantised twist.
+  d.v_rate_world.resize(n);
+  for (int a = 0; a < 3; ++a) {
+    std::vector<double> x(n), v(n);
+    for (std::size_t k = 0; k < n; ++k) {
+      x[k] = d.kin[k].T_world_ee.translation()(a);
+      v[k] = d.kin[k].v_world_ee(a);
     }
-    // Quantised: few distinct values, all on a grid of that step.
-    if (v.size() < n / 2) d.resolution(c) = step;
+    const RateChoice c = choose_rate(d.obs.t_s, x, v, rates);
+    d.position_quantum_m(a) = c.position_quantum_m;
+    d.velocity_quantum_m_per_s(a) = c.velocity_quantum_m_per_s;
+    d.rate_mse_ratio(a) = c.mse_ratio;
+    d.rate_from_poses[static_cast<std::size_t>(a)] = c.from_poses;
+    for (std::size_t k = 0; k < n; ++k) d.v_rate_world[k](a) = c.v_m_per_s[k];
   }
   std::nth_element(deltas.begin(), deltas.begin() + static_cast<long>(deltas.size() / 2), deltas.end());
   d.delta_ref_m = deltas[deltas.size() / 2];
@@ -326,9 +431,11 @@ std::vector<Eigen::VectorXd> ContactFamily::starts() const {
   return out;
 }
 
-void ContactFamily::columns(const std::vector<cid::ContactPoint>& cs, const cid::Kinematics& k, double p,
+void ContactFamily::columns(const std::vector<cid::ContactPoint>& cs, const cid::Kinematics& k, const Vec3& v_rate, double p,
                             Eigen::Ref<Eigen::MatrixXd> out) const {
   const auto& T = d_.scene.T_world_fp;
+  cid::Kinematics k_rate = k;
+  k_rate.v_world_ee = v_rate;
   for (const auto& c : cs) {
     const double de = p == 1.0 ? c.delta : d_.delta_ref_m * std::pow(c.delta / d_.delta_ref_m, p);
     const Eigen::Vector3d pt = c.point + friction_lever_ * c.delta * c.normal;  // the tangential forces' point
@@ -336,7 +443,7 @@ void ContactFamily::columns(const std::vector<cid::ContactPoint>& cs, const cid:
     out.col(1) += plate_wrench_of(T, de * c.tangent, pt);
     if (j_visc_ >= 0) out.col(j_visc_) += plate_wrench_of(T, c.slip_speed * c.tangent, pt);
     if (j_damp_ >= 0) {
-      const double rate = -cid::relative_velocity(d_.scene, k, c.point).dot(c.normal);
+      const double rate = -cid::relative_velocity(d_.scene, k_rate, c.point).dot(c.normal);
       out.col(j_damp_) += plate_wrench_of(T, rate * c.normal, c.point);
       out.col(j_damp_ + 1) += plate_wrench_of(T, rate * c.tangent, pt);  // zero while sticking
     }
@@ -352,17 +459,17 @@ void ContactFamily::columns(const std::vector<cid::ContactPoint>& cs, const cid:
 // to 0.007 of a sample); exact at the samples, so τ = 0 gives the measured kinematics.
 constexpr int kSincLobes = 8;
 
-cid::Kinematics ContactFamily::kinematics_at(double t) const {
+ContactFamily::SincWeights ContactFamily::sinc_weights(double t) const {
   const auto& ts = d_.obs.t_s;
-  const auto n = static_cast<std::ptrdiff_t>(ts.size());
   // The interval [t_j0, t_j0+1) holding t and the fraction a in it (the sample times may jitter:
   // the neighbours count as evenly spaced).
   const auto it = std::upper_bound(ts.begin(), ts.end(), t);
   const std::ptrdiff_t j0 = std::max<std::ptrdiff_t>(0, (it - ts.begin()) - 1);
   const auto at = [&](std::ptrdiff_t j) { return ts[static_cast<std::size_t>(j)]; };
   const double a = it == ts.begin() || it == ts.end() ? 0.0 : (t - at(j0)) / (at(j0 + 1) - at(j0));
-  const auto& centre = d_.kin[static_cast<std::size_t>(j0)];
-  if (a == 0.0) return centre;
+  SincWeights w;
+  w.first = j0;
+  if (a == 0.0) return w;
 
   constexpr int m = 2 * kSincLobes;
   constexpr double pi = 3.14159265358979323846;
@@ -377,18 +484,31 @@ cid::Kinematics ContactFamily::kinematics_at(double t) const {
   // Σ h x^p = [p = 0] for p = 0..3, by the least-norm correction.
   const Eigen::Vector4d miss = B * h - Eigen::Vector4d::UnitX();
   h -= B.transpose() * (B * B.transpose()).ldlt().solve(miss);
+  w.first = j0 + 1 - kSincLobes;
+  w.h.assign(h.data(), h.data() + m);
+  return w;
+}
 
+cid::Kinematics ContactFamily::kinematics_at(double t) const { return kinematics_at(sinc_weights(t)); }
+
+cid::Kinematics ContactFamily::kinematics_at(const SincWeights& sw) const {
+  const auto n = static_cast<std::ptrdiff_t>(d_.kin.size());
+  const auto sample = [&](std::ptrdiff_t j) -> const cid::Kinematics& {
+    return d_.kin[static_cast<std::size_t>(std::clamp<std::ptrdiff_t>(j, 0, n - 1))];
+  };
+  if (sw.h.empty()) return sample(sw.first);
+  const cid::Kinematics& centre = sample(sw.first + kSincLobes - 1);
   const Eigen::Quaterniond qc(centre.T_world_ee.linear());
   Eigen::Vector3d p = Eigen::Vector3d::Zero(), v = Eigen::Vector3d::Zero(), w = Eigen::Vector3d::Zero();
   Eigen::Vector4d q = Eigen::Vector4d::Zero();  // blended quaternions: the rotations within a window are close
-  for (int i = 0; i < m; ++i) {
-    const auto& k = d_.kin[static_cast<std::size_t>(std::clamp<std::ptrdiff_t>(j0 + i + 1 - kSincLobes, 0, n - 1))];
+  for (std::size_t i = 0; i < sw.h.size(); ++i) {
+    const auto& k = sample(sw.first + static_cast<std::ptrdiff_t>(i));
     Eigen::Quaterniond qk(k.T_world_ee.linear());
     if (qk.dot(qc) < 0.0) qk.coeffs() = -qk.coeffs();
-    p += h(i) * k.T_world_ee.translation();
-    v += h(i) * k.v_world_ee;
-    w += h(i) * k.w_world_ee;
-    q += h(i) * qk.coeffs();
+    p += sw.h[i] * k.T_world_ee.translation();
+    v += sw.h[i] * k.v_world_ee;
+    w += sw.h[i] * k.w_world_ee;
+    q += sw.h[i] * qk.coeffs();
   }
   cid::Kinematics out = centre;
   out.T_world_ee.translation() = p;
@@ -396,6 +516,17 @@ cid::Kinematics ContactFamily::kinematics_at(double t) const {
   out.w_world_ee = w;
   out.T_world_ee.linear() = Eigen::Quaterniond(q).normalized().toRotationMatrix();
   return out;
+}
+
+Vec3 ContactFamily::rate_velocity_at(const SincWeights& sw) const {
+  const auto n = static_cast<std::ptrdiff_t>(d_.v_rate_world.size());
+  const auto sample = [&](std::ptrdiff_t j) -> const Vec3& {
+    return d_.v_rate_world[static_cast<std::size_t>(std::clamp<std::ptrdiff_t>(j, 0, n - 1))];
+  };
+  if (sw.h.empty()) return sample(sw.first);
+  Vec3 v = Vec3::Zero();
+  for (std::size_t i = 0; i < sw.h.size(); ++i) v += sw.h[i] * sample(sw.first + static_cast<std::ptrdiff_t>(i));
+  return v;
 }
 
 std::shared_ptr<const ContactFamily::PairTable> ContactFamily::make_pairs(const ContactData& d) {
@@ -529,7 +660,8 @@ void ContactFamily::design(const Eigen::VectorXd& phi, Eigen::MatrixXd& A) const
   if (i_cmp_ >= 0)
     for (std::size_t i = 0; i < basis_.size(); ++i) C += phi(i_cmp_ + static_cast<Eigen::Index>(i)) * basis_[i];
   if (!recompute) {
-    for (std::size_t k = 0; k < n; ++k) columns(d_.contacts[k], d_.kin[k], expo, A.block(static_cast<Eigen::Index>(6 * k), 0, 6, p));
+    for (std::size_t k = 0; k < n; ++k)
+      columns(d_.contacts[k], d_.kin[k], d_.v_rate_world[k], expo, A.block(static_cast<Eigen::Index>(6 * k), 0, 6, p));
   } else {
     if (!base_.valid) {
       // The first base: the contacts at the design geometry and the measured poses.
@@ -546,7 +678,9 @@ void ContactFamily::design(const Eigen::VectorXd& phi, Eigen::MatrixXd& A) const
     std::vector<bool> full(n);
     for (std::size_t k = 0; k < n; ++k) {
       // A delayed wrench stream: the wrench at t_k is the one of the pose at t_k - τ.
-      cid::Kinematics kin = tau != 0.0 ? kinematics_at(d_.obs.t_s[k] - tau) : d_.kin[k];
+      const SincWeights sw = tau != 0.0 ? sinc_weights(d_.obs.t_s[k] - tau) : SincWeights{static_cast<std::ptrdiff_t>(k), {}};
+      cid::Kinematics kin = tau != 0.0 ? kinematics_at(sw) : d_.kin[k];
+      const Vec3 v_rate = j_damp_ < 0 ? Vec3::Zero() : tau != 0.0 ? rate_velocity_at(sw) : d_.v_rate_world[k];
       if (i_cmp_ >= 0) {
         // The measured contact wrench on the held object, about the ee origin, in ee.
         const Vector6d w_ee = cid::plate_to_object1(d_.obs.y.row(static_cast<Eigen::Index>(k)).transpose(), d_.scene.T_world_fp,
@@ -555,7 +689,7 @@ void ContactFamily::design(const Eigen::VectorXd& phi, Eigen::MatrixXd& A) const
       }
       const bool reuse = same_poses && !base_.full[k];
       full[k] = !sample_contacts(k, kin, g, reuse ? &base_.contacts[k] : nullptr, cs[k]);
-      columns(cs[k], kin, expo, A.block(static_cast<Eigen::Index>(6 * k), 0, 6, p));
+      columns(cs[k], kin, v_rate, expo, A.block(static_cast<Eigen::Index>(6 * k), 0, 6, p));
     }
     // A finite-difference step moves one feature: the point it steps from stays the base.
     if (!same_poses || changed > 1) {

@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <map>
 
 #include <hil/cli/commands.hpp>
 #include <hil/services/output.hpp>
@@ -26,6 +27,7 @@ struct DiagnoseArgs {
   std::string run, rig, json, report;
   std::vector<std::string> candidates;
   int folds = 5;
+  hil::diagnose::RateSource damping_rates = hil::diagnose::RateSource::automatic;
   bool quiet = false;
 };
 
@@ -33,6 +35,7 @@ int diagnose_cmd(const DiagnoseArgs& a) {
   diagnose::Options o;
   o.candidates = a.candidates;
   o.folds = a.folds;
+  o.damping_rates = a.damping_rates;
   const bool tty = isatty(STDERR_FILENO) != 0;
   if (!a.quiet)
     o.progress = [tty](int step, int total, const std::string& what) {
@@ -67,6 +70,14 @@ void add_diagnose(CLI::App& app) {
   d->add_option("--report", da.report, "write an HTML report into this folder");
   d->add_option("--candidates", da.candidates, "only these candidate causes (default: all that apply)")->delimiter(',');
   d->add_option("--folds", da.folds, "blocks of the cross-validation over time")->capture_default_str()->check(CLI::Range(2, 1000));
+  const std::map<std::string, hil::diagnose::RateSource> rates{{"auto", hil::diagnose::RateSource::automatic},
+                                                                {"twist", hil::diagnose::RateSource::twist},
+                                                                {"poses", hil::diagnose::RateSource::poses}};
+  d->add_option("--damping-rates", da.damping_rates,
+                "where contact_damping's penetration rates come from: auto (per axis, the pose slope where it beats the "
+                "reported twist), twist, poses")
+      ->transform(CLI::CheckedTransformer(rates, CLI::ignore_case))
+      ->default_str("auto");
   d->add_flag("--quiet", da.quiet, "no progress lines");
   d->callback([] { set_action([] { return diagnose_cmd(da); }); });
 }

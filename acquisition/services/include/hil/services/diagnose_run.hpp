@@ -17,6 +17,8 @@ namespace hil::services::diagnose {
 struct Options {
   std::vector<std::string> candidates;  ///< empty: all that apply
   int folds = 5;
+  /// Where contact_damping's penetration rates come from (contact runs).
+  hil::diagnose::RateSource damping_rates = hil::diagnose::RateSource::automatic;
   hil::diagnose::Progress progress;
 };
 

@@ -22,6 +22,7 @@
 /// Pure numerics on hil::contact_id: no I/O.
 #include <Eigen/Geometry>
 #include <array>
+#include <limits>
 #include <map>
 #include <memory>
 #include <optional>
@@ -58,12 +59,61 @@ struct ContactData {
   /// Per plate component, the sensor's quantisation step seen in the data (0: not quantised). A
   /// constant offset cannot be known better than step/√12, whatever the number of samples.
   Vector6d resolution = Vector6d::Zero();
+  /// The ee's linear velocity (world) contact_damping takes its penetration rates from, per sample.
+  /// Per axis either the reported twist or, where both streams are quantised and the reported
+  /// twist's step is the coarser noise, the least-squares slope of the reported positions over
+  /// ± kRateHalfWindow samples (docs/diagnosis.md, "Penetration rates").
+  std::vector<Eigen::Vector3d> v_rate_world;
+  /// Per linear axis, whether v_rate_world is the pose slope (true) or the reported twist.
+  std::array<bool, 3> rate_from_poses{false, false, false};
+  /// Per linear axis, the quanta seen in the reported positions and twist (0: not quantised).
+  Eigen::Vector3d position_quantum_m = Eigen::Vector3d::Zero(), velocity_quantum_m_per_s = Eigen::Vector3d::Zero();
+  /// Per linear axis, the pose slope's estimated mean square error over the twist's (NaN: not compared).
+  Eigen::Vector3d rate_mse_ratio = Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
+  /// One line on where the penetration rates come from, for the report.
+  std::string rate_source() const;
 };
+
+/// Half-width of the pose slope's window, samples: measured on the blind suite (± 4 leaves the
+/// damping 2 std low at the fine resolution, ± 8 within 1.5 std at both).
+constexpr int kRateHalfWindow = 8;
+
+/// The step of a quantised signal: the smallest gap between its distinct values when every value
+/// lies on that grid (0: fewer than max(3, min_levels) distinct values, or not on a grid).
+double quantum_of(std::vector<double> values, std::size_t min_levels = 3);
+
+/// Per sample, the least-squares slope of x over the samples within ± half_window of it (clipped at
+/// the ends of the run), against the sample times. \pre t increasing, t.size() == x.size().
+std::vector<double> windowed_slope(const std::vector<double>& t_s, const std::vector<double>& x, int half_window);
+
+/// Where contact_damping's penetration rates come from (ContactData::v_rate_world).
+enum class RateSource {
+  automatic,  ///< per axis, the pose slope where it is estimated to have less error than the twist
+  twist,      ///< the reported twist (a simulation whose twist is exact)
+  poses,      ///< the pose slope on every axis
+};
+
+/// One axis's penetration-rate source (ContactData::v_rate_world).
+struct RateChoice {
+  std::vector<double> v_m_per_s;       ///< per sample: the pose slope or the reported velocity
+  bool from_poses = false;
+  double position_quantum_m = 0.0, velocity_quantum_m_per_s = 0.0;  ///< 0: not quantised
+  /// The slope's estimated mean square error (noise + smoothing bias) over the twist's bound q_v²/12
+  /// (NaN: not compared; the slope is taken below 0.5 when the twist's error is seen at its bound).
+  double mse_ratio = std::numeric_limits<double>::quiet_NaN();
+};
+
+/// Chooses, for one axis, between the reported velocity and the slope of the reported positions
+/// over ± half_window samples (docs/diagnosis.md, "Penetration rates").
+/// \throws std::invalid_argument on mismatched sizes, fewer than 2 samples or half_window < 2.
+RateChoice choose_rate(const std::vector<double>& t_s, const std::vector<double>& x_m, const std::vector<double>& v_m_per_s,
+                       RateSource rates = RateSource::automatic, int half_window = kRateHalfWindow);
 
 /// \param force_scale_n, moment_scale_nm the weights' scales (0: the largest measured component).
 /// \throws std::runtime_error if no sample brings the objects into contact.
 ContactData make_contact_data(const cid::Scene& scene, double v_tm, const std::vector<cid::Measurement>& m,
-                              double force_scale_n = 0.0, double moment_scale_nm = 0.0);
+                              double force_scale_n = 0.0, double moment_scale_nm = 0.0,
+                              RateSource rates = RateSource::automatic);
 
 /// The nominal contact model with a set of extensions. Not thread-safe: when the contacts depend on
 /// φ (geometric_offset, robot_compliance, time_offset), design() keeps scratch and the last
@@ -107,7 +157,18 @@ class ContactFamily : public ModelFamily {
   ContactFamily(const ContactData& d, std::set<std::string> extensions, const std::vector<int>& samples,
                 std::shared_ptr<const PairTable> pairs);
   bool has(const std::string& e) const { return ext_.count(e) > 0; }
-  void columns(const std::vector<cid::ContactPoint>& cs, const cid::Kinematics& k, double p, Eigen::Ref<Eigen::MatrixXd> out) const;
+  /// \param v_rate the ee's linear velocity the damping's penetration rates take (ContactData::v_rate_world).
+  void columns(const std::vector<cid::ContactPoint>& cs, const cid::Kinematics& k, const Eigen::Vector3d& v_rate, double p,
+               Eigen::Ref<Eigen::MatrixXd> out) const;
+  /// The Lanczos weights of kinematics_at: the window's first sample and the weights (empty: the
+  /// sample `first` itself).
+  struct SincWeights {
+    std::ptrdiff_t first = 0;
+    std::vector<double> h;
+  };
+  SincWeights sinc_weights(double t) const;
+  Eigen::Vector3d rate_velocity_at(const SincWeights& w) const;
+  cid::Kinematics kinematics_at(const SincWeights& w) const;
   const ContactData& d_;
   std::set<std::string> ext_;
   std::vector<Param> linear_, nonlinear_;
