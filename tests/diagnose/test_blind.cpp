@@ -200,7 +200,12 @@ TEST_P(Blind, TheRightCauseWithItsMagnitude) {
   table << std::setprecision(4);
   for (const auto& k : d.candidates)
     table << "  " << k.name << ": " << 100 * k.score.cv_error << " % (noise fraction " << k.noise_fraction << ") " << k.verdict << "\n";
-  for (const auto& k : d.second_step) table << "  + " << k.name << ": " << k.verdict << "\n";
+  for (const auto& k : d.second_step) {
+    table << "  + " << k.name << ": " << k.verdict << " nf " << k.noise_fraction << " |";
+    for (const auto& q : k.score.full.reported) if (q.extension) table << " " << q.name << "=" << q.value << "±" << q.std;
+    table << "\n";
+  }
+  if (std::getenv("HIL_DEBUG_TABLE")) std::cout << table.str();
   SCOPED_TRACE("nominal " + std::to_string(100 * d.nominal.cv_error) + " %, noise " + std::to_string(100 * d.noise_relative) +
                " %, candidates:\n" + table.str());
   // One line per case for the report: the named causes, the gain, each checked parameter.
