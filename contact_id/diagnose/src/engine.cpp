@@ -545,6 +545,14 @@ void honest_intervals(Score& s, const std::map<std::string, std::vector<double>>
   }
 }
 
+/// The values `m` reports for a fit made without statistics (a fold's, a model form's): its
+/// covariance zero, its unidentifiable directions the full fit's. Only the values are meaningful.
+std::vector<Reported> values_reported(const ModelFamily& m, Fit f, const Fit& full) {
+  f.cov = Eigen::MatrixXd::Zero(f.theta.size() + f.phi.size(), f.theta.size() + f.phi.size());
+  f.unidentifiable = full.unidentifiable;
+  return reported_of(m, f);
+}
+
 /// Intervals that hold whichever of the family's alternative model forms is right, within the range
 /// they bound (e.g. the friction acting anywhere between the interference's deepest point and its
 /// surface): the full fit is repeated under each, from the full fit's optimum with the same
@@ -560,10 +568,8 @@ void model_form_intervals(Score& s, const ModelFamily& m, const Observations& ob
     DesignCache cache(fm, obs.size());
     const Eigen::VectorXd warm = mapped(fm.nonlinear(), s.full.phi_names, s.full.phi);
     const std::vector<bool> fixed = fixed_by_name(m, s.full.fixed, fm);
-    Fit f = fit_with(fm, obs, all, o, cache, &warm, false, &fixed);
-    f.cov = Eigen::MatrixXd::Zero(f.theta.size() + f.phi.size(), f.theta.size() + f.phi.size());
-    f.unidentifiable = s.full.unidentifiable;
-    for (const auto& r : reported_of(fm, f))
+    const Fit f = fit_with(fm, obs, all, o, cache, &warm, false, &fixed);
+    for (const auto& r : values_reported(fm, f, s.full))
       for (const auto& q : s.full.reported)
         if (q.name == r.name && std::isfinite(r.value)) shift[q.name] = std::max(shift[q.name], std::abs(r.value - q.value));
     s.model_forms.push_back(form.assumption);
@@ -632,9 +638,7 @@ Score score(const ModelFamily& m, const Observations& obs, const CvOptions& o, c
     s.fold_phi.push_back(f.phi);
     s.fold_phi_names.push_back(f.phi_names);
     // The fold's estimates of what the full fit reports (derived quantities included).
-    f.cov = Eigen::MatrixXd::Zero(f.theta.size() + f.phi.size(), f.theta.size() + f.phi.size());
-    f.unidentifiable = s.full.unidentifiable;
-    for (const auto& r : reported_of(fm, f)) by_name[r.name].push_back(r.value);
+    for (const auto& r : values_reported(fm, f, s.full)) by_name[r.name].push_back(r.value);
     ++fold;
   }
   s.cv_error = relative_error(obs, s.cv_prediction, all);
