@@ -817,6 +817,10 @@ TEST(ContactFamily, DampingRatesComeFromThePosesOnlyWhereTheyBeatTheTwist) {
   EXPECT_TRUE(choose_rate(t, x, v_finest, RateSource::poses).from_poses);
   EXPECT_THROW(choose_rate(t, x, {1.0}), std::invalid_argument);
   EXPECT_THROW(choose_rate(t, x, truth_v, RateSource::automatic, 1), std::invalid_argument);
+  auto bad = x;
+  bad[17] = std::nan("");
+  EXPECT_THAT([&] { (void)choose_rate(t, bad, truth_v); }, ThrowsMessage<std::invalid_argument>(HasSubstr("sample 17")));
+  EXPECT_EQ(quantum_of(bad), 0.0);
 }
 
 // The same choice inside make_contact_data, per axis, on the ACU press: its commanded speeds sit on
@@ -881,6 +885,15 @@ TEST(ContactFamily, UnknownExtensionsAndRunsWithoutContactAreClearErrors) {
     FAIL() << "expected an error";
   } catch (const std::runtime_error& err) {
     EXPECT_NE(std::string(err.what()).find("sample 7"), std::string::npos) << err.what();
+  }
+  m = test::measure(r, {}, 1, false);
+  m[9].kin.v_world_ee.z() = std::numeric_limits<double>::infinity();  // the twist too (the damping's rates read it)
+  try {
+    (void)make_contact_data(r.scene, r.model.v_tm, m);
+    FAIL() << "expected an error";
+  } catch (const std::runtime_error& err) {
+    EXPECT_NE(std::string(err.what()).find("sample 9"), std::string::npos) << err.what();
+    EXPECT_NE(std::string(err.what()).find("non-finite value"), std::string::npos) << err.what();
   }
   m = test::measure(r, {}, 1, false);
   m[12].t_s = m[11].t_s;  // (the strict run reader refuses this first; the library says so too)

@@ -72,6 +72,7 @@ std::string describe_extension(const std::string& n) {
 }
 
 double quantum_of(std::vector<double> v, std::size_t min_levels) {
+  if (!std::all_of(v.begin(), v.end(), [](double x) { return std::isfinite(x); })) return 0.0;  // (and sort needs an order)
   std::sort(v.begin(), v.end());
   v.erase(std::unique(v.begin(), v.end()), v.end());
   if (v.size() < std::max<std::size_t>(3, min_levels)) return 0.0;
@@ -117,6 +118,9 @@ RateChoice choose_rate(const std::vector<double>& t_s, const std::vector<double>
   const std::size_t n = t_s.size();
   if (x_m.size() != n || v_m_per_s.size() != n || n < 2 || half_window < 2)
     throw std::invalid_argument("choose_rate: needs as many positions and velocities as times (>= 2), and a half-window >= 2");
+  for (std::size_t k = 0; k < n; ++k)
+    if (!std::isfinite(t_s[k]) || !std::isfinite(x_m[k]) || !std::isfinite(v_m_per_s[k]) || (k > 0 && !(t_s[k] > t_s[k - 1])))
+      throw std::invalid_argument("choose_rate: sample " + std::to_string(k) + ": non-finite value or time not increasing");
   RateChoice c;
   c.v_m_per_s = v_m_per_s;
   c.position_quantum_m = quantum_of(x_m);
@@ -193,7 +197,8 @@ ContactData make_contact_data(const cid::Scene& scene, double v_tm, const std::v
   std::vector<double> deltas;
   double fmax = 0.0, mmax = 0.0;
   for (std::size_t k = 0; k < n; ++k) {
-    if (!m[k].w_fp.allFinite() || !m[k].kin.T_world_ee.matrix().allFinite() || !std::isfinite(m[k].t_s))
+    if (!m[k].w_fp.allFinite() || !m[k].kin.T_world_ee.matrix().allFinite() || !m[k].kin.v_world_ee.allFinite() ||
+        !m[k].kin.w_world_ee.allFinite() || !std::isfinite(m[k].t_s))
       throw std::runtime_error("sample " + std::to_string(k) + " (t = " + std::to_string(m[k].t_s) + " s): non-finite value");
     if (k > 0 && !(m[k].t_s > m[k - 1].t_s))
       throw std::runtime_error("sample " + std::to_string(k) + ": time does not increase");

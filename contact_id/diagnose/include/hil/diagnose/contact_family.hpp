@@ -79,7 +79,8 @@ struct ContactData {
 constexpr int kRateHalfWindow = 8;
 
 /// The step of a quantised signal: the smallest gap between its distinct values when every value
-/// lies on that grid (0: fewer than max(3, min_levels) distinct values, or not on a grid).
+/// lies on that grid (0: fewer than max(3, min_levels) distinct values, not on a grid, or a
+/// non-finite value).
 double quantum_of(std::vector<double> values, std::size_t min_levels = 3);
 
 /// Per sample, the least-squares slope of x over the samples within ± half_window of it (clipped at
@@ -105,7 +106,8 @@ struct RateChoice {
 
 /// Chooses, for one axis, between the reported velocity and the slope of the reported positions
 /// over ± half_window samples (docs/diagnosis.md, "Penetration rates").
-/// \throws std::invalid_argument on mismatched sizes, fewer than 2 samples or half_window < 2.
+/// \throws std::invalid_argument on mismatched sizes, fewer than 2 samples, half_window < 2, a
+/// non-finite value or times that do not increase (naming the sample).
 RateChoice choose_rate(const std::vector<double>& t_s, const std::vector<double>& x_m, const std::vector<double>& v_m_per_s,
                        RateSource rates = RateSource::automatic, int half_window = kRateHalfWindow);
 
