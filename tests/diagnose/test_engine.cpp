@@ -821,6 +821,9 @@ TEST(ContactFamily, DampingRatesComeFromThePosesOnlyWhereTheyBeatTheTwist) {
   bad[17] = std::nan("");
   EXPECT_THAT([&] { (void)choose_rate(t, bad, truth_v); }, ThrowsMessage<std::invalid_argument>(HasSubstr("sample 17")));
   EXPECT_EQ(quantum_of(bad), 0.0);
+  auto stalled = t;
+  stalled[23] = stalled[22];  // a repeated time stamp: no slope can be taken across it
+  EXPECT_THAT([&] { (void)choose_rate(stalled, x, truth_v); }, ThrowsMessage<std::invalid_argument>(HasSubstr("sample 23")));
 }
 
 // The same choice inside make_contact_data, per axis, on the ACU press: its commanded speeds sit on
