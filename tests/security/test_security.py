@@ -266,7 +266,9 @@ class BadKeystore(unittest.TestCase):
         with open(path) as f:
             text = f.read()
         with open(path, "w") as f:
-            f.write(text.replace("<rtps_protection_kind>ENCRYPT", "<rtps_protection_kind>NONE", 1))
+            tampered = text.replace("<data_protection_kind>ENCRYPT", "<data_protection_kind>NONE", 1)
+            self.assertNotEqual(tampered, text)
+            f.write(tampered)
         err = self.refused(*ks.secure("echo"))
         self.assertIn("governance.p7s: signature does not verify", err)
 

@@ -147,7 +147,9 @@ std::string governance_xml() {
                          expr);
   return fmt::format(R"(<?xml version="1.0" encoding="UTF-8"?>
 <!-- hil keystore governance (docs/security.md): every domain, only authenticated participants with
-     permissions join, discovery, liveliness, whole RTPS messages and hil's topics encrypted. -->
+     permissions join, discovery, liveliness and hil's topics (every submessage and payload)
+     encrypted. rtps_protection_kind is NONE: Fast DDS 2.9 can abort in encode_rtps_message when a
+     peer leaves while this participant tears down (docs/security.md, "Why not rtps_protection"). -->
 <dds xmlns:xsi="http://www.w3.org/2001/XMLSchema-instance"
      xsi:noNamespaceSchemaLocation="http://www.omg.org/spec/DDS-SECURITY/20170901/omg_shared_ca_governance.xsd">
   <domain_access_rules>
@@ -159,7 +161,7 @@ std::string governance_xml() {
       <enable_join_access_control>true</enable_join_access_control>
       <discovery_protection_kind>ENCRYPT</discovery_protection_kind>
       <liveliness_protection_kind>ENCRYPT</liveliness_protection_kind>
-      <rtps_protection_kind>ENCRYPT</rtps_protection_kind>
+      <rtps_protection_kind>NONE</rtps_protection_kind>
       <topic_access_rules>
 {}      </topic_access_rules>
     </domain_rule>
