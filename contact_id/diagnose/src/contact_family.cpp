@@ -477,6 +477,7 @@ ContactFamily::SincWeights ContactFamily::sinc_weights(double t) const {
   if (a == 0.0) return w;
 
   constexpr int m = 2 * kSincLobes;
+  static_assert(m <= SincWeights::kMaxTaps);
   constexpr double pi = 3.14159265358979323846;
   const auto sinc = [](double x) { return x == 0.0 ? 1.0 : std::sin(pi * x) / (pi * x); };
   Eigen::Matrix<double, m, 1> h;
@@ -490,7 +491,8 @@ ContactFamily::SincWeights ContactFamily::sinc_weights(double t) const {
   const Eigen::Vector4d miss = B * h - Eigen::Vector4d::UnitX();
   h -= B.transpose() * (B * B.transpose()).ldlt().solve(miss);
   w.first = j0 + 1 - kSincLobes;
-  w.h.assign(h.data(), h.data() + m);
+  w.taps = m;
+  std::copy(h.data(), h.data() + m, w.h.begin());
   return w;
 }
 
@@ -501,19 +503,20 @@ cid::Kinematics ContactFamily::kinematics_at(const SincWeights& sw) const {
   const auto sample = [&](std::ptrdiff_t j) -> const cid::Kinematics& {
     return d_.kin[static_cast<std::size_t>(std::clamp<std::ptrdiff_t>(j, 0, n - 1))];
   };
-  if (sw.h.empty()) return sample(sw.first);
+  if (sw.taps == 0) return sample(sw.first);
   const cid::Kinematics& centre = sample(sw.first + kSincLobes - 1);
   const Eigen::Quaterniond qc(centre.T_world_ee.linear());
   Eigen::Vector3d p = Eigen::Vector3d::Zero(), v = Eigen::Vector3d::Zero(), w = Eigen::Vector3d::Zero();
   Eigen::Vector4d q = Eigen::Vector4d::Zero();  // blended quaternions: the rotations within a window are close
-  for (std::size_t i = 0; i < sw.h.size(); ++i) {
-    const auto& k = sample(sw.first + static_cast<std::ptrdiff_t>(i));
+  for (int i = 0; i < sw.taps; ++i) {
+    const auto& k = sample(sw.first + i);
+    const double hi = sw.h[static_cast<std::size_t>(i)];
     Eigen::Quaterniond qk(k.T_world_ee.linear());
     if (qk.dot(qc) < 0.0) qk.coeffs() = -qk.coeffs();
-    p += sw.h[i] * k.T_world_ee.translation();
-    v += sw.h[i] * k.v_world_ee;
-    w += sw.h[i] * k.w_world_ee;
-    q += sw.h[i] * qk.coeffs();
+    p += hi * k.T_world_ee.translation();
+    v += hi * k.v_world_ee;
+    w += hi * k.w_world_ee;
+    q += hi * qk.coeffs();
   }
   cid::Kinematics out = centre;
   out.T_world_ee.translation() = p;
@@ -528,9 +531,9 @@ Vec3 ContactFamily::rate_velocity_at(const SincWeights& sw) const {
   const auto sample = [&](std::ptrdiff_t j) -> const Vec3& {
     return d_.v_rate_world[static_cast<std::size_t>(std::clamp<std::ptrdiff_t>(j, 0, n - 1))];
   };
-  if (sw.h.empty()) return sample(sw.first);
+  if (sw.taps == 0) return sample(sw.first);
   Vec3 v = Vec3::Zero();
-  for (std::size_t i = 0; i < sw.h.size(); ++i) v += sw.h[i] * sample(sw.first + static_cast<std::ptrdiff_t>(i));
+  for (int i = 0; i < sw.taps; ++i) v += sw.h[static_cast<std::size_t>(i)] * sample(sw.first + i);
   return v;
 }
 
@@ -683,7 +686,7 @@ void ContactFamily::design(const Eigen::VectorXd& phi, Eigen::MatrixXd& A) const
     std::vector<bool> full(n);
     for (std::size_t k = 0; k < n; ++k) {
       // A delayed wrench stream: the wrench at t_k is the one of the pose at t_k - τ.
-      const SincWeights sw = tau != 0.0 ? sinc_weights(d_.obs.t_s[k] - tau) : SincWeights{static_cast<std::ptrdiff_t>(k), {}};
+      const SincWeights sw = tau != 0.0 ? sinc_weights(d_.obs.t_s[k] - tau) : SincWeights{static_cast<std::ptrdiff_t>(k)};
       cid::Kinematics kin = tau != 0.0 ? kinematics_at(sw) : d_.kin[k];
       const Vec3 v_rate = j_damp_ < 0 ? Vec3::Zero() : tau != 0.0 ? rate_velocity_at(sw) : d_.v_rate_world[k];
       if (i_cmp_ >= 0) {

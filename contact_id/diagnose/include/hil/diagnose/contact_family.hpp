@@ -162,11 +162,13 @@ class ContactFamily : public ModelFamily {
   /// \param v_rate the ee's linear velocity the damping's penetration rates take (ContactData::v_rate_world).
   void columns(const std::vector<cid::ContactPoint>& cs, const cid::Kinematics& k, const Eigen::Vector3d& v_rate, double p,
                Eigen::Ref<Eigen::MatrixXd> out) const;
-  /// The Lanczos weights of kinematics_at: the window's first sample and the weights (empty: the
-  /// sample `first` itself).
+  /// The Lanczos weights of kinematics_at: the window's first sample and its weights (taps 0: the
+  /// sample `first` itself). Fixed storage: one is made per sample of every design under a delay.
   struct SincWeights {
+    static constexpr int kMaxTaps = 16;
     std::ptrdiff_t first = 0;
-    std::vector<double> h;
+    int taps = 0;
+    std::array<double, kMaxTaps> h{};
   };
   SincWeights sinc_weights(double t) const;
   Eigen::Vector3d rate_velocity_at(const SincWeights& w) const;
