@@ -165,6 +165,30 @@ TEST(RestChange, AFoldLocatesAnEventInItsGapFromTheTrainingSamplesOnly) {
   EXPECT_LE(ev.lower_s, kDt * (gap0 - 1) + 1e-12);
   EXPECT_GE(ev.upper_s, kDt * gap1 - 1e-12);
   EXPECT_NEAR(ev.t_s, 0.5 * kDt * (gap0 - 1 + gap1), 1e-12);  // the gap's middle, not the truth (4.995 s)
+  EXPECT_NEAR(ev.before_s, kDt * (gap0 - 1), 1e-12);
+  EXPECT_NEAR(ev.after_s, kDt * gap1, 1e-12);
+  // The fold predicts its held-out samples with the step's probability under a uniform position in
+  // the gap: a ramp from 0 at the last training sample before it to 1 at the first after.
+  const auto column = [](const DeflectionFamily& f, const std::string& name) {
+    const auto lin = f.linear();
+    for (std::size_t i = 0; i < lin.size(); ++i)
+      if (lin[i].name == name) return static_cast<Eigen::Index>(i);
+    return Eigen::Index{-1};
+  };
+  Eigen::MatrixXd A;
+  fold.design(Eigen::VectorXd(), A);
+  const Eigen::Index step_rz = column(fold, "step_1_rz");
+  ASSERT_GE(step_rz, 0);
+  for (int k = gap0 - 3; k < gap1 + 3; ++k) {
+    const double expected = std::clamp((kDt * k - ev.before_s) / (ev.after_s - ev.before_s), 0.0, 1.0);
+    EXPECT_NEAR(A(6 * k + 5, step_rz), expected, 1e-12) << "sample " << k;
+    EXPECT_EQ(A(6 * k + 4, step_rz), 0.0) << "sample " << k;  // each step column moves its own component only
+  }
+  // On all samples no sample lies between the two around a change: the column is a step.
+  Eigen::MatrixXd A_all;
+  fam.design(Eigen::VectorXd(), A_all);
+  const Eigen::VectorXd all_rz = A_all.col(column(fam, "step_1_rz"));
+  for (Eigen::Index r = 0; r < all_rz.size(); ++r) EXPECT_TRUE(all_rz(r) == 0.0 || all_rz(r) == 1.0) << "row " << r;
   EXPECT_LE(std::abs(fold.events()[1].first_sample - steps[1].sample), 2);
   // Same parameter names as the family on all samples (the engine maps warm starts by name).
   ASSERT_EQ(fold.linear().size(), fam.linear().size());

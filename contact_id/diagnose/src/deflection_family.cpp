@@ -317,7 +317,9 @@ void DeflectionFamily::locate(const std::vector<int>& train) {
       // fold whose held-out block holds the change, that is the whole gap.
       RestEvent ev;
       ev.first_sample = train[j];
-      ev.t_s = 0.5 * (t[static_cast<std::size_t>(train[j - 1])] + t[static_cast<std::size_t>(train[j])]);
+      ev.before_s = t[static_cast<std::size_t>(train[j - 1])];
+      ev.after_s = t[static_cast<std::size_t>(train[j])];
+      ev.t_s = 0.5 * (ev.before_s + ev.after_s);
       ev.lower_s = t[static_cast<std::size_t>(train[static_cast<std::size_t>(cp.lower[e]) - 1])];
       ev.upper_s = t[static_cast<std::size_t>(train[static_cast<std::size_t>(cp.upper[e])])];
       events_.push_back(ev);
@@ -389,9 +391,12 @@ void DeflectionFamily::design(const Eigen::VectorXd& phi, Eigen::MatrixXd& A) co
   for (std::size_t k = 0; k < n; ++k) {
     const auto r = static_cast<Eigen::Index>(6 * k);
     for (int c = 0; c < 6; ++c) A(r + c, c) = 1.0;
-    for (std::size_t e = 0; e < events_.size(); ++e)
-      if (t[k] >= events_[e].t_s)
-        for (int c = 0; c < 6; ++c) A(r + c, static_cast<Eigen::Index>(first_step_ + 6 * e) + c) = 1.0;
+    for (std::size_t e = 0; e < events_.size(); ++e) {
+      const RestEvent& ev = events_[e];
+      const double h = t[k] >= ev.after_s ? 1.0 : t[k] <= ev.before_s ? 0.0 : (t[k] - ev.before_s) / (ev.after_s - ev.before_s);
+      if (h > 0.0)
+        for (int c = 0; c < 6; ++c) A(r + c, static_cast<Eigen::Index>(first_step_ + 6 * e) + c) = h;
+    }
     if (!compliance_) continue;
     // The load at t - τ (linear interpolation, held at the ends).
     Eigen::Matrix<double, 1, 6> w;

@@ -10,10 +10,20 @@
 ///                                           on its support (= the plate's wrench) about its rest
 ///                                           position, world axes
 ///   time_offset       y = d + C w(t - τ)    the deflection lags the load by τ (with compliance)
-///   rest_change       y = d + Σ_e H(t - t_e) Δ_e (+ the others' terms)   the rest pose steps by Δ_e
-///                                           (6 linear entries per event) at events t_e located from
+///   rest_change       y = d + Σ_e H_e(t) Δ_e (+ the others' terms)   the rest pose steps by Δ_e
+///                                           (6 linear entries per event) at events located from
 ///                                           the data: a body that slips on its support stays where
-///                                           it went, which no elastic model follows
+///                                           it went, which no elastic model follows. H_e is 0
+///                                           up to the last searched sample before the change, 1
+///                                           from the first after, and a ramp in between: the
+///                                           probability that the step has happened by t when the
+///                                           data put it anywhere in that interval (uniformly).
+///                                           On every sample the interval holds no sample, so H_e
+///                                           is a step; a fold whose held-out block holds the
+///                                           change predicts that block with the ramp, the least
+///                                           mean squared error without knowing where the step is
+///                                           (1/6 of Δ² over the block, against 1/4 for a step at
+///                                           the middle).
 #include <memory>
 #include <set>
 #include <string>
@@ -34,6 +44,10 @@ struct RestEvent {
   double t_s = 0.0;       ///< the step's time in the model: midway between the samples around the change
   double lower_s = 0.0, upper_s = 0.0;
   int first_sample = 0;   ///< the first sample (index into the observations) at the new rest pose
+  /// The searched samples around the change: the last at the old rest pose, the first at the new.
+  /// Adjacent samples for a fit on every sample; for a fold whose held-out block holds the change,
+  /// the whole gap, across which the model ramps (below).
+  double before_s = 0.0, after_s = 0.0;
 };
 
 /// The change-point search of rest_change, on a residual (m x 6, one row per searched sample, in
