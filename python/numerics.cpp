@@ -127,8 +127,10 @@ py::dict identify_contact(const Path& run_path, const Path& rig, bool geometric,
 struct StopForPython {};
 
 py::dict diagnose(const Path& path, const Path& rig, const std::vector<std::string>& candidates, int folds,
-                  const py::object& progress) {
+                  const py::object& progress, int cv_offsets) {
   if (folds < 2) throw py::value_error("folds: must be at least 2, got " + std::to_string(folds));
+  if (cv_offsets < 0 || cv_offsets > 64)
+    throw py::value_error("cv_offsets: must be 0 (automatic) to 64, got " + std::to_string(cv_offsets));
   if (!progress.is_none() && !PyCallable_Check(progress.ptr()))
     throw py::type_error("progress: expected a callable (step, total, what) or None");
   nlohmann::json j;
@@ -138,6 +140,7 @@ py::dict diagnose(const Path& path, const Path& rig, const std::vector<std::stri
     services::diagnose::Options o;
     o.candidates = candidates;
     o.folds = folds;
+    o.cv_offsets = cv_offsets;
     // Between steps, with the GIL: Ctrl-C (signals reach Python only while it runs) and the callback.
     o.progress = [&](int step, int total, const std::string& what) {
       py::gil_scoped_acquire hold;
@@ -235,10 +238,11 @@ void add_numerics(py::module_& m) {
         "plus K_ci95 / mu_ci95 (95 % intervals), fit (measured, model and residual plate wrench per sample in "
         "contact), instantaneous and window estimates.");
   m.def("diagnose", &diagnose, py::arg("path"), py::arg("rig") = "", py::arg("candidates") = std::vector<std::string>{},
-        py::arg("folds") = 5, py::arg("progress") = py::none(),
+        py::arg("folds") = 5, py::arg("progress") = py::none(), py::arg("cv_offsets") = 0,
         "The diagnosis of a run folder (or of a stiffness table with rig=), as `hil diagnose --json`: cause, "
         "second_cause, candidates with held-out gain, the extended model's parameters with intervals. "
-        "progress(step, total, what) is called before each step; Ctrl-C stops between steps.");
+        "progress(step, total, what) is called before each step; Ctrl-C stops between steps. cv_offsets: "
+        "offsets of the block grid the cross-validation is repeated over (0: 8 with rest_change, else 1).");
   m.def(
       "simulate_contact",
       [](const Path& rig, const Path& trajectory, const py::object& K, const py::object& mu,

@@ -161,6 +161,10 @@ class Diagnose(unittest.TestCase):
         self.assertEqual(r.returncode, 2, r.stderr)
         self.assertIn("--damping-rates", r.stderr)
         self.assertIn("imu", r.stderr)
+        # Repeated cross-validation over at most 64 offsets of the block grid.
+        r = hil("diagnose", table, "--rig", rig, "--cv-offsets", "65", "--quiet")
+        self.assertEqual(r.returncode, 2, r.stderr)
+        self.assertIn("--cv-offsets: Value 65 not in range 0 to 64", r.stderr)
 
     @unittest.skipUnless(os.path.exists(TIAGO), "../shared/data/tiago-suspension is not beside this checkout")
     def test_tiago_deflection_mode(self):
@@ -176,8 +180,14 @@ class Diagnose(unittest.TestCase):
         self.assertEqual(d["mode"], "deflection")
         self.assertGreater(d["nominal"]["relative_error"], 0.05)  # the base moves: the rigid model is wrong
         # The base tilts elastically under the swinging arm's moment: a compliance is named, with a
-        # positive pitch compliance; the yaw slips stay unexplained (docs/case-study-tiago.md).
+        # positive pitch compliance; the yaw slips are the second cause (docs/case-study-tiago.md),
+        # on held-out errors pooled over 8 offsets of the block grid (repeated blocked CV).
         self.assertEqual(d["cause"]["name"], "robot_compliance")
+        self.assertEqual(d["second_cause"]["name"], "rest_change")
+        second = next(c for c in d["second_step"] if c["name"] == "rest_change")
+        self.assertTrue(second["supported"])
+        self.assertGreater(second["gain_percent"], 2)
+        self.assertTrue(any("pooled over 8 offsets of the 5-block grid" in n for n in d["notes"]), d["notes"])
         self.assertGreater(d["gain_percent"], 5)
         self.assertLess(d["extended"]["relative_error"], d["nominal"]["relative_error"])
         c = d["cause"]["parameters"]["C_ry_ry"]

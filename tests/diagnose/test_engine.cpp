@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <memory>
 #include <random>
 
@@ -447,6 +448,93 @@ TEST(Engine, TimeBlocksPartitionTheSamplesInOrder) {
   for (const auto& blk : b)
     for (int k : blk) EXPECT_EQ(k, next++);
   EXPECT_EQ(next, 103);
+}
+
+TEST(Engine, ShiftedTimeBlocksWrapTheRunsEndOntoItsStart) {
+  EXPECT_EQ(time_blocks(103, 5, 0.0), time_blocks(103, 5));
+  const auto b = time_blocks(100, 5, 0.5);
+  ASSERT_EQ(b.size(), 5u);
+  std::vector<int> seen;
+  for (const auto& blk : b) seen.insert(seen.end(), blk.begin(), blk.end());
+  std::sort(seen.begin(), seen.end());
+  EXPECT_EQ(seen, all(100));  // a partition
+  std::vector<int> wrapped;
+  for (int k = 0; k < 10; ++k) wrapped.push_back(k);
+  for (int k = 90; k < 100; ++k) wrapped.push_back(k);
+  EXPECT_EQ(b[0], wrapped);  // half a block at the start, half at the end
+  for (std::size_t i = 1; i < 5; ++i) {
+    ASSERT_EQ(b[i].size(), 20u);
+    EXPECT_EQ(b[i].front(), 10 + 20 * static_cast<int>(i - 1));
+  }
+  for (double bad : {1.0, -0.1, std::numeric_limits<double>::quiet_NaN()})
+    EXPECT_THAT([&] { time_blocks(100, 5, bad); },
+                ThrowsMessage<std::invalid_argument>(::testing::HasSubstr("is outside [0, 1) of a block")));
+}
+
+/// y_c = θ_c: each held-out prediction is the mean of the fold's training samples, which the test
+/// computes on its own.
+class MeanFamily : public ModelFamily {
+ public:
+  explicit MeanFamily(const Observations& o) : o_(o) {}
+  std::string name() const override { return "mean"; }
+  std::vector<Param> linear() const override {
+    std::vector<Param> p;
+    for (int c = 0; c < 6; ++c) p.push_back({"mean_" + std::to_string(c), "", 1, false});
+    return p;
+  }
+  void design(const Eigen::VectorXd&, Eigen::MatrixXd& A) const override {
+    A.setZero(static_cast<Eigen::Index>(6 * o_.size()), 6);
+    for (std::size_t k = 0; k < o_.size(); ++k)
+      for (int c = 0; c < 6; ++c) A(static_cast<Eigen::Index>(6 * k) + c, c) = 1.0;
+  }
+
+ private:
+  const Observations& o_;
+};
+
+TEST(Engine, RepeatedCvHoldsOutEveryShiftedBlockAndPoolsTheErrors) {
+  Observations o;
+  const int n = 200;
+  o.y.resize(n, 6);
+  for (int k = 0; k < n; ++k) {
+    o.t_s.push_back(0.01 * k);
+    for (int c = 0; c < 6; ++c) o.y(k, c) = 1e-4 * k * k + c + std::sin(0.37 * k * (c + 1));
+  }
+  const MeanFamily m(o);
+  CvOptions cv;
+  cv.offsets = 4;
+  const Score plain = score(m, o), repeated = score(m, o, cv);
+  ASSERT_TRUE(plain.cv_shifted.empty());
+  ASSERT_EQ(repeated.cv_shifted.size(), 3u);
+  // The unshifted grid is plain blocked CV, its intervals included.
+  EXPECT_EQ(repeated.cv_prediction, plain.cv_prediction);
+  ASSERT_EQ(repeated.full.reported.size(), plain.full.reported.size());
+  for (std::size_t i = 0; i < plain.full.reported.size(); ++i) EXPECT_EQ(repeated.full.reported[i].std, plain.full.reported[i].std);
+  // Each shifted block is predicted by the mean of the samples farther than gap_samples from it.
+  double pooled = 0.0;
+  for (int shift = 0; shift < 4; ++shift) {
+    const Eigen::MatrixXd& pred = shift == 0 ? repeated.cv_prediction : repeated.cv_shifted[static_cast<std::size_t>(shift - 1)];
+    for (const auto& block : time_blocks(n, cv.folds, shift / 4.0)) {
+      Eigen::Matrix<double, 1, 6> mean = Eigen::Matrix<double, 1, 6>::Zero();
+      int count = 0;
+      for (int k = 0; k < n; ++k) {
+        const bool near = std::any_of(block.begin(), block.end(), [&](int h) { return std::abs(h - k) <= cv.gap_samples; });
+        if (near) continue;
+        mean += o.y.row(k);
+        ++count;
+      }
+      mean /= count;
+      for (int k : block) EXPECT_LT((pred.row(k) - mean).norm(), 1e-9) << "offset " << shift << "/4, sample " << k;
+    }
+    const double e = relative_error(o, pred, all(n));
+    pooled += e * e / 4.0;
+  }
+  EXPECT_NEAR(repeated.cv_error, std::sqrt(pooled), 1e-12);
+  EXPECT_NE(repeated.cv_error, plain.cv_error);
+  // Scores held out on different grids are not compared.
+  EXPECT_THAT([&] { paired_z(o, plain, repeated); },
+              ThrowsMessage<std::invalid_argument>(::testing::HasSubstr("held out on 1 and 4 grid offsets")));
+  EXPECT_EQ(paired_z(o, repeated, repeated), 0.0);
 }
 
 TEST(Engine, PairedZIsZeroForEqualPredictionsAndLargeForAConsistentGain) {

@@ -274,6 +274,8 @@ def test_diagnose_names_a_hidden_sensor_bias(tmp_path):
         hil.diagnose(str(run), candidates=["not_a_cause"])
     with pytest.raises(ValueError, match="folds"):
         hil.diagnose(str(run), folds=1)
+    with pytest.raises(ValueError, match="cv_offsets: must be 0"):
+        hil.diagnose(str(run), cv_offsets=-1)
 
 
 def test_diagnose_progress_and_stopping_it():

@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <set>
@@ -152,6 +153,13 @@ static std::vector<std::string> checked_candidates(const Options& o, const std::
   return o.candidates.empty() ? all : o.candidates;
 }
 
+/// Options::cv_offsets, its default resolved for these candidates.
+static int cv_offsets(const Options& o, const std::vector<std::string>& candidates) {
+  if (o.cv_offsets < 0) throw std::invalid_argument("diagnose: cv_offsets must be >= 0 (0: automatic), not " + std::to_string(o.cv_offsets));
+  if (o.cv_offsets > 0) return o.cv_offsets;
+  return std::find(candidates.begin(), candidates.end(), "rest_change") != candidates.end() ? 8 : 1;
+}
+
 RunDiagnosis diagnose_table(const std::string& table_path, const std::string& rig_path, const Options& o) {
   if (rig_path.empty()) throw format::FormatError({table_path, 0, 0, ""}, "a stiffness table needs --rig (the robot's rig file)");
   const calibration::VjmModel model(rig::load_robot(rig_path));
@@ -162,6 +170,7 @@ RunDiagnosis diagnose_table(const std::string& table_path, const std::string& ri
   const auto candidates = checked_candidates(o, dg::stiffness_extensions());
   dg::DiagnoseOptions dopt;
   dopt.cv.folds = o.folds;
+  dopt.cv.offsets = cv_offsets(o, candidates);
   try {
     r.stiffness = std::make_unique<dg::StiffnessData>(dg::make_stiffness_data(model, table.rows));
     const auto& d = *r.stiffness;
@@ -197,6 +206,13 @@ RunDiagnosis diagnose_run(const format::Run& run, const Options& o) {
   dopt.cv.folds = o.folds;
   dg::ModelFactory make;
   const auto candidates = checked_candidates(o, rig.model.contact ? dg::contact_extensions() : dg::deflection_extensions());
+  dopt.cv.offsets = cv_offsets(o, candidates);
+  if (dopt.cv.offsets > 1)
+    r.notes.push_back(fmt::format("held-out errors are pooled over {} offsets of the {}-block grid (repeated blocked CV{}); "
+                                  "the plotted held-out predictions are the unshifted grid's",
+                                  dopt.cv.offsets, o.folds,
+                                  o.cv_offsets > 0 ? "" : ": rest_change's events make a single grid's verdict depend on "
+                                                          "where its block edges fall"));
   try {
     if (rig.model.contact) {
       r.mode = "contact";

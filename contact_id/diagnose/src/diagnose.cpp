@@ -36,10 +36,10 @@ double noise_level(const Observations& obs, const Eigen::MatrixXd& prediction) {
   return std::sqrt(d.squaredNorm() / (2.0 * 6.0 * static_cast<double>(n - 1)));
 }
 
-double paired_z(const Observations& obs, const Eigen::MatrixXd& reference, const Eigen::MatrixXd& candidate) {
-  // Loss: the per-sample weighted error norm (not its square), so that a few large residuals
-  // (e.g. a sliding sample measured as sticking) do not decide the comparison alone.
-  const Eigen::VectorXd d = per_sample_sq(obs, reference).cwiseSqrt() - per_sample_sq(obs, candidate).cwiseSqrt();
+namespace {
+
+/// Newey-West z of the mean of a per-sample loss difference (autocorrelation-robust).
+double newey_west_z(const Eigen::VectorXd& d) {
   const Eigen::Index n = d.size();
   if (n < 3) return 0.0;
   const double mean = d.mean();
@@ -52,6 +52,29 @@ double paired_z(const Observations& obs, const Eigen::MatrixXd& reference, const
   }
   if (!(lrv > 0)) return mean > 0 ? 1e300 : 0.0;
   return mean / std::sqrt(lrv / static_cast<double>(n));
+}
+
+/// Per sample, the weighted error norm of a score's held-out predictions, averaged over the grid
+/// offsets of repeated blocked CV.
+Eigen::VectorXd held_out_norm(const Observations& obs, const Score& s) {
+  Eigen::VectorXd e = per_sample_sq(obs, s.cv_prediction).cwiseSqrt();
+  for (const auto& p : s.cv_shifted) e += per_sample_sq(obs, p).cwiseSqrt();
+  return e / static_cast<double>(1 + s.cv_shifted.size());
+}
+
+}  // namespace
+
+double paired_z(const Observations& obs, const Eigen::MatrixXd& reference, const Eigen::MatrixXd& candidate) {
+  // Loss: the per-sample weighted error norm (not its square), so that a few large residuals
+  // (e.g. a sliding sample measured as sticking) do not decide the comparison alone.
+  return newey_west_z(per_sample_sq(obs, reference).cwiseSqrt() - per_sample_sq(obs, candidate).cwiseSqrt());
+}
+
+double paired_z(const Observations& obs, const Score& reference, const Score& candidate) {
+  if (reference.cv_shifted.size() != candidate.cv_shifted.size())
+    throw std::invalid_argument("paired_z: the scores were held out on " + std::to_string(1 + reference.cv_shifted.size()) + " and " +
+                                std::to_string(1 + candidate.cv_shifted.size()) + " grid offsets");
+  return newey_west_z(held_out_norm(obs, reference) - held_out_norm(obs, candidate));
 }
 
 ResidualAnalysis analyse_residuals(const Observations& obs, const Eigen::MatrixXd& pred, const Context& ctx) {
@@ -164,7 +187,7 @@ void judge(CandidateResult& c, const Score& ref, double noise, const Observation
   }
   c.gain_percent = ref.cv_error > 0 ? 100.0 * (1.0 - c.score.cv_error / ref.cv_error) : 0.0;
   c.noise_fraction = noise > 0 ? (ref.cv_error * ref.cv_error - c.score.cv_error * c.score.cv_error) / (noise * noise) : 1e300;
-  c.z = paired_z(obs, ref.cv_prediction, c.score.cv_prediction);
+  c.z = paired_z(obs, ref, c.score);
   std::vector<std::string> why;
   if (c.gain_percent < 100.0 * o.min_gain) why.push_back(fmt::format("held-out gain {:.2f} % < {:.0f} %", c.gain_percent, 100 * o.min_gain));
   if (c.z < o.min_z) why.push_back(fmt::format("not consistent (z = {:.1f} < {:.0f})", c.z, o.min_z));

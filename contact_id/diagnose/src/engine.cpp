@@ -477,6 +477,19 @@ std::vector<std::vector<int>> time_blocks(std::size_t samples, int folds) {
   return out;
 }
 
+std::vector<std::vector<int>> time_blocks(std::size_t samples, int folds, double offset) {
+  if (!(offset >= 0.0 && offset < 1.0))
+    throw std::invalid_argument("time_blocks: the grid offset " + std::to_string(offset) + " is outside [0, 1) of a block");
+  if (offset == 0.0) return time_blocks(samples, folds);
+  folds = std::max(1, std::min<int>(folds, static_cast<int>(samples)));
+  std::vector<std::vector<int>> out(static_cast<std::size_t>(folds));
+  for (std::size_t k = 0; k < samples; ++k) {
+    const double x = static_cast<double>(k) * folds / static_cast<double>(samples) + offset;
+    out[static_cast<std::size_t>(std::floor(x)) % static_cast<std::size_t>(folds)].push_back(static_cast<int>(k));
+  }
+  return out;
+}
+
 namespace {
 
 /// The φ of `from` (named `names`) mapped onto the nonlinear parameters `nl`, the others at 0.
@@ -612,37 +625,55 @@ Score score(const ModelFamily& m, const Observations& obs, const CvOptions& o, c
   }
   FitOptions fold_fit = o.fit;
   fold_fit.noise_tolerance = std::max(fold_fit.noise_tolerance, o.fold_noise_tolerance);
-  s.cv_prediction = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(n), 6);
-  std::size_t fold = 0;
+  std::size_t fold = 0, folds_unshifted = 0;
   std::map<std::string, std::vector<double>> by_name;
-  for (const auto& block : time_blocks(n, o.folds)) {
-    if (block.empty()) continue;
-    std::vector<int> train;
-    for (int k : all)
-      if (k < block.front() - o.gap_samples || k > block.back() + o.gap_samples) train.push_back(k);
-    if (train.empty()) continue;
-    // Leak-free: the family's data-derived choices and every start come from `train` alone.
-    const std::unique_ptr<ModelFamily> own = m.restricted(train);
-    const ModelFamily& fm = own ? *own : m;
-    std::optional<DesignCache> own_cache;
-    if (own) own_cache.emplace(fm, n);
-    DesignCache& fc = own ? *own_cache : cache;
-    // The fold's model may differ from the full one in its parameters: warm start and fixed flags by name.
-    std::optional<Eigen::VectorXd> warm;
-    if (extends && fold < extends->fold_phi.size())
-      warm = mapped(fm.nonlinear(), extends->fold_phi_names[fold], extends->fold_phi[fold]);
-    const std::vector<bool> fixed = fixed_by_name(m, s.full.fixed, fm);
-    Fit f = fit_with(fm, obs, train, fold_fit, fc, warm ? &*warm : nullptr, false, &fixed);
-    const Eigen::MatrixXd pr = predict_with(fc.get(f.phi), f, n);
-    for (int k : block) s.cv_prediction.row(k) = pr.row(k);
-    s.fold_phi.push_back(f.phi);
-    s.fold_phi_names.push_back(f.phi_names);
-    // The fold's estimates of what the full fit reports (derived quantities included).
-    for (const auto& r : values_reported(fm, f, s.full)) by_name[r.name].push_back(r.value);
-    ++fold;
+  const int offsets = std::max(1, o.offsets);
+  double pooled_sq = 0.0;
+  for (int shift = 0; shift < offsets; ++shift) {
+    Eigen::MatrixXd held_out = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(n), 6);
+    for (const auto& block : time_blocks(n, o.folds, static_cast<double>(shift) / offsets)) {
+      if (block.empty()) continue;
+      // Training: every sample farther than gap_samples from each held-out one (a shifted grid's
+      // block 0 is two runs of samples, at the end and at the start).
+      std::vector<int> near(n + 1, 0), train;
+      for (int k : block) {
+        ++near[static_cast<std::size_t>(std::max(0, k - o.gap_samples))];
+        --near[static_cast<std::size_t>(std::min(static_cast<int>(n), k + o.gap_samples + 1))];
+      }
+      int covered = 0;
+      for (int k : all)
+        if ((covered += near[static_cast<std::size_t>(k)]) == 0) train.push_back(k);
+      if (train.empty()) continue;
+      // Leak-free: the family's data-derived choices and every start come from `train` alone.
+      const std::unique_ptr<ModelFamily> own = m.restricted(train);
+      const ModelFamily& fm = own ? *own : m;
+      std::optional<DesignCache> own_cache;
+      if (own) own_cache.emplace(fm, n);
+      DesignCache& fc = own ? *own_cache : cache;
+      // The fold's model may differ from the full one in its parameters: warm start and fixed flags by name.
+      std::optional<Eigen::VectorXd> warm;
+      if (extends && fold < extends->fold_phi.size())
+        warm = mapped(fm.nonlinear(), extends->fold_phi_names[fold], extends->fold_phi[fold]);
+      const std::vector<bool> fixed = fixed_by_name(m, s.full.fixed, fm);
+      Fit f = fit_with(fm, obs, train, fold_fit, fc, warm ? &*warm : nullptr, false, &fixed);
+      const Eigen::MatrixXd pr = predict_with(fc.get(f.phi), f, n);
+      for (int k : block) held_out.row(k) = pr.row(k);
+      s.fold_phi.push_back(f.phi);
+      s.fold_phi_names.push_back(f.phi_names);
+      ++fold;
+      if (shift > 0) continue;
+      // The fold's estimates of what the full fit reports (derived quantities included): the
+      // intervals' spread is that of the plain grid's folds (a shifted grid's overlap them).
+      for (const auto& r : values_reported(fm, f, s.full)) by_name[r.name].push_back(r.value);
+      ++folds_unshifted;
+    }
+    const double e = relative_error(obs, held_out, all);
+    pooled_sq += e * e;
+    if (shift == 0) s.cv_prediction = std::move(held_out);
+    else s.cv_shifted.push_back(std::move(held_out));
   }
-  s.cv_error = relative_error(obs, s.cv_prediction, all);
-  honest_intervals(s, by_name, fold);
+  s.cv_error = std::sqrt(pooled_sq / offsets);
+  honest_intervals(s, by_name, folds_unshifted);
   if (o.model_forms) model_form_intervals(s, m, obs, all, o.fit);
   s.full.invalid = m.check(s.full);
   s.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

@@ -27,6 +27,7 @@ struct DiagnoseArgs {
   std::string run, rig, json, report;
   std::vector<std::string> candidates;
   int folds = 5;
+  int cv_offsets = 0;
   hil::diagnose::RateSource damping_rates = hil::diagnose::RateSource::automatic;
   bool quiet = false;
 };
@@ -35,6 +36,7 @@ int diagnose_cmd(const DiagnoseArgs& a) {
   diagnose::Options o;
   o.candidates = a.candidates;
   o.folds = a.folds;
+  o.cv_offsets = a.cv_offsets;
   o.damping_rates = a.damping_rates;
   const bool tty = isatty(STDERR_FILENO) != 0;
   if (!a.quiet)
@@ -70,6 +72,11 @@ void add_diagnose(CLI::App& app) {
   d->add_option("--report", da.report, "write an HTML report into this folder");
   d->add_option("--candidates", da.candidates, "only these candidate causes (default: all that apply)")->delimiter(',');
   d->add_option("--folds", da.folds, "blocks of the cross-validation over time")->capture_default_str()->check(CLI::Range(2, 1000));
+  d->add_option("--cv-offsets", da.cv_offsets,
+                "repeat the cross-validation over this many offsets of its block grid and pool the held-out errors "
+                "(0: 8 when rest_change is a candidate, else 1)")
+      ->capture_default_str()
+      ->check(CLI::Range(0, 64));
   const std::map<std::string, hil::diagnose::RateSource> rates{{"auto", hil::diagnose::RateSource::automatic},
                                                                 {"twist", hil::diagnose::RateSource::twist},
                                                                 {"poses", hil::diagnose::RateSource::poses}};

@@ -17,6 +17,10 @@ namespace hil::services::diagnose {
 struct Options {
   std::vector<std::string> candidates;  ///< empty: all that apply
   int folds = 5;
+  /// Offsets of the block grid the cross-validation is repeated over (CvOptions::offsets); 0: 8 when
+  /// rest_change is among the candidates (its held-out error depends on where the blocks cut its
+  /// events), else 1.
+  int cv_offsets = 0;
   /// Where contact_damping's penetration rates come from (contact runs).
   hil::diagnose::RateSource damping_rates = hil::diagnose::RateSource::automatic;
   hil::diagnose::Progress progress;

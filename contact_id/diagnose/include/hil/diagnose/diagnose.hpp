@@ -106,5 +106,9 @@ Diagnosis diagnose(const ModelFactory& make, const std::vector<std::string>& can
 double noise_level(const Observations& obs, const Eigen::MatrixXd& prediction);
 
 double paired_z(const Observations& obs, const Eigen::MatrixXd& reference, const Eigen::MatrixXd& candidate);
+/// The same on two scores' held-out predictions, the per-sample error norm averaged over the grid
+/// offsets of repeated blocked CV (CvOptions::offsets).
+/// \throws std::invalid_argument if the two were held out on different numbers of offsets.
+double paired_z(const Observations& obs, const Score& reference, const Score& candidate);
 
 }  // namespace hil::diagnose
