@@ -361,14 +361,20 @@ class DecayFamily : public ModelFamily {
   const Observations& o_;
 };
 
-TEST(Engine, SecantUpdatesReachTheSameOptimumWithFewerDesigns) {
+/// n samples at 100 Hz, y(k, c) = f(k, t_k, c).
+template <class F>
+Observations noiseless(int n, F f) {
   Observations o;
-  const int n = 400;
   o.y.resize(n, 6);
   for (int k = 0; k < n; ++k) {
     o.t_s.push_back(0.01 * k);
-    for (int c = 0; c < 6; ++c) o.y(k, c) = 2.0 * std::exp(-0.5 * o.t_s.back()) * std::sin(2 * M_PI * 1.23 * o.t_s.back() + c) + 0.3;
+    for (int c = 0; c < 6; ++c) o.y(k, c) = f(k, o.t_s.back(), c);
   }
+  return o;
+}
+
+TEST(Engine, SecantUpdatesReachTheSameOptimumWithFewerDesigns) {
+  const Observations o = noiseless(400, [](int, double t, int c) { return 2.0 * std::exp(-0.5 * t) * std::sin(2 * M_PI * 1.23 * t + c) + 0.3; });
   DecayFamily m(o);
   FitOptions fd, secant;
   fd.secant_updates = 0;
@@ -493,13 +499,8 @@ class MeanFamily : public ModelFamily {
 };
 
 TEST(Engine, RepeatedCvHoldsOutEveryShiftedBlockAndPoolsTheErrors) {
-  Observations o;
   const int n = 200;
-  o.y.resize(n, 6);
-  for (int k = 0; k < n; ++k) {
-    o.t_s.push_back(0.01 * k);
-    for (int c = 0; c < 6; ++c) o.y(k, c) = 1e-4 * k * k + c + std::sin(0.37 * k * (c + 1));
-  }
+  const Observations o = noiseless(n, [](int k, double, int c) { return 1e-4 * k * k + c + std::sin(0.37 * k * (c + 1)); });
   const MeanFamily m(o);
   CvOptions cv;
   cv.offsets = 4;
