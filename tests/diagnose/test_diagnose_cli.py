@@ -172,8 +172,12 @@ class Diagnose(unittest.TestCase):
         r = hil("import", TIAGO, "--config", os.path.join(SRC, "examples", "import", "tiago_suspension.yaml"), "--out", run)
         self.assertEqual(r.returncode, 0, r.stderr)
         js = os.path.join(self.dir, "t.json")
+        # Under ASan + UBSan (ctest --preset asan sets HIL_SANITIZE) the default 8 grid offsets take
+        # over 300 s: 2 offsets exercise the same repeated-CV path there; the verdict needs all 8.
+        sanitized = bool(os.environ.get("HIL_SANITIZE"))
+        offsets = ["--cv-offsets", "2"] if sanitized else []
         r = hil("diagnose", run, "--rig", os.path.join(SRC, "examples", "import", "tiago_suspension_rig.yaml"), "--json", js,
-                "--quiet")
+                "--quiet", *offsets)
         self.assertEqual(r.returncode, 0, r.stderr)
         with open(js) as f:
             d = json.load(f)
@@ -182,17 +186,21 @@ class Diagnose(unittest.TestCase):
         # The base tilts elastically under the swinging arm's moment: a compliance is named, with a
         # positive pitch compliance; the yaw slips are the second cause (docs/case-study-tiago.md),
         # on held-out errors pooled over 8 offsets of the block grid (repeated blocked CV).
-        self.assertEqual(d["cause"]["name"], "robot_compliance")
-        self.assertEqual(d["second_cause"]["name"], "rest_change")
-        second = next(c for c in d["second_step"] if c["name"] == "rest_change")
-        self.assertTrue(second["supported"])
-        self.assertGreater(second["gain_percent"], 2)
-        self.assertTrue(any("pooled over 8 offsets of the 5-block grid" in n for n in d["notes"]), d["notes"])
+        # (with 2 offsets the slips come first: docs/case-study-tiago.md, per-offset table)
+        self.assertEqual(d["cause"]["name"], "rest_change" if sanitized else "robot_compliance")
+        self.assertTrue(any("pooled over %d offsets of the 5-block grid" % (2 if sanitized else 8) in n for n in d["notes"]),
+                        d["notes"])
+        if not sanitized:
+            self.assertEqual(d["second_cause"]["name"], "rest_change")
+            second = next(c for c in d["second_step"] if c["name"] == "rest_change")
+            self.assertTrue(second["supported"])
+            self.assertGreater(second["gain_percent"], 2)
         self.assertGreater(d["gain_percent"], 5)
         self.assertLess(d["extended"]["relative_error"], d["nominal"]["relative_error"])
-        c = d["cause"]["parameters"]["C_ry_ry"]
-        self.assertGreater(c["value"], 0)
-        self.assertGreaterEqual(c["pnr"], 5)
+        if not sanitized:
+            c = d["cause"]["parameters"]["C_ry_ry"]
+            self.assertGreater(c["value"], 0)
+            self.assertGreaterEqual(c["pnr"], 5)
         self.assertIn("follows load_my", r.stdout)
         # rest_change locates the two slips (docs/case-study-tiago.md): events with intervals, not
         # standard deviations, near 23.4 s and 48.8 s, and the yaw steps they carry identifiable.
@@ -206,7 +214,10 @@ class Diagnose(unittest.TestCase):
         for slip in (23.45, 48.85):
             self.assertTrue(any(abs(v["value"] - slip) < 0.1 for v in events.values()), (slip, events))
         self.assertTrue(any(k.startswith("step_") and k.endswith("_rz") and v["pnr"] >= 5 for k, v in rc["parameters"].items()))
-        self.assertIn("rest_change alone: event_1_s", r.stdout)
+        if d["cause"]["name"] != "rest_change":  # as the cause its events are listed under it
+            self.assertIn("rest_change alone: event_1_s", r.stdout)
+        else:
+            self.assertIn("event_1_s", r.stdout)
         # The whole document, located events included, is valid against its published schema.
         import jsonschema
         with open(os.path.join(SRC, "docs", "schemas", "hil.diagnosis.schema.json")) as f:
