@@ -71,7 +71,8 @@ class Diagnose(unittest.TestCase):
         self.assertEqual(names, {"geometric_offset", "robot_compliance", "time_offset", "sensor_bias", "sensor_gain",
                                  "viscous_friction", "contact_damping", "nonlinear_stiffness"})
         for c in d["candidates"]:
-            for key in ("relative_error", "gain_percent", "bic", "max_pnr", "supported", "verdict"):
+            for key in ("relative_error", "gain_percent", "noise_variances", "effect_noise_variances", "bic", "max_pnr",
+                        "supported", "verdict"):
                 self.assertIn(key, c)
             for name, p in c["parameters"].items():  # the reported std is the wider of the two
                 self.assertGreaterEqual(p["std"], p["std_asymptotic"] * (1 - 1e-12), name)
@@ -195,6 +196,12 @@ class Diagnose(unittest.TestCase):
             second = next(c for c in d["second_step"] if c["name"] == "rest_change")
             self.assertTrue(second["supported"])
             self.assertGreater(second["gain_percent"], 2)
+            # A second cause's size: the held-out reduction and its effect in the joint fit, both
+            # above the quarter noise variance a cause must explain (docs/diagnosis.md).
+            self.assertGreater(second["noise_variances"], 0.25)
+            self.assertGreaterEqual(second["effect_noise_variances"], 0.25)
+        for c in d["candidates"]:  # the first step is sized by its held-out reduction alone
+            self.assertIsNone(c["effect_noise_variances"], c["name"])
         self.assertGreater(d["gain_percent"], 5)
         self.assertLess(d["extended"]["relative_error"], d["nominal"]["relative_error"])
         if not sanitized:

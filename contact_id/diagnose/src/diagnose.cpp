@@ -7,6 +7,7 @@
 #include <set>
 #include <sstream>
 
+#include <Eigen/QR>
 #include <fmt/format.h>
 
 namespace hil::diagnose {
@@ -174,6 +175,48 @@ std::string fails_without_held_out(const Score& s, const Score& ref, const Diagn
   return fmt::format("{}", fmt::join(why, "; "));
 }
 
+/// CandidateResult::effect_fraction of the fit `f` of `m`: the parameters of `m` that are
+/// extensions and not among `cause_params` are the added candidate's.
+double effect_fraction(const ModelFamily& m, const Fit& f, const std::set<std::string>& cause_params, const Observations& obs,
+                       double noise) {
+  const auto lin = m.linear();
+  const auto nl = m.nonlinear();
+  auto added = [&](const Param& p) { return p.extension && !cause_params.count(p.name); };
+  Eigen::VectorXd phi = f.phi;
+  for (std::size_t j = 0; j < nl.size() && static_cast<Eigen::Index>(j) < phi.size(); ++j)
+    if (added(nl[j])) phi(static_cast<Eigen::Index>(j)) = 0.0;
+  Eigen::MatrixXd A_fit, A_off;
+  m.design(f.phi, A_fit);
+  m.design(phi, A_off);
+  Eigen::VectorXd w(A_fit.rows());
+  for (Eigen::Index r = 0; r < w.size(); ++r) w(r) = obs.weight(r % 6);
+  Eigen::VectorXd y(A_fit.rows());
+  for (Eigen::Index k = 0; k < obs.y.rows(); ++k)
+    for (int c = 0; c < 6; ++c) y(6 * k + c) = obs.y(k, c);
+  // The added candidate's θ at 0, the cause's as fitted, the nominal model's re-solved (QR).
+  Eigen::VectorXd theta = f.theta;
+  std::vector<Eigen::Index> nominal;
+  for (std::size_t j = 0; j < lin.size(); ++j) {
+    const auto i = static_cast<Eigen::Index>(j);
+    if (!lin[j].extension) {
+      nominal.push_back(i);
+      theta(i) = 0.0;
+    } else if (added(lin[j])) {
+      theta(i) = 0.0;
+    }
+  }
+  if (!nominal.empty()) {
+    Eigen::MatrixXd An(A_off.rows(), static_cast<Eigen::Index>(nominal.size()));
+    for (std::size_t j = 0; j < nominal.size(); ++j) An.col(static_cast<Eigen::Index>(j)) = w.cwiseProduct(A_off.col(nominal[j]));
+    const Eigen::VectorXd rhs = w.cwiseProduct(y - A_off * theta);
+    const Eigen::VectorXd x = An.colPivHouseholderQr().solve(rhs);
+    for (std::size_t j = 0; j < nominal.size(); ++j) theta(nominal[j]) = x(static_cast<Eigen::Index>(j));
+  }
+  const Eigen::VectorXd change = w.cwiseProduct(A_fit * f.theta - A_off * theta);
+  const double mean_sq = change.squaredNorm() / static_cast<double>(std::max<Eigen::Index>(1, change.size()));
+  return noise > 0 ? mean_sq / (noise * noise) : 1e300;
+}
+
 void judge(CandidateResult& c, const Score& ref, double noise, const Observations& obs, const DiagnoseOptions& o) {
   c.pnr = added_pnr(c.score, ref);
   if (!c.score.held_out()) {
@@ -191,12 +234,17 @@ void judge(CandidateResult& c, const Score& ref, double noise, const Observation
   std::vector<std::string> why;
   if (c.gain_percent < 100.0 * o.min_gain) why.push_back(fmt::format("held-out gain {:.2f} % < {:.0f} %", c.gain_percent, 100 * o.min_gain));
   if (c.z < o.min_z) why.push_back(fmt::format("not consistent (z = {:.1f} < {:.0f})", c.z, o.min_z));
-  if (c.noise_fraction < o.min_noise_fraction)
-    why.push_back(fmt::format("below the noise (explains {:.2f} of the noise variance < {:.2f})", c.noise_fraction, o.min_noise_fraction));
+  const bool joint = !std::isnan(c.effect_fraction);
+  const double size = joint ? std::max(c.noise_fraction, c.effect_fraction) : c.noise_fraction;
+  if (size < o.min_noise_fraction)
+    why.push_back(joint ? fmt::format("below the noise (explains {:.2f} of the noise variance held out, its effect in the joint fit {:.2f}; < {:.2f})",
+                                      c.noise_fraction, c.effect_fraction, o.min_noise_fraction)
+                        : fmt::format("below the noise (explains {:.2f} of the noise variance < {:.2f})", c.noise_fraction, o.min_noise_fraction));
   if (const auto rest = fails_without_held_out(c.score, ref, o); !rest.empty()) why.push_back(rest);
   c.supported = why.empty();
-  c.verdict = c.supported ? fmt::format("supported: held-out gain {:.1f} %, z = {:.1f}, PNR {:.1f}, {:.2f} noise variances",
-                                        c.gain_percent, c.z, c.pnr, c.noise_fraction)
+  c.verdict = c.supported ? fmt::format("supported: held-out gain {:.1f} %, z = {:.1f}, PNR {:.1f}, {:.2f} noise variances{}",
+                                        c.gain_percent, c.z, c.pnr, c.noise_fraction,
+                                        joint ? fmt::format(" (its effect in the joint fit {:.2f})", c.effect_fraction) : "")
                           : fmt::format("{}", fmt::join(why, "; "));
 }
 
@@ -252,6 +300,12 @@ Diagnosis diagnose(const ModelFactory& make, const std::vector<std::string>& can
     d.cause = first.name;
     d.extended = first.score;
     // Greedy forward selection: the best remaining single candidates, each added to the cause.
+    std::set<std::string> cause_params;
+    {
+      const auto cause_model = make({d.cause});
+      for (const auto& p : cause_model->linear()) cause_params.insert(p.name);
+      for (const auto& p : cause_model->nonlinear()) cause_params.insert(p.name);
+    }
     int tried = 0;
     for (const auto& c : d.candidates) {
       // Every other candidate, not only those that helped alone: an extension may only matter
@@ -262,7 +316,9 @@ Diagnosis diagnose(const ModelFactory& make, const std::vector<std::string>& can
       CandidateResult r;
       r.name = c.name;
       try {
-        r.score = score(*make({d.cause, c.name}), obs, screened_against(first.score), &first.score);
+        const auto model = make({d.cause, c.name});
+        r.score = score(*model, obs, screened_against(first.score), &first.score);
+        if (r.score.held_out()) r.effect_fraction = effect_fraction(*model, r.score.full, cause_params, obs, d.noise_relative);
         judge(r, first.score, d.noise_relative, obs, o);
       } catch (const std::exception& e) {
         r.score.cv_error = std::numeric_limits<double>::infinity();

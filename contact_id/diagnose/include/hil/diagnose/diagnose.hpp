@@ -5,6 +5,7 @@
 /// the best-supported extension; greedy forward selection then names a second cause when one
 /// remains; `none` when no extension beats the nominal model beyond the noise.
 #include <functional>
+#include <limits>
 #include <map>
 #include <memory>
 #include <optional>
@@ -62,6 +63,10 @@ struct DiagnoseOptions {
   /// and its size: the held-out mean squared (weighted) error must fall by at least this fraction
   /// of the measurement noise variance (estimated from the nominal residual's first differences),
   /// so that effects far below the sensor's resolution are not named however precisely fitted.
+  /// In the second step the size is the larger of that and the added candidate's effect in the
+  /// joint fit (CandidateResult::effect_fraction): a second cause confounded with the first (a
+  /// damping force looks to the normal force like a lead, which the fitted delay absorbs) shows
+  /// only the part of its size the first cannot mimic as a held-out reduction.
   double min_noise_fraction = 0.25;
   int second_candidates = 8;  ///< greedy second step: the best single candidates tried with the cause
 };
@@ -72,6 +77,10 @@ struct CandidateResult {
   double gain_percent = 0.0;  ///< held-out error reduction against the model it extends
   double z = 0.0;             ///< significance of that reduction
   double noise_fraction = 0.0;  ///< held-out MSE reduction over the noise variance
+  /// Second step: the weighted mean squared change of the joint fit's prediction when the added
+  /// candidate's parameters go to their nominal value (0), the nominal model's linear parameters
+  /// re-solved and the cause's kept as fitted, over the noise variance (NaN: not computed).
+  double effect_fraction = std::numeric_limits<double>::quiet_NaN();
   /// The largest PNR among the parameters this candidate adds (not those of the model it extends).
   double pnr = 0.0;
   bool supported = false;
