@@ -87,6 +87,40 @@ TEST(Engine, IntervalsCoverTheTruthAndCrossValidationScoresHeldOutData) {
   EXPECT_TRUE(s.identifiable);
 }
 
+/// The sine family whose design jumps by `jump` on one row when the frequency reaches `edge`: a
+/// design discontinuous in φ, as a contact's stick/slip switch at v_tm makes a delayed one.
+class JumpingSine : public SineFamily {
+ public:
+  JumpingSine(const Observations& o, double start, double edge, double jump) : SineFamily(o), start_(start), edge_(edge), jump_(jump) {}
+  std::vector<Eigen::VectorXd> starts() const override { return {Eigen::VectorXd::Constant(1, start_)}; }
+  void design(const Eigen::VectorXd& phi, Eigen::MatrixXd& A) const override {
+    SineFamily::design(phi, A);
+    if (phi(0) >= edge_) A(6 * 17 + 2, 0) += jump_;
+  }
+
+ private:
+  double start_, edge_, jump_;
+};
+
+TEST(Engine, AnIntervalIsNotShrunkByADesignThatJumpsBesideTheOptimum) {
+  // Statistics at the true frequency (no iteration), with the design's jump half a difference step
+  // (1e-4 of the scale 0.1) above it, then below it: a one-sided difference across the jump
+  // measures jump / step (3e3 on one row against slopes of a few units), not the slope.
+  const auto o = sine_data(1.0, 1.0, 0.0, 0.1, 5);
+  FitOptions once;
+  once.max_iterations = 0;
+  const double h = 1e-4 * 0.1;
+  const Fit smooth = fit(JumpingSine(o, 1.0, 1e300, 0.0), o, all(o.size()), once);
+  ASSERT_EQ(smooth.phi(0), 1.0);
+  const double sd = std::sqrt(smooth.cov(2, 2));
+  ASSERT_GT(sd, 0.0);
+  for (double edge : {1.0 + 0.5 * h, 1.0 - 0.5 * h}) {
+    const Fit jumping = fit(JumpingSine(o, 1.0, edge, 0.03), o, all(o.size()), once);
+    ASSERT_EQ(jumping.phi(0), 1.0);
+    EXPECT_NEAR(std::sqrt(jumping.cov(2, 2)), sd, 0.05 * sd) << "jump at " << edge - 1.0 << " from the optimum";
+  }
+}
+
 /// y_c = θ_0 sin(2π f t + c) + θ_1 + θ_2 g_c(t) + φ_1 θ_0 h(t): `twin` makes g a multiple of the
 /// sine (θ_2 cannot be told from the amplitude); φ_1 (bounded ±0.5) scales a signal h that is 0
 /// when `flat`, so that nothing determines it.
