@@ -12,21 +12,26 @@ include(CMakePackageConfigHelpers)
 # Target -> exported name (hil::<name>). Exported ones must only link exported or imported targets.
 set(_hil_exports
   hil_so3 so3
+  hil_error error
   hil_solver solver
   hil_calibration calibration
   hil_contact_id contact_id
   hil_format format
   hil_idl_types idl_types
   hil_idl idl
+  hil_messages messages
   hil_drivers drivers
   hil_acquisition acquisition
   hil_report report
   hil_import import
   hil_diagnose diagnose
-  hil_rig_drivers rig_drivers
-  hil_rig rig
+  hil_rig_service rig_service
+  hil_models models
   hil_keystore keystore
-  hil_services services)
+  hil_service_contact service_contact
+  hil_service_diagnose service_diagnose
+  hil_service_stiffness service_stiffness
+  hil_service_workers service_workers)
 set(HIL_CONFIG_MCAP_DEPS "")
 set(HIL_PC_REQUIRES "eigen3 yaml-cpp spdlog libmodbus")
 if(TARGET hil_mcap)

@@ -1,5 +1,6 @@
 # Project-wide warning flags, applied per target with hil_target_warnings().
 add_library(hil_warnings INTERFACE)
+hil_layer(hil_warnings core)  # compiler flags only: every layer uses them
 target_compile_options(hil_warnings INTERFACE
   -Wall -Wextra -Wpedantic -Wshadow -Wnon-virtual-dtor -Woverloaded-virtual
   -Wformat=2 -Wimplicit-fallthrough)

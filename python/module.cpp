@@ -3,27 +3,27 @@
 #include <pybind11/pybind11.h>
 
 #include "bindings.hpp"
-#include <hil/format/error.hpp>
+#include <hil/error/error.hpp>
 
 namespace py = pybind11;
 
 namespace {
 // Created once at import and never freed: a static py::object would be released after the
 // interpreter is gone.
-py::exception<hil::format::FormatError>* format_error = nullptr;
+py::exception<hil::error::FormatError>* format_error = nullptr;
 }  // namespace
 
 PYBIND11_MODULE(hil, m) {
   m.doc() = "hil: runs and rig files as numpy arrays; contact identification, diagnosis and elastostatic calibration";
   m.attr("__version__") = HIL_VERSION;
 
-  format_error = new py::exception<hil::format::FormatError>(m, "FormatError", PyExc_ValueError);
+  format_error = new py::exception<hil::error::FormatError>(m, "FormatError", PyExc_ValueError);
   format_error->doc() = "Bad input: the message reads FILE:LINE:COL: field 'F': MESSAGE; also as attributes file, line, "
                        "column (1-based, 0 = not applicable), field and message.";
   py::register_exception_translator([](std::exception_ptr p) {
     try {
       if (p) std::rethrow_exception(p);
-    } catch (const hil::format::FormatError& e) {
+    } catch (const hil::error::FormatError& e) {
       py::object err = py::handle(format_error->ptr())(e.what());  // an instance, to carry the location
       const auto& w = e.where();
       err.attr("file") = w.file;

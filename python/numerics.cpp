@@ -15,9 +15,11 @@
 #include <hil/calibration/reduction.hpp>
 #include <hil/format/run.hpp>
 #include <hil/services/contact_identify.hpp>
-#include <hil/rig/contact.hpp>
+#include <hil/models/contact.hpp>
+#include <hil/services/diagnose_output.hpp>
 #include <hil/services/diagnose_run.hpp>
-#include <hil/services/stiffness_io.hpp>
+#include <hil/models/stiffness.hpp>
+#include <hil/models/stiffness_model.hpp>
 
 namespace hil::python {
 
@@ -171,12 +173,12 @@ py::dict identify_stiffness(const Path& table_path, const Path& rig, double nois
   nlohmann::json j;
   {
     py::gil_scoped_release free;
-    const calibration::VjmModel model(rig::load_robot(rig.string()));
-    const auto table = rig::read_stiffness_table(table_path.string(), model.dof(), true);
+    const calibration::VjmModel model(models::load_robot(rig.string()));
+    const auto table = models::read_stiffness_table(table_path.string(), model.dof(), true);
     calibration::PipelineOptions o;  // the defaults of `hil stiffness identify`
     o.neglect_below = neglect_below;
     const auto r = calibration::calibrate(model, table.rows, {noise_pos_m, noise_rot_rad}, o);
-    j = services::stiffness::result_to_json(model, r);
+    j = models::result_to_json(model, r);
   }
   return to_python(j);
 }
@@ -193,8 +195,8 @@ py::dict simulate_contact(const Path& rig_path, const Path& trajectory, const py
     const double K_value = has_K ? K.cast<double>() : 0.0, mu_value = has_mu ? mu.cast<double>() : 0.0;
     py::gil_scoped_release free;
     const auto rig = format::load_rig(rig_path.string());
-    const auto scene = rig::scene_from_rig(rig);
-    model = rig::model_from_rig(rig);
+    const auto scene = models::scene_from_rig(rig);
+    model = models::model_from_rig(rig);
     if (has_K) model.K = K_value;
     if (has_mu) model.mu = mu_value;
     try {
@@ -202,8 +204,8 @@ py::dict simulate_contact(const Path& rig_path, const Path& trajectory, const py
     } catch (const std::invalid_argument& e) {
       throw py::value_error(std::string("K, mu: ") + e.what());
     }
-    const Eigen::VectorXd x_true = rig::uncertainty_vector(scene, geometric, "geometric");
-    auto traj = rig::read_trajectory(trajectory.string());
+    const Eigen::VectorXd x_true = models::uncertainty_vector(scene, geometric, "geometric");
+    auto traj = models::read_trajectory(trajectory.string());
     sim = cid::simulate(scene, model, x_true, traj.kin, sensor);
     t = std::move(traj.t);
   }

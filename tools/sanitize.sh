@@ -12,7 +12,7 @@ kind="${1:-}"
 shift || true
 
 # The targets behind label `threads` (tests/{drivers,acquisition,idl,benchmarks}/CMakeLists.txt).
-tsan_targets=(test_drivers test_drivers_rig test_acquisition test_acquisition_e2e test_idl bench_rig)
+tsan_targets=(test_drivers test_rig_service test_acquisition test_acquisition_e2e test_idl bench_rig)
 
 case "$kind" in
   asan | tsan) ;;

@@ -21,8 +21,9 @@ deps() {
     pybind11-dev python3-dev python3-pytest
     openssl
     clang libclang-rt-14-dev lld  # libFuzzer targets (tests/fuzz)
+    clang-format  # the tree's style, checked by tests/architecture/format (tools/format.sh)
   )
-  # Node and npm for the independent MCAP reader's tests (tests/mcap); kept when already there (Node 20).
+  # Node and npm for the independent MCAP reader's tests (tests/formats/mcap); kept when already there (Node 20).
   command -v npm >/dev/null 2>&1 || pkgs+=(nodejs npm)
   local missing=()
   for p in "${pkgs[@]}"; do dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p"); done

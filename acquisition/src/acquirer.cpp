@@ -11,13 +11,19 @@
 #include <ctime>
 #include <cstring>
 
-#include <hil/acquisition/ros_msgs.hpp>
-#include <hil/acquisition/sample_msg.hpp>
+#include <hil/messages/ros_msgs.hpp>
+#include <hil/messages/sample_msg.hpp>
 #include <hil/dds/topics.hpp>
 #include <hil/drivers/can_channel.hpp>
 #include <hil/drivers/error.hpp>
 
 namespace hil::acquisition {
+// What the acquirer publishes, as the bus messages of formats/messages.
+using messages::to_diagnostic_status;
+using messages::to_joint_state;
+using messages::to_message;
+using messages::to_tf_message;
+using messages::to_time;
 
 // Append-only CSV of each device's own readings, flushed with the run (whole lines per write).
 class RawWriter {

@@ -1,6 +1,6 @@
 #include <hil/acquisition/recorder.hpp>
 
-#include <hil/acquisition/sample_msg.hpp>
+#include <hil/messages/sample_msg.hpp>
 
 #include <fmt/format.h>
 

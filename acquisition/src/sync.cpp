@@ -181,4 +181,16 @@ void Synchronizer::emit_ready(std::int64_t now_ns, bool force) {
   while (poses_.size() > 2 && poses_[1].t_ns < oldest_needed) poses_.pop_front();
 }
 
+format::Sample to_row(const SyncedSample& s, double t_s) {
+  format::Sample row;
+  row.t_s = t_s;
+  row.p_world_ee_m = s.p_world_ee_m;
+  row.q_world_ee = s.q_world_ee;
+  row.v_world_ee_m_per_s = s.v_world_ee_m_per_s;
+  row.w_world_ee_rad_per_s = s.w_world_ee_rad_per_s;
+  row.f_fp_n = s.wrench_fp.head<3>();
+  row.m_fp_nm = s.wrench_fp.tail<3>();
+  return row;
+}
+
 }  // namespace hil::acquisition

@@ -480,4 +480,10 @@ const std::vector<PaperTableRow>& paper_table1() {
   return rows;
 }
 
+std::string paper_count(const std::string& step) {
+  for (const auto& row : paper_table1())
+    if (step == row.step) return row.count;
+  return "";
+}
+
 }  // namespace hil::calibration

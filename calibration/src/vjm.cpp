@@ -155,9 +155,15 @@ Eigen::VectorXd VjmModel::compensate(const ComplianceSet& k, const Eigen::Ref<co
   Vector6d err = Vector6d::Zero();
   for (int it = 0; it <= iterations; ++it) {
     jacobians(q, ws);
-    err = pose_difference(target, ws.poses.T_world_ee) + deflection(k, ws, w_world);
+    const Vector6d rigid = pose_difference(target, ws.poses.T_world_ee);
+    err = rigid + deflection(k, ws, w_world);
     if (it == iterations) break;
-    q -= tool_jacobian(robot_, ws.poses).completeOrthogonalDecomposition().solve(err);
+    // The rotation error is log(R(q) R_targetᵀ): a joint step turns R(q) by J_ω dq in the world
+    // frame, which moves the log by Jl⁻¹(log) J_ω dq (so3::left_jacobian_inverse). The deflection's
+    // own change with q is second order and left out.
+    Eigen::MatrixXd J = tool_jacobian(robot_, ws.poses);
+    J.bottomRows<3>() = so3::left_jacobian_inverse(rigid.tail<3>()) * J.bottomRows<3>();
+    q -= J.completeOrthogonalDecomposition().solve(err);
   }
   if (residual) *residual = err.norm();
   return q;

@@ -2,7 +2,7 @@
 #include <random>
 
 #include <hil/drivers/error.hpp>
-#include <hil/drivers/fake_rig.hpp>
+#include <hil/drivers/fake_devices.hpp>
 
 namespace hil::drivers {
 

@@ -2,7 +2,7 @@
 #include <cmath>
 
 #include <hil/drivers/error.hpp>
-#include <hil/drivers/fake_rig.hpp>
+#include <hil/drivers/fake_devices.hpp>
 #include <hil/so3/so3.hpp>
 
 namespace hil::drivers {

@@ -1,6 +1,6 @@
 #include <hil/dds/bus.hpp>
 
-#include <hil/format/error.hpp>
+#include <hil/error/error.hpp>
 
 #include <fastdds/dds/domain/DomainParticipantFactory.hpp>
 #include <spdlog/spdlog.h>
@@ -47,7 +47,7 @@ int parse_domain(const char* variable, const char* value) {
   const bool digits = !v.empty() && v.size() <= 3 && std::all_of(v.begin(), v.end(), [](char c) { return c >= '0' && c <= '9'; });
   const int d = digits ? std::stoi(v) : -1;
   if (d < 0 || d > 232)
-    throw format::FormatError({std::string("$") + variable, 0, 0, ""}, "expected a DDS domain id, an integer 0..232, found '" + v + "'");
+    throw error::FormatError({std::string("$") + variable, 0, 0, ""}, "expected a DDS domain id, an integer 0..232, found '" + v + "'");
   return d;
 }
 }  // namespace
@@ -67,11 +67,11 @@ namespace {
 void check_readable(const std::string& path, const char* what) {
   std::error_code ec;
   if (path.empty() || !std::filesystem::is_regular_file(path, ec))
-    throw format::FormatError({path.empty() ? std::string("DDS Security") : path, 0, 0, ""}, std::string(what) + " not found");
+    throw error::FormatError({path.empty() ? std::string("DDS Security") : path, 0, 0, ""}, std::string(what) + " not found");
   if (std::FILE* f = std::fopen(path.c_str(), "rb")) {
     std::fclose(f);
   } else {
-    throw format::FormatError({path, 0, 0, ""}, std::string(what) + " not readable: " + std::strerror(errno));
+    throw error::FormatError({path, 0, 0, ""}, std::string(what) + " not readable: " + std::strerror(errno));
   }
 }
 

@@ -11,12 +11,12 @@
 
 #include <hil/test/files.hpp>
 #include <hil/acquisition/acquirer.hpp>
-#include <hil/acquisition/sample_msg.hpp>
+#include <hil/messages/sample_msg.hpp>
 #include <hil/dds/topics.hpp>
-#include <hil/drivers/fake_rig.hpp>
+#include <hil/drivers/fake_devices.hpp>
 #include <hil/format/csv.hpp>
 #include <hil/format/run.hpp>
-#include <hil/rig_drivers/drivers_from_rig.hpp>
+#include <hil/rig_service/drivers_from_rig.hpp>
 
 using namespace hil;
 
@@ -31,7 +31,7 @@ format::CsvOptions requiring(std::vector<std::string> columns) {
 
 std::shared_ptr<const drivers::Scenario> example_scenario(bool loop) {
   const auto run = format::load_run(std::string(HIL_SOURCE_DIR) + "/examples/runs/press_slide");
-  return std::make_shared<const drivers::Scenario>(rig_drivers::scenario_from_run(run, Eigen::Isometry3d::Identity(), loop));
+  return std::make_shared<const drivers::Scenario>(rig_service::scenario_from_run(run, Eigen::Isometry3d::Identity(), loop));
 }
 
 int test_domain(int base) { return base + static_cast<int>(getpid() % 40); }
@@ -47,7 +47,7 @@ struct StatusLog {
   std::vector<Entry> entries;
   void add(const hil_msgs::msg::DeviceStatus& s) {
     std::lock_guard<std::mutex> lock(m);
-    entries.push_back({static_cast<std::int64_t>(acquisition::from_time(s.stamp()) * 1e9), s.device(), s.state(), s.last_error()});
+    entries.push_back({static_cast<std::int64_t>(messages::from_time(s.stamp()) * 1e9), s.device(), s.state(), s.last_error()});
   }
   // First status of `device` with a state other than ok at or after t_ns.
   const Entry* first_bad(const std::string& device, std::int64_t after_ns) {
@@ -115,7 +115,7 @@ TEST(EndToEnd, ThirtySecondsAt1kHzNoneLost) {
   ASSERT_EQ(received.size(), run.samples.size()) << "the subscriber and the recording disagree on the count";
   for (std::size_t i = 0; i < received.size(); ++i) {
     ASSERT_EQ(received[i].sample_index(), i) << "lost or reordered on the bus";
-    const auto s = acquisition::from_message(received[i]);
+    const auto s = messages::from_message(received[i]);
     const auto& r = run.samples.samples[i];
     ASSERT_NEAR(s.t_s, r.t_s, 1e-9);
     ASSERT_EQ(s.f_fp_n, r.f_fp_n) << "row " << i;

@@ -6,7 +6,7 @@
 #include <fastrtps/rtps/common/SerializedPayload.h>
 
 #include <hil/acquisition/recorder.hpp>
-#include <hil/acquisition/sample_msg.hpp>
+#include <hil/messages/sample_msg.hpp>
 #include <hil/acquisition/sync.hpp>
 
 using namespace hil::acquisition;
@@ -25,7 +25,7 @@ void run_pipeline(benchmark::State& state, double output_rate_hz) {
   std::uint64_t outputs = 0;
   Synchronizer sync({1000.0, output_rate_hz}, [&](const SyncedSample& s) {
     rec.append(s);
-    auto m = to_message(to_row(s, static_cast<double>(s.t_ns - t0) * 1e-9), s.index, s.joints_rad.transpose());
+    auto m = hil::messages::to_message(to_row(s, static_cast<double>(s.t_ns - t0) * 1e-9), s.index, s.joints_rad.transpose());
     payload.length = 0;
     ts.serialize(&m, &payload);
     ++outputs;

@@ -38,11 +38,11 @@
 #include <spdlog/spdlog.h>
 
 #include <hil/acquisition/acquirer.hpp>
-#include <hil/acquisition/sample_msg.hpp>
+#include <hil/messages/sample_msg.hpp>
 #include <hil/dds/topics.hpp>
-#include <hil/drivers/fake_rig.hpp>
+#include <hil/drivers/fake_devices.hpp>
 #include <hil/format/run.hpp>
-#include <hil/rig_drivers/drivers_from_rig.hpp>
+#include <hil/rig_service/drivers_from_rig.hpp>
 
 namespace {
 
@@ -147,7 +147,7 @@ struct Accounts {
 
 std::shared_ptr<const hil::drivers::Scenario> scenario() {
   const auto run = hil::format::load_run(std::string(HIL_SOURCE_DIR) + "/examples/runs/press_slide");
-  return std::make_shared<const hil::drivers::Scenario>(hil::rig_drivers::scenario_from_run(run, Eigen::Isometry3d::Identity(), true));
+  return std::make_shared<const hil::drivers::Scenario>(hil::rig_service::scenario_from_run(run, Eigen::Isometry3d::Identity(), true));
 }
 
 // SCHED_FIFO at `priority` for the calling thread and the threads it starts from now on (they
@@ -170,7 +170,7 @@ int subscriber(int domain, int done_fd, int result_fd, int rt_priority) {
   std::int64_t last_index = -1;
   hil::dds::Reader<geometry_msgs::msg::WrenchStamped> wr(p, hil::dds::topics::kWrench, [&](const auto& msg, const auto&) {
     const auto now = hil::acquisition::realtime_ns();
-    const double stamp_s = hil::acquisition::from_time(msg.header().stamp());
+    const double stamp_s = hil::messages::from_time(msg.header().stamp());
     std::lock_guard<std::mutex> lock(m);
     latency_us.push_back((static_cast<double>(now) * 1e-9 - stamp_s) * 1e6);
   });

@@ -80,7 +80,7 @@ TEST(Kinematics, ConventionsAgreeOnAnEquivalentPlanarArm) {
 }
 
 TEST(Kinematics, ToolInBaseIsTheToolPoseWithoutTheBase) {
-  // The allocation-free form the Modbus driver calls per poll (through hil::rig_drivers), for both
+  // The allocation-free form the Modbus driver calls per poll (through hil::rig_service), for both
   // conventions and a prismatic joint: T_world_base^-1 T_world_ee.
   for (const auto convention : {hc::DhConvention::standard, hc::DhConvention::modified}) {
     const hc::SerialRobot r = mixed_robot(convention);

@@ -160,7 +160,7 @@ class Cli(unittest.TestCase):
             self.assertIn("named by the diagnosis", r.stdout)
             self.assertTrue(os.path.exists(os.path.join(out, "run-diagnosis", "index.html")))
             self.assertEqual(hil("validate", os.path.join(out, "run")).returncode, 0)
-            # The demo's run.mcap through the independent MCAP reader (tests/mcap), when node is there.
+            # The demo's run.mcap through the independent MCAP reader (tests/formats/mcap), when node is there.
             if os.environ.get("HIL_MCAP_CHECK"):
                 run = os.path.join(out, "run")
                 c = subprocess.run([os.environ["HIL_MCAP_NODE"], os.environ["HIL_MCAP_CHECK"], os.path.join(run, "run.mcap"),

@@ -7,7 +7,7 @@
 
 #include <hil/drivers/ati_protocol.hpp>
 #include <hil/drivers/error.hpp>
-#include <hil/drivers/fake_rig.hpp>
+#include <hil/drivers/fake_devices.hpp>
 #include <hil/drivers/force_plate.hpp>
 #include <hil/test/drivers.hpp>
 

@@ -11,7 +11,7 @@
 #include <thread>
 
 #include <hil/drivers/error.hpp>
-#include <hil/drivers/fake_rig.hpp>
+#include <hil/drivers/fake_devices.hpp>
 #include <hil/drivers/robot_controller.hpp>
 #include <hil/test/drivers.hpp>
 

@@ -4,7 +4,7 @@
 
 #include <sstream>
 
-#include <hil/drivers/fake_rig.hpp>
+#include <hil/drivers/fake_devices.hpp>
 #include <hil/drivers/robot_controller.hpp>
 #include <hil/test/drivers.hpp>
 

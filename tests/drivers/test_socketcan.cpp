@@ -9,7 +9,7 @@
 #include <filesystem>
 
 #include <hil/drivers/candump.hpp>
-#include <hil/drivers/fake_rig.hpp>
+#include <hil/drivers/fake_devices.hpp>
 #include <hil/drivers/force_plate.hpp>
 #include <hil/drivers/socketcan.hpp>
 #include <hil/test/drivers.hpp>

@@ -12,7 +12,7 @@
 #include <thread>
 #include <vector>
 
-#include <hil/acquisition/sample_msg.hpp>
+#include <hil/messages/sample_msg.hpp>
 #include <hil/dds/bus.hpp>
 #include <hil/dds/topics.hpp>
 
@@ -59,7 +59,7 @@ int publisher_process(int domain) {
   Eigen::RowVectorXd q(2);
   for (int i = 0; i < kSamples; ++i) {
     q << 0.1 * i, -0.1 * i;
-    if (!w.write(hil::acquisition::to_message(make_sample(i), static_cast<std::uint64_t>(i), q))) return 4;
+    if (!w.write(hil::messages::to_message(make_sample(i), static_cast<std::uint64_t>(i), q))) return 4;
   }
   return w.wait_for_acknowledgments(std::chrono::seconds(20)) ? 0 : 5;
 }
@@ -101,7 +101,7 @@ TEST(DdsExchange, ThousandSamplesBetweenProcessesNoneLost) {
   for (int i = 0; i < kSamples; ++i) {
     ASSERT_EQ(got[i].sample_index(), static_cast<std::uint64_t>(i)) << "out of order or lost";
     Eigen::VectorXd q;
-    const auto s = hil::acquisition::from_message(got[i], &q);
+    const auto s = hil::messages::from_message(got[i], &q);
     EXPECT_EQ(s.f_fp_n, make_sample(i).f_fp_n);
     EXPECT_EQ(s.p_world_ee_m, make_sample(i).p_world_ee_m);
     ASSERT_EQ(q.size(), 2);

@@ -3,7 +3,7 @@
 
 #include <fastrtps/rtps/common/SerializedPayload.h>
 
-#include <hil/acquisition/sample_msg.hpp>
+#include <hil/messages/sample_msg.hpp>
 #include <hil/dds/types.hpp>
 
 namespace {
@@ -83,17 +83,17 @@ TEST(BusTypes, HilTypes) {
   s.m_fp_nm = {0.5, -0.5, 0.01};
   Eigen::RowVectorXd q(6);
   q << 0.1, 0.2, 0.3, 0.4, 0.5, 0.6;
-  auto m = hil::acquisition::to_message(s, 42, q);
+  auto m = hil::messages::to_message(s, 42, q);
   m.wrench_seq(7), m.pose_seq(3), m.wrench_age_s(0.001), m.pose_age_s(0.004);
   m.quality_flags(hil_msgs::msg::QUALITY_POSE_EXTRAPOLATED | hil_msgs::msg::QUALITY_GAP_BEFORE);
   const auto back = roundtrip(m, "hil_msgs::msg::dds_::PoseWrenchSample_");
   EXPECT_EQ(back, m);
   Eigen::VectorXd joints;
-  const auto s2 = hil::acquisition::from_message(back, &joints);
+  const auto s2 = hil::messages::from_message(back, &joints);
   EXPECT_EQ(s2.t_s, s.t_s);
   EXPECT_EQ(s2.f_fp_n, s.f_fp_n);
   EXPECT_EQ(joints, q.transpose());
-  EXPECT_NEAR(hil::acquisition::from_time(back.header().stamp()), s.t_s, 1e-9);
+  EXPECT_NEAR(hil::messages::from_time(back.header().stamp()), s.t_s, 1e-9);
 
   hil_msgs::msg::DeviceStatus d;
   d.device("force_plate"), d.state(hil_msgs::msg::DEVICE_DEGRADED), d.connected(true), d.rate_hz(999.5);
@@ -121,7 +121,7 @@ TEST(BusTypes, HilTypes) {
 }
 
 TEST(BusTypes, TimeConversionCarries) {
-  const auto t = hil::acquisition::to_time(2.9999999999);
+  const auto t = hil::messages::to_time(2.9999999999);
   EXPECT_EQ(t.sec(), 3);
   EXPECT_EQ(t.nanosec(), 0u);
 }

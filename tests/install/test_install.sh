@@ -29,7 +29,7 @@ echo "== 1. cmake --install $BUILD --prefix $prefix"
 for f in "$BINDIR/hil" "$LIBDIR/cmake/hil/hilConfig.cmake" "$LIBDIR/cmake/hil/hilConfigVersion.cmake" \
   "$LIBDIR/cmake/hil/hilTargets.cmake" "$LIBDIR/pkgconfig/hil.pc" "$LIBDIR/libhil_contact_id.a" \
   "$LIBDIR/libhil_idl_types.a" "$INCLUDEDIR/hil/format/rig.hpp" "$INCLUDEDIR/hil/dds/types.hpp" \
-  "$INCLUDEDIR/hil/calibration/vjm.hpp" "$INCLUDEDIR/hil/acquisition/sample_msg.hpp" \
+  "$INCLUDEDIR/hil/calibration/vjm.hpp" "$INCLUDEDIR/hil/messages/sample_msg.hpp" "$INCLUDEDIR/hil/error/error.hpp" \
   "$INCLUDEDIR/hil/drivers/force_plate.hpp" "$INCLUDEDIR/hil/idl/hil_msgsPubSubTypes.h" \
   "$INCLUDEDIR/hil/idl/std_msgs.h" "$DATADIR/hil/dds_localhost.xml" "$DATADIR/hil/examples/acu/acu.yaml" \
   "$DATADIR/hil/examples/rigs/press_bench.yaml" "$DOCDIR/LICENSE"; do

@@ -8,7 +8,7 @@
 #include <string>
 
 #include <hil/dds/bus.hpp>
-#include <hil/format/error.hpp>
+#include <hil/error/error.hpp>
 #include <hil/test/files.hpp>
 
 using hil::dds::domain_from;
@@ -36,7 +36,7 @@ class ScopedEnv {
 std::string error_of(const char* hil, const char* ros) {
   try {
     domain_from(hil, ros, 0);
-  } catch (const hil::format::FormatError& e) {
+  } catch (const hil::error::FormatError& e) {
     return e.what();
   }
   return "no error";

@@ -15,7 +15,7 @@
 #include <thread>
 
 #include <hil/test/files.hpp>
-#include <hil/acquisition/sample_msg.hpp>
+#include <hil/messages/sample_msg.hpp>
 #include <hil/dds/bus.hpp>
 #include <hil/dds/topics.hpp>
 
@@ -103,7 +103,7 @@ TEST(LabProfile, WithTheLoopbackAsTheLabAddressParticipantsExchangeSamples) {
   hil::format::Sample s;
   for (std::uint64_t i = 0; i < 20; ++i) {
     s.t_s = 0.01 * static_cast<double>(i);
-    ASSERT_TRUE(writer.write(hil::acquisition::to_message(s, i, Eigen::RowVectorXd())));
+    ASSERT_TRUE(writer.write(hil::messages::to_message(s, i, Eigen::RowVectorXd())));
   }
   ASSERT_TRUE(writer.wait_for_acknowledgments(std::chrono::seconds(10)));
   std::this_thread::sleep_for(std::chrono::milliseconds(100));

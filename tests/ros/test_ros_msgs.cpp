@@ -6,8 +6,8 @@
 #include <map>
 #include <string>
 
-#include <hil/acquisition/ros_msgs.hpp>
-#include <hil/acquisition/sample_msg.hpp>
+#include <hil/messages/ros_msgs.hpp>
+#include <hil/messages/sample_msg.hpp>
 #include <hil/format/rig.hpp>
 
 using namespace hil;
@@ -17,7 +17,7 @@ namespace {
 
 hil_msgs::msg::DeviceStatus status(std::uint8_t state, const std::string& last_error) {
   hil_msgs::msg::DeviceStatus s;
-  s.stamp(acquisition::to_time(1700000000.25));
+  s.stamp(messages::to_time(1700000000.25));
   s.device("force_plate");
   s.state(state);
   s.connected(state != hil_msgs::msg::DEVICE_DISCONNECTED);
@@ -42,11 +42,11 @@ std::map<std::string, std::string> values(const diagnostic_msgs::msg::Diagnostic
 }  // namespace
 
 TEST(RosDiagnostics, LevelFollowsTheDeviceState) {
-  EXPECT_EQ(acquisition::diagnostic_level(hil_msgs::msg::DEVICE_OK), level::OK);
-  EXPECT_EQ(acquisition::diagnostic_level(hil_msgs::msg::DEVICE_DEGRADED), level::WARN);
-  EXPECT_EQ(acquisition::diagnostic_level(hil_msgs::msg::DEVICE_FAULT), level::ERROR);
-  EXPECT_EQ(acquisition::diagnostic_level(hil_msgs::msg::DEVICE_DISCONNECTED), level::ERROR);
-  EXPECT_EQ(acquisition::diagnostic_level(9), level::STALE);
+  EXPECT_EQ(messages::diagnostic_level(hil_msgs::msg::DEVICE_OK), level::OK);
+  EXPECT_EQ(messages::diagnostic_level(hil_msgs::msg::DEVICE_DEGRADED), level::WARN);
+  EXPECT_EQ(messages::diagnostic_level(hil_msgs::msg::DEVICE_FAULT), level::ERROR);
+  EXPECT_EQ(messages::diagnostic_level(hil_msgs::msg::DEVICE_DISCONNECTED), level::ERROR);
+  EXPECT_EQ(messages::diagnostic_level(9), level::STALE);
   // The ROS 2 values (diagnostic_msgs/DiagnosticStatus.msg), so rqt_robot_monitor colours them right.
   EXPECT_EQ(level::OK, 0);
   EXPECT_EQ(level::WARN, 1);
@@ -55,7 +55,7 @@ TEST(RosDiagnostics, LevelFollowsTheDeviceState) {
 }
 
 TEST(RosDiagnostics, AFaultyDeviceSaysWhyWithItsCountersAsValues) {
-  const auto d = acquisition::to_diagnostic_status(status(hil_msgs::msg::DEVICE_FAULT, "bus_error: bus-off"), "ATI serial FT1 on can0");
+  const auto d = messages::to_diagnostic_status(status(hil_msgs::msg::DEVICE_FAULT, "bus_error: bus-off"), "ATI serial FT1 on can0");
   EXPECT_EQ(d.level(), level::ERROR);
   EXPECT_EQ(d.name(), "hil/force_plate");
   EXPECT_EQ(d.hardware_id(), "ATI serial FT1 on can0");
@@ -74,21 +74,21 @@ TEST(RosDiagnostics, AFaultyDeviceSaysWhyWithItsCountersAsValues) {
 
 TEST(RosDiagnostics, MessageIsOkWhenOkAndTheStateWhenNoReasonIsKnown) {
   // An ok device's last error is history: level OK, message "ok", the error kept among the values.
-  auto d = acquisition::to_diagnostic_status(status(hil_msgs::msg::DEVICE_OK, "timeout: no answer"), "");
+  auto d = messages::to_diagnostic_status(status(hil_msgs::msg::DEVICE_OK, "timeout: no answer"), "");
   EXPECT_EQ(d.level(), level::OK);
   EXPECT_EQ(d.message(), "ok");
   EXPECT_EQ(values(d).at("last_error"), "timeout: no answer");
 
-  d = acquisition::to_diagnostic_status(status(hil_msgs::msg::DEVICE_OK, ""), "");
+  d = messages::to_diagnostic_status(status(hil_msgs::msg::DEVICE_OK, ""), "");
   EXPECT_EQ(values(d).count("last_error"), 0u);
   EXPECT_EQ(values(d).size(), 7u);
 
-  d = acquisition::to_diagnostic_status(status(hil_msgs::msg::DEVICE_DEGRADED, "silent for 4.0 ms"), "x");
+  d = messages::to_diagnostic_status(status(hil_msgs::msg::DEVICE_DEGRADED, "silent for 4.0 ms"), "x");
   EXPECT_EQ(d.level(), level::WARN);
   EXPECT_EQ(d.message(), "silent for 4.0 ms");
   EXPECT_EQ(values(d).at("state"), "degraded");
 
-  d = acquisition::to_diagnostic_status(status(hil_msgs::msg::DEVICE_DISCONNECTED, ""), "x");
+  d = messages::to_diagnostic_status(status(hil_msgs::msg::DEVICE_DISCONNECTED, ""), "x");
   EXPECT_EQ(d.level(), level::ERROR);
   EXPECT_EQ(d.message(), "disconnected");
   EXPECT_EQ(values(d).at("connected"), "false");
@@ -107,8 +107,8 @@ robot:
     - {a_m: 0, alpha_rad: 0, d_m: 0.1}
 )",
                                      "rig.yaml");
-  const auto stamp = acquisition::to_time(12.5);
-  const auto m = acquisition::to_tf_message(format::static_frames(rig), stamp);
+  const auto stamp = messages::to_time(12.5);
+  const auto m = messages::to_tf_message(format::static_frames(rig), stamp);
   ASSERT_EQ(m.transforms().size(), 3u);
   const auto& fp = m.transforms()[0];
   EXPECT_EQ(fp.header().frame_id(), "world");
@@ -134,11 +134,11 @@ TEST(RosJointState, NamesFromTheRigPositionsFromTheSample) {
   s.t_s = 3.25;
   Eigen::RowVectorXd q(3);
   q << 0.1, -0.2, 0.3;
-  const auto m = acquisition::to_message(s, 4, q);
-  const auto j = acquisition::to_joint_state(m, {"shoulder", "elbow"});
+  const auto m = messages::to_message(s, 4, q);
+  const auto j = messages::to_joint_state(m, {"shoulder", "elbow"});
   EXPECT_EQ(j.name(), (std::vector<std::string>{"shoulder", "elbow", "j3"}));
   EXPECT_EQ(j.position(), (std::vector<double>{0.1, -0.2, 0.3}));
   EXPECT_EQ(j.header().stamp(), m.header().stamp());
   EXPECT_EQ(j.header().frame_id(), "");
-  EXPECT_EQ(acquisition::to_joint_state(m, {}).name(), (std::vector<std::string>{"j1", "j2", "j3"}));
+  EXPECT_EQ(messages::to_joint_state(m, {}).name(), (std::vector<std::string>{"j1", "j2", "j3"}));
 }

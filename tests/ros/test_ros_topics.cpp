@@ -13,13 +13,13 @@
 #include <thread>
 
 #include <hil/acquisition/acquirer.hpp>
-#include <hil/acquisition/ros_msgs.hpp>
-#include <hil/acquisition/sample_msg.hpp>
+#include <hil/messages/ros_msgs.hpp>
+#include <hil/messages/sample_msg.hpp>
 #include <hil/dds/topics.hpp>
-#include <hil/drivers/fake_rig.hpp>
+#include <hil/drivers/fake_devices.hpp>
 #include <hil/format/rig.hpp>
 #include <hil/format/run.hpp>
-#include <hil/rig_drivers/drivers_from_rig.hpp>
+#include <hil/rig_service/drivers_from_rig.hpp>
 
 using namespace hil;
 namespace level = diagnostic_msgs::msg::DiagnosticStatus_Constants;
@@ -56,11 +56,11 @@ struct Collected {
 
 TEST(RosTopics, TfStaticForLateJoinersDiagnosticsAndNamedJoints) {
   const auto rig = named_rig();
-  const Eigen::Isometry3d T_world_base = rig_drivers::world_to_base(rig);
+  const Eigen::Isometry3d T_world_base = rig_service::world_to_base(rig);
   const auto played = format::load_run(std::string(HIL_SOURCE_DIR) + "/examples/runs/press_slide");
-  auto scenario = std::make_shared<const drivers::Scenario>(rig_drivers::scenario_from_run(played, T_world_base, true));
-  auto pcfg = rig_drivers::force_plate_config(rig);
-  auto mcfg = rig_drivers::robot_controller_config(rig);
+  auto scenario = std::make_shared<const drivers::Scenario>(rig_service::scenario_from_run(played, T_world_base, true));
+  auto pcfg = rig_service::force_plate_config(rig);
+  auto mcfg = rig_service::robot_controller_config(rig);
   auto bus = drivers::CanLoopbackBus::create("loop0");
   drivers::FakeAtiConfig fc;
   fc.base_id = pcfg.base_id;
@@ -98,7 +98,7 @@ TEST(RosTopics, TfStaticForLateJoinersDiagnosticsAndNamedJoints) {
   ao.joint_names = format::joint_names(rig, mcfg.map.joint_count());
   ao.status_period_s = 0.5;
   ASSERT_EQ(ao.static_frames.size(), 4u) << "force_plate, object2, object1 and robot_base";
-  const auto expected_tf = acquisition::to_tf_message(ao.static_frames, acquisition::to_time(0));
+  const auto expected_tf = messages::to_tf_message(ao.static_frames, messages::to_time(0));
 
   std::vector<tf2_msgs::msg::TFMessage> tf_late;
   std::mutex tf_m;
@@ -174,7 +174,7 @@ TEST(RosTopics, TfStaticForLateJoinersDiagnosticsAndNamedJoints) {
       ASSERT_NE(same, nullptr) << d.name() << ": no DeviceStatus with the array's stamp";
       // Who the device is: the plate's protocol, serial and CAN interface; the controller's address.
       const std::string hw = same->device() == "robot" ? mcfg.describe() : "ati_ft_can serial " + plate_serial + " on loop0";
-      EXPECT_EQ(d, acquisition::to_diagnostic_status(*same, hw)) << d.name() << " '" << d.hardware_id() << "' " << d.message();
+      EXPECT_EQ(d, messages::to_diagnostic_status(*same, hw)) << d.name() << " '" << d.hardware_id() << "' " << d.message();
       if (d.name() == "hil/force_plate" && d.level() == level::OK) plate_ok = true;
       if (d.name() == "hil/robot" && d.level() == level::OK) robot_ok = true;
       // (the robot is also ERROR "not connected" before its first poll)

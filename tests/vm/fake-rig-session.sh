@@ -1,5 +1,5 @@
 # Sourced by the whole-rig vcan tests (tests/acquisition/vcan_acquire.sh,
-# tests/diagnose/vcan_diagnose.sh): the press bench rig slowed for the guest, `hil fake-rig` on
+# tests/diagnosis/vcan_diagnose.sh): the press bench rig slowed for the guest, `hil fake-rig` on
 # vcan0 + 127.0.0.1, and `hil acquire` recording from it. Expects HIL, SRC and WORK to be set.
 
 # $WORK/rig.yaml: the shipped press bench with the plate polled at 200 Hz instead of 1 kHz: the

@@ -15,10 +15,11 @@
 #include <mutex>
 #include <sstream>
 
-#include <hil/services/acquire.hpp>
+#include <hil/rig_service/acquire.hpp>
 #include <hil/services/contact_identify.hpp>
 #include <hil/services/contact_simulate.hpp>
 #include <hil/services/contact_worker.hpp>
+#include <hil/services/diagnose_output.hpp>
 #include <hil/services/diagnose_run.hpp>
 #include <hil/cli/commands.hpp>
 #include <hil/cli/participant.hpp>
@@ -34,9 +35,9 @@ namespace hil::cli {
 
 namespace contact = services::contact;
 namespace diagnose = services::diagnose;
-using services::AcquireOptions;
+using rig_service::AcquireOptions;
 using services::ContactWorker;
-using services::run_acquisition;
+using rig_service::run_acquisition;
 using services::contact::SimulateArgs;
 using services::contact::simulate_run;
 namespace {

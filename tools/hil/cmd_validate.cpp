@@ -6,30 +6,30 @@
 #include <iostream>
 
 #include <hil/cli/commands.hpp>
-#include <hil/format/error.hpp>
+#include <hil/error/error.hpp>
 #include <hil/format/run.hpp>
-#include <hil/services/output.hpp>
+#include <hil/format/output.hpp>
 #include "summary.hpp"
 
 namespace hil::cli {
 
-using services::human;
-using services::is_stdout;
-using services::tag_format;
-using services::write_json;
+using format::human;
+using format::is_stdout;
+using format::tag_format;
+using format::write_json;
 namespace fs = std::filesystem;
 
 namespace {
 
 /// What PATH is: run, run_info (run.yaml), samples (.csv) or rig (.yaml). \throws FormatError.
 std::string kind_of(const std::string& path) {
-  if (!fs::exists(path)) throw format::FormatError({path, 0, 0, ""}, "no such file or folder");
+  if (!fs::exists(path)) throw error::FormatError({path, 0, 0, ""}, "no such file or folder");
   if (fs::is_directory(path)) return "run";
   if (fs::path(path).filename() == "run.yaml") return "run_info";
   const auto ext = fs::path(path).extension().string();
   if (ext == ".csv") return "samples";
   if (ext == ".yaml" || ext == ".yml") return "rig";
-  throw format::FormatError({path, 0, 0, ""}, "not a run folder, rig file (.yaml), run.yaml or samples.csv");
+  throw error::FormatError({path, 0, 0, ""}, "not a run folder, rig file (.yaml), run.yaml or samples.csv");
 }
 
 /// Checks PATH of that kind, prints the human summary to `text` and returns it as JSON.
@@ -60,7 +60,7 @@ nlohmann::json check(const std::string& kind, const std::string& path, const std
 
 nlohmann::json error_json(const std::string& path, const std::exception& e) {
   auto null_if = [](auto v, bool unknown) { return unknown ? nlohmann::json() : nlohmann::json(v); };
-  if (const auto* f = dynamic_cast<const format::FormatError*>(&e)) {
+  if (const auto* f = dynamic_cast<const error::FormatError*>(&e)) {
     const auto& w = f->where();
     return {{"file", w.file.empty() ? path : w.file}, {"line", null_if(w.line, w.line == 0)}, {"column", null_if(w.column, w.column == 0)},
             {"field", null_if(w.field, w.field.empty())}, {"message", f->message()}, {"text", e.what()}};

@@ -7,7 +7,7 @@
 #include <iostream>
 
 #include <hil/cli/commands.hpp>
-#include <hil/format/error.hpp>
+#include <hil/error/error.hpp>
 #include "usage.hpp"
 
 int main(int argc, char** argv) {
@@ -53,7 +53,7 @@ int main(int argc, char** argv) {
   try {
     const auto& run = action();
     return run ? run() : 1;
-  } catch (const hil::format::FormatError& e) {
+  } catch (const hil::error::FormatError& e) {
     std::cerr << "error: " << e.what() << '\n';
     return kExitUsage;
   } catch (const std::exception& e) {

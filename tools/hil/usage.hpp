@@ -7,7 +7,7 @@
 
 namespace hil::cli {
 
-/// Exit status of a usage error or of bad input (hil::format::FormatError).
+/// Exit status of a usage error or of bad input (hil::error::FormatError).
 inline constexpr int kExitUsage = 2;
 
 /// Reports a CLI11 parse error of `app` on `err` as "error: ..." naming the unknown command or

@@ -18,7 +18,7 @@
 #include <sstream>
 #include <stdexcept>
 
-#include <hil/format/error.hpp>
+#include <hil/error/error.hpp>
 
 namespace hil::keystore {
 namespace fs = std::filesystem;
@@ -206,14 +206,14 @@ std::string permissions_xml(const std::string& name, const std::string& subject,
 }
 
 void check_days(int days) {
-  if (days < 1 || days > 36500) throw format::FormatError({"command line", 0, 0, "--days"}, fmt::format("expected 1..36500, found {}", days));
+  if (days < 1 || days > 36500) throw error::FormatError({"command line", 0, 0, "--days"}, fmt::format("expected 1..36500, found {}", days));
 }
 
 void check_name(const std::string& name) {
   const bool ok = !name.empty() && name.size() <= 64 && name.front() != '.' &&
                   std::all_of(name.begin(), name.end(), [](char c) { return std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-' || c == '.'; });
   if (!ok)
-    throw format::FormatError({"command line", 0, 0, "NAME"},
+    throw error::FormatError({"command line", 0, 0, "NAME"},
                               "expected a participant name of letters, digits, '_', '-' or '.' (at most 64), found '" + name + "'");
 }
 
@@ -231,8 +231,8 @@ struct Layout {
 
 void need(const fs::path& p, const std::string& what, const std::string& hint) {
   std::error_code ec;
-  if (!fs::is_regular_file(p, ec)) throw format::FormatError({p.string(), 0, 0, ""}, what + " not found" + hint);
-  if (!std::ifstream(p)) throw format::FormatError({p.string(), 0, 0, ""}, what + " not readable: " + std::strerror(errno));
+  if (!fs::is_regular_file(p, ec)) throw error::FormatError({p.string(), 0, 0, ""}, what + " not found" + hint);
+  if (!std::ifstream(p)) throw error::FormatError({p.string(), 0, 0, ""}, what + " not readable: " + std::strerror(errno));
 }
 
 void sign(const Layout& k, const fs::path& xml, const fs::path& p7s) {
@@ -245,13 +245,13 @@ void verify_signed(const Layout& k, const fs::path& p7s) {
   const auto r = openssl({"smime", "-verify", "-in", p7s.string(), "-CAfile", k.permissions_ca().string(), "-purpose", "any", "-out",
                           "/dev/null"});
   if (r.status != 0)
-    throw format::FormatError({p7s.string(), 0, 0, ""}, "signature does not verify against the permissions CA " + k.permissions_ca().string() +
+    throw error::FormatError({p7s.string(), 0, 0, ""}, "signature does not verify against the permissions CA " + k.permissions_ca().string() +
                                                             " (changed after signing, or signed by another CA): " + reason(r.output));
 }
 
 std::string subject_rfc2253(const fs::path& cert) {
   const auto r = openssl({"x509", "-noout", "-subject", "-nameopt", "RFC2253", "-in", cert.string()});
-  if (r.status != 0) throw format::FormatError({cert.string(), 0, 0, ""}, "not a PEM certificate: " + reason(r.output));
+  if (r.status != 0) throw error::FormatError({cert.string(), 0, 0, ""}, "not a PEM certificate: " + reason(r.output));
   std::string s = r.output.substr(0, r.output.find('\n'));
   if (s.rfind("subject=", 0) == 0) s = s.substr(8);
   return s;
@@ -259,7 +259,7 @@ std::string subject_rfc2253(const fs::path& cert) {
 
 std::string public_key(const std::vector<std::string>& args, const fs::path& file, const std::string& what) {
   const auto r = openssl(args);
-  if (r.status != 0) throw format::FormatError({file.string(), 0, 0, ""}, "not a PEM " + what + ": " + reason(r.output));
+  if (r.status != 0) throw error::FormatError({file.string(), 0, 0, ""}, "not a PEM " + what + ": " + reason(r.output));
   return r.output;
 }
 
@@ -272,7 +272,7 @@ std::string dds_topic(const std::string& topic, const std::string& where) {
                     return std::isalnum(static_cast<unsigned char>(c)) || std::strchr("_/*?.-", c) != nullptr;
                   });
   if (!ok)
-    throw format::FormatError({"command line", 0, 0, where}, "expected a DDS topic (rt/hil/pose_wrench) or a ROS 2 topic "
+    throw error::FormatError({"command line", 0, 0, where}, "expected a DDS topic (rt/hil/pose_wrench) or a ROS 2 topic "
                                                              "(/hil/pose_wrench), '*' allowed, found '" + topic + "'");
   return t;
 }
@@ -282,7 +282,7 @@ void create(const std::string& dir, int days) {
   const Layout k{dir};
   std::error_code ec;
   if (fs::exists(k.identity_ca(), ec) || fs::exists(k.governance(), ec))
-    throw format::FormatError({dir, 0, 0, ""}, "already holds a keystore (a new CA would orphan its participants)");
+    throw error::FormatError({dir, 0, 0, ""}, "already holds a keystore (a new CA would orphan its participants)");
   fs::create_directories(k.ca());
   fs::create_directories(k.dir / "participants");
   write_file(k.config(), kOpensslConfig);
@@ -303,7 +303,7 @@ void add(const std::string& dir, const std::string& name, const Grants& g, int d
   check_days(days);
   check_name(name);
   if (g.publish.empty() && g.subscribe.empty())
-    throw format::FormatError({"command line", 0, 0, "--publish/--subscribe"}, "participant '" + name + "' would be allowed no topic");
+    throw error::FormatError({"command line", 0, 0, "--publish/--subscribe"}, "participant '" + name + "' would be allowed no topic");
   const Layout k{dir};
   const std::string hint = " (make the keystore with: hil keystore create " + dir + ")";
   need(k.identity_ca_key(), "identity CA key", hint);
@@ -329,7 +329,7 @@ dds::SecurityFiles participant_files(const std::string& dir, const std::string& 
   const Layout k{dir};
   const fs::path p = k.participant(name);
   std::error_code ec;
-  if (!fs::is_directory(k.dir, ec)) throw format::FormatError({dir, 0, 0, ""}, "keystore not found");
+  if (!fs::is_directory(k.dir, ec)) throw error::FormatError({dir, 0, 0, ""}, "keystore not found");
   const std::string create_hint = " (make the keystore with: hil keystore create " + dir + ")";
   need(k.identity_ca(), "identity CA certificate", create_hint);
   need(k.permissions_ca(), "permissions CA certificate", create_hint);
@@ -341,18 +341,18 @@ dds::SecurityFiles participant_files(const std::string& dir, const std::string& 
 
   const auto v = openssl({"verify", "-CAfile", k.identity_ca().string(), (p / "cert.pem").string()});
   if (v.status != 0)
-    throw format::FormatError({(p / "cert.pem").string(), 0, 0, ""},
+    throw error::FormatError({(p / "cert.pem").string(), 0, 0, ""},
                               "certificate does not verify against the identity CA " + k.identity_ca().string() + ": " + reason(v.output));
   if (public_key({"x509", "-noout", "-pubkey", "-in", (p / "cert.pem").string()}, p / "cert.pem", "certificate") !=
       public_key({"pkey", "-pubout", "-in", (p / "key.pem").string()}, p / "key.pem", "private key"))
-    throw format::FormatError({(p / "key.pem").string(), 0, 0, ""}, "private key does not belong to " + (p / "cert.pem").string());
+    throw error::FormatError({(p / "key.pem").string(), 0, 0, ""}, "private key does not belong to " + (p / "cert.pem").string());
   verify_signed(k, k.governance());
   verify_signed(k, p / "permissions.p7s");
   // Fast DDS matches the grant to the certificate by subject; a mixed-up file is named here.
   const std::string text = read_file(p / "permissions.p7s"), subject = subject_rfc2253(p / "cert.pem");
   const auto b = text.find("<subject_name>"), e = text.find("</subject_name>");
   if (b == std::string::npos || e == std::string::npos || text.substr(b + 14, e - b - 14) != subject)
-    throw format::FormatError({(p / "permissions.p7s").string(), 0, 0, "subject_name"},
+    throw error::FormatError({(p / "permissions.p7s").string(), 0, 0, "subject_name"},
                               "the grant is not for this participant's certificate (" + subject + ")");
 
   dds::SecurityFiles f;

@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-#include <hil/acquisition/sample_msg.hpp>
+#include <hil/messages/sample_msg.hpp>
 #include <hil/contact_id/model.hpp>
 #include <hil/format/rig.hpp>
 #include <hil/format/run.hpp>
@@ -65,14 +65,14 @@ int main(int argc, char** argv) try {
   s.m_fp_nm = w.tail<3>();
   Eigen::RowVectorXd joints(2);
   joints << 0.5, -0.25;
-  auto msg = hil::acquisition::to_message(s, 7, joints);
+  auto msg = hil::messages::to_message(s, 7, joints);
   hil_msgs::msg::PoseWrenchSamplePubSubType type;
   eprosima::fastrtps::rtps::SerializedPayload_t payload(type.getSerializedSizeProvider(&msg)());
   if (!type.serialize(&msg, &payload)) throw std::runtime_error("CDR serialization failed");
   hil_msgs::msg::PoseWrenchSample back;
   if (!type.deserialize(&payload, &back)) throw std::runtime_error("CDR deserialization failed");
   Eigen::VectorXd joints_back;
-  const auto s2 = hil::acquisition::from_message(back, &joints_back);
+  const auto s2 = hil::messages::from_message(back, &joints_back);
   if (joints_back.size() != 2) throw std::runtime_error("joints lost in the round trip");
   std::printf("cdr type %s bytes %u index %llu t %.6g z %.6g fz %.6g my %.6g joints %.6g %.6g\n", type.getName(),
               payload.length, static_cast<unsigned long long>(back.sample_index()), s2.t_s, s2.p_world_ee_m.z(),

@@ -2,20 +2,20 @@
 // controller (Modbus), synchronizes, records the run and publishes it on the bus until Ctrl-C
 // (or --duration). With --play RUN it first starts the fake rig in-process (loopback CAN and a
 // Modbus server on 127.0.0.1) playing that run: the whole service without hardware or SocketCAN.
-// The run itself is hil::services::run_acquisition (shared with `hil demo`).
+// The run itself is hil::rig_service::run_acquisition (shared with `hil demo`).
 #include <fmt/format.h>
 
 #include <iostream>
 
 #include <hil/cli/commands.hpp>
 #include <hil/cli/participant.hpp>
-#include <hil/services/acquire.hpp>
+#include <hil/rig_service/acquire.hpp>
 
 namespace hil::cli {
 
-using services::AcquireOptions;
-using services::run_acquisition;
-using services::run_check;
+using rig_service::AcquireOptions;
+using rig_service::run_acquisition;
+using rig_service::run_check;
 
 void add_acquire(CLI::App& app) {
   auto* cmd = app.add_subcommand("acquire", "Acquire from the rig: record a run and publish it on the bus");

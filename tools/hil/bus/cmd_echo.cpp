@@ -11,10 +11,10 @@
 
 #include <hil/cli/commands.hpp>
 #include <hil/cli/participant.hpp>
-#include <hil/acquisition/sample_msg.hpp>
+#include <hil/messages/sample_msg.hpp>
 #include <hil/dds/bus.hpp>
 #include <hil/dds/topics.hpp>
-#include <hil/format/error.hpp>
+#include <hil/error/error.hpp>
 
 namespace hil::cli {
 namespace {
@@ -142,7 +142,7 @@ void add_echo(CLI::App& app) {
       // /tf_static is latched (transient local): a late echo still gets the tree.
       if (topic == dds::topics::kTfStatic) return echo<tf2_msgs::msg::TFMessage>(p, topic, fmt_tf, o, dds::StreamQos{true, 1, 1});
       if (topic == dds::topics::kDiagnostics) return echo<diagnostic_msgs::msg::DiagnosticArray>(p, topic, fmt_diagnostics, o);
-      throw format::FormatError({"command line", 0, 0, "TOPIC"}, "unknown topic '" + o.topic +
+      throw error::FormatError({"command line", 0, 0, "TOPIC"}, "unknown topic '" + o.topic +
                                     "' (known: pose_wrench, device_status, contact_estimate, stiffness_estimate, "
                                     "stiffness_measurement, tf_static, diagnostics)");
     });

@@ -10,10 +10,10 @@
 
 #include <hil/cli/commands.hpp>
 #include <hil/cli/participant.hpp>
-#include <hil/acquisition/sample_msg.hpp>
+#include <hil/messages/sample_msg.hpp>
 #include <hil/dds/bus.hpp>
 #include <hil/dds/topics.hpp>
-#include <hil/format/error.hpp>
+#include <hil/error/error.hpp>
 #include <hil/format/run.hpp>
 #include <hil/mcap/recording.hpp>
 
@@ -35,12 +35,12 @@ std::vector<hil_msgs::msg::PoseWrenchSample> load_samples(const std::string& pat
   std::vector<hil_msgs::msg::PoseWrenchSample> out;
   if (std::filesystem::is_regular_file(path)) {
     out = mcap::read_pose_wrench(mcap::read_file(path));
-    if (out.empty()) throw format::FormatError({path, 0, 0, ""}, "the recording holds no /hil/pose_wrench message");
+    if (out.empty()) throw error::FormatError({path, 0, 0, ""}, "the recording holds no /hil/pose_wrench message");
     return out;
   }
   const auto run = format::load_run(path);
   for (std::size_t i = 0; i < run.samples.size(); ++i)
-    out.push_back(acquisition::to_message(run.samples.samples[i], i, run.samples.joints_rad.row(static_cast<Eigen::Index>(i))));
+    out.push_back(messages::to_message(run.samples.samples[i], i, run.samples.joints_rad.row(static_cast<Eigen::Index>(i))));
   return out;
 }
 

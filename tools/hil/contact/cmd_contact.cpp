@@ -14,12 +14,12 @@
 #include <thread>
 
 #include <hil/cli/commands.hpp>
-#include <hil/services/output.hpp>
-#include <hil/format/error.hpp>
+#include <hil/format/output.hpp>
+#include <hil/error/error.hpp>
 #include <hil/format/run.hpp>
 #include <hil/diagnose/contact_family.hpp>
 #include <hil/services/contact_identify.hpp>
-#include <hil/rig/contact.hpp>
+#include <hil/models/contact.hpp>
 #include <hil/services/contact_simulate.hpp>
 #include "contact_commands.hpp"
 #include <hil/services/contact_worker.hpp>
@@ -29,10 +29,10 @@ namespace hil::cli {
 namespace contact = services::contact;
 using services::contact::SimulateArgs;
 using services::contact::simulate_run;
-using services::human;
-using services::is_stdout;
-using services::tag_format;
-using services::write_json;
+using format::human;
+using format::is_stdout;
+using format::tag_format;
+using format::write_json;
 
 namespace cid = hil::contact_id;
 namespace fs = std::filesystem;

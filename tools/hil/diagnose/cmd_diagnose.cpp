@@ -9,17 +9,18 @@
 #include <map>
 
 #include <hil/cli/commands.hpp>
-#include <hil/services/output.hpp>
+#include <hil/format/output.hpp>
 #include <hil/format/run.hpp>
+#include <hil/services/diagnose_output.hpp>
 #include <hil/services/diagnose_run.hpp>
 
 namespace hil::cli {
 
 namespace diagnose = services::diagnose;
-using services::human;
-using services::is_stdout;
-using services::tag_format;
-using services::write_json;
+using format::human;
+using format::is_stdout;
+using format::tag_format;
+using format::write_json;
 
 namespace {
 
@@ -60,6 +61,24 @@ int diagnose_cmd(const DiagnoseArgs& a) {
   return 0;
 }
 
+/// The candidates per model family and what asks for repeated CV, from the effect registry.
+std::string candidates_help() {
+  namespace dg = hil::diagnose;
+  return fmt::format("only these candidate causes (default: all that apply). Contact runs: {}; deflection runs: {}; "
+                     "stiffness tables: {}",
+                     fmt::join(dg::effect_names(dg::FamilyKind::contact), ", "), fmt::join(dg::effect_names(dg::FamilyKind::deflection), ", "),
+                     fmt::join(dg::stiffness_extensions(), ", "));
+}
+
+std::string cv_offsets_help() {
+  std::vector<std::string> asks;
+  for (const hil::diagnose::Effect* e : hil::diagnose::registered_effects())
+    if (e->cv_offsets() > 1) asks.push_back(fmt::format("{} when {} is a candidate", e->cv_offsets(), e->name()));
+  return fmt::format("repeat the cross-validation over this many offsets of its block grid and pool the held-out errors "
+                     "(0: {}{}1)",
+                     fmt::join(asks, ", "), asks.empty() ? "" : ", else ");
+}
+
 }  // namespace
 
 void add_diagnose(CLI::App& app) {
@@ -70,11 +89,9 @@ void add_diagnose(CLI::App& app) {
   d->add_option("--rig", da.rig, "rig file (default: the run's rig.yaml)");
   d->add_option("--json", da.json, "write the diagnosis as JSON (hil.diagnosis; - for stdout, the summary then goes to stderr)");
   d->add_option("--report", da.report, "write an HTML report into this folder");
-  d->add_option("--candidates", da.candidates, "only these candidate causes (default: all that apply)")->delimiter(',');
+  d->add_option("--candidates", da.candidates, candidates_help())->delimiter(',');
   d->add_option("--folds", da.folds, "blocks of the cross-validation over time")->capture_default_str()->check(CLI::Range(2, 1000));
-  d->add_option("--cv-offsets", da.cv_offsets,
-                "repeat the cross-validation over this many offsets of its block grid and pool the held-out errors "
-                "(0: 8 when rest_change is a candidate, else 1)")
+  d->add_option("--cv-offsets", da.cv_offsets, cv_offsets_help())
       ->capture_default_str()
       ->check(CLI::Range(0, 64));
   const std::map<std::string, hil::diagnose::RateSource> rates{{"auto", hil::diagnose::RateSource::automatic},

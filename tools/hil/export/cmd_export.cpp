@@ -5,7 +5,7 @@
 #include <iostream>
 
 #include <hil/cli/commands.hpp>
-#include <hil/format/error.hpp>
+#include <hil/error/error.hpp>
 #include <hil/format/run.hpp>
 #include <hil/mcap/mcap.hpp>
 #include <hil/mcap/recording.hpp>

@@ -1,33 +1,35 @@
 // `hil stiffness identify|predict|simulate|table1|replay|worker`: elastostatic calibration of
-// serial robots (issue 4). Numerics in hil::calibration; this file is command-line plumbing.
+// serial robots (issue 4). Command-line plumbing only: the files are hil::models' (formats/models),
+// the work hil::services::stiffness' (services/stiffness, services/workers), the numerics
+// hil::calibration's.
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
 #include <csignal>
-#include <fstream>
 #include <iostream>
-#include <thread>
+#include <sstream>
 
 #include <hil/cli/commands.hpp>
 #include <hil/cli/participant.hpp>
-#include <hil/services/output.hpp>
+#include <hil/format/output.hpp>
 #include <hil/calibration/experiment.hpp>
-#include <hil/calibration/online.hpp>
 #include <hil/dds/topics.hpp>
-#include <hil/format/error.hpp>
-#include <hil/so3/so3.hpp>
-#include <hil/services/stiffness_io.hpp>
+#include <hil/error/error.hpp>
+#include <hil/models/stiffness_model.hpp>
+#include <hil/services/stiffness.hpp>
 #include <hil/services/stiffness_worker.hpp>
 
 namespace hil::cli {
 namespace hc = hil::calibration;
-using format::FormatError;
+using error::FormatError;
 using namespace services::stiffness;
-using services::human;
-using services::is_stdout;
-using services::tag_format;
-using services::write_json;
-using services::Output;
+using models::load_robot;
+using models::read_stiffness_table;
+using format::human;
+using format::is_stdout;
+using format::tag_format;
+using format::write_json;
+using format::Output;
 
 
 namespace {
@@ -123,77 +125,19 @@ int identify(const std::string& data_path, const std::string& rig, const std::st
   const auto r = hc::calibrate(model, table.rows, {a.noise_pos_m, a.noise_rot_rad}, opt);
   print_report(human(is_stdout(json_out)), model, r);
   if (!json_out.empty()) {
-    write_json(json_out, result_to_json(model, r));
+    write_json(json_out, models::result_to_json(model, r));
     if (!is_stdout(json_out)) spdlog::info("model written to {}", json_out);
   }
   return 0;
 }
 
 // ---- predict
-struct ModelFile {
-  hc::VjmModel model;
-  hc::ComplianceSet k;
-};
-
-ModelFile load_model(const std::string& path, const std::string& rig) {
-  const auto j = load_json(path);
-  check_model_format(j, path, false);
-  if (!j.is_object() || !j.contains("springs")) throw FormatError({path, 0, 0, "springs"}, "a model file needs a \"springs\" object");
-  hc::SerialRobot robot;
-  if (!rig.empty()) robot = load_robot(rig);
-  else if (j.contains("robot")) robot = robot_from_json(j.at("robot"), path);
-  else throw FormatError({path, 0, 0, "robot"}, "no robot in the model file: give --rig");
-  hc::VjmModel model(robot);
-  auto k = read_springs(j.at("springs"), model, path);
-  return {std::move(model), std::move(k)};
-}
-
 int predict(const std::string& model_path, const std::string& data_path, const std::string& rig, bool compensate, const std::string& out_path) {
-  const auto mf = load_model(model_path, rig);
+  const hc::SerialRobot robot = rig.empty() ? hc::SerialRobot{} : load_robot(rig);
+  const auto mf = models::read_model_file(model_path, rig.empty() ? nullptr : &robot);
   const auto table = read_stiffness_table(data_path, mf.model.dof(), false);
   Output out(out_path.empty() ? "-" : out_path);
-  std::ostream& os = out.stream();
-  const int n = mf.model.dof();
-  const auto& first = table.rows.front();
-  const bool markers = first.kind == hc::MeasurementKind::markers;
-  os << "config";
-  for (int j = 1; j <= n; ++j) os << ",j" << j;
-  if (markers) {
-    for (std::size_t k = 1; k <= first.p_ee_marker_m.size(); ++k) os << fmt::format(",m{0}_dx,m{0}_dy,m{0}_dz", k);
-  } else {
-    os << ",dx,dy,dz,rx,ry,rz";
-  }
-  if (compensate) {
-    os << ",x,y,z,qx,qy,qz,cx,cy,cz,cqx,cqy,cqz";
-    for (int j = 1; j <= n; ++j) os << ",cj" << j;
-  }
-  os << '\n';
-  for (const auto& row : table.rows) {
-    hc::Measurement m = row;
-    if (!markers) m.kind = hc::MeasurementKind::pose6;
-    const Eigen::VectorXd d = hc::predict(mf.model, mf.k, m);
-    os << m.config;
-    for (int j = 0; j < n; ++j) os << fmt::format(",{:.9g}", m.q_rad[j]);
-    for (Eigen::Index i = 0; i < d.size(); ++i) os << fmt::format(",{:.6e}", d[i]);
-    if (compensate) {
-      // Target = the nominal pose at the given joints. First order: command the target moved by the
-      // opposite of the deflection (position, and rotation vector composed on the left); in joint
-      // space, Newton iterations q ← q - J⁺ (pose(q) ⊕ t(q) ⊖ target) on the deflected robot.
-      const Eigen::Isometry3d T = hc::tool_pose(mf.model.robot(), m.q_rad);
-      const hc::Vector6d t = mf.model.deflection(mf.k, m.q_rad, m.w_world);
-      Eigen::Isometry3d Tc = T;
-      Tc.translation() -= t.head<3>();
-      Tc.linear() = so3::exp(-t.tail<3>()) * T.linear();
-      const Eigen::Vector3d rv = so3::log(Eigen::Matrix3d(T.linear())), rvc = so3::log(Eigen::Matrix3d(Tc.linear()));
-      const Eigen::VectorXd qc = mf.model.compensate(mf.k, m.q_rad, m.w_world);
-      os << fmt::format(",{:.9f},{:.9f},{:.9f},{:.9f},{:.9f},{:.9f}", T.translation().x(), T.translation().y(), T.translation().z(), rv.x(),
-                        rv.y(), rv.z());
-      os << fmt::format(",{:.9f},{:.9f},{:.9f},{:.9f},{:.9f},{:.9f}", Tc.translation().x(), Tc.translation().y(), Tc.translation().z(), rvc.x(),
-                        rvc.y(), rvc.z());
-      for (int j = 0; j < n; ++j) os << fmt::format(",{:.9f}", qc[j]);
-    }
-    os << '\n';
-  }
+  write_predictions(out.stream(), mf, table, compensate);
   out.close();
   return 0;
 }
@@ -214,12 +158,7 @@ struct SimArgs {
 
 int simulate(const SimArgs& a) {
   const hc::VjmModel model(load_robot(a.rig));
-  const auto j = load_json(a.truth);
-  check_model_format(j, a.truth, false);
-  if (!j.is_object() || !j.contains("springs")) throw FormatError({a.truth, 0, 0, "springs"}, "a truth file needs a \"springs\" object");
-  const auto truth = read_springs(j.at("springs"), model, a.truth);
-  for (const auto& c : hc::check_spd(model, truth))
-    if (!c.positive_definite && c.max_eigenvalue != 0.0) spdlog::warn("truth: {} is not symmetric positive definite", c.spring);
+  const auto truth = models::read_truth_file(a.truth, model);
   hc::ExperimentPlan plan;
   plan.configurations = a.configs;
   plan.loads_per_config = a.loads;
@@ -237,12 +176,8 @@ int simulate(const SimArgs& a) {
   }
   if (plan.kind == hc::MeasurementKind::markers && plan.p_ee_marker_m.empty())
     throw FormatError({"command line", 0, 0, "--marker"}, "--measure markers needs at least one --marker X,Y,Z");
-  const auto rows = hc::simulate(model, truth, plan, {a.noise_pos_m, a.noise_rot_rad});
   Output out(a.out.empty() ? "-" : a.out);
-  std::ostream& os = out.stream();
-  os << fmt::format("# hil stiffness simulate: rig {}, truth {}, seed {}, noise σ {} m / {} rad\n", a.rig, a.truth, a.seed, a.noise_pos_m,
-                    a.noise_rot_rad);
-  write_stiffness_table(os, rows, model.dof());
+  write_simulated_table(out.stream(), model, truth, plan, {a.noise_pos_m, a.noise_rot_rad}, fmt::format("rig {}, truth {}", a.rig, a.truth));
   out.close();
   return 0;
 }
@@ -250,41 +185,7 @@ int simulate(const SimArgs& a) {
 // ---- table1
 int table1(const std::string& rig, int configs, const std::string& measure, std::uint64_t seed, bool complete_ranks) {
   const hc::VjmModel model(rig.empty() ? hc::kr270_like() : load_robot(rig));
-  hc::ExperimentPlan plan;
-  plan.configurations = configs;
-  plan.loads_per_config = 2;
-  plan.moment_nm = measure == "point3-forces" ? 0.0 : 300.0;
-  plan.kind = measure == "pose6" ? hc::MeasurementKind::pose6 : hc::MeasurementKind::point3;
-  if (measure == "markers") {
-    plan.kind = hc::MeasurementKind::markers;
-    plan.p_ee_marker_m = {{0.2, 0.0, 0.0}, {0.0, 0.2, 0.0}, {0.0, 0.0, 0.1}};
-  }
-  plan.seed = seed;
-  const auto data = hc::simulate(model, hc::example_compliance(model), plan, {});
-  hc::PipelineOptions opt;
-  opt.neglect_below = 0.0;  // M6 needs real noise; the counting stops at M5
-  opt.complete_ranks = complete_ranks;
-  const auto r = hc::calibrate(model, data, {1e-5, 1e-5}, opt);
-  std::cout << fmt::format("Table I counting for robot '{}' ({} configurations x 2 loads, measurement {}, noise-free)\n\n", model.robot().name,
-                           configs, measure);
-  print_reduction_table(std::cout, r.reduction);
-  std::cout << fmt::format("\nrank(A) physical model {} = after M5 {} = dim {}\n", r.rank_physical, r.rank_algebraic, r.kept.size());
-  auto names = [&](const char* label, const std::vector<int>& cols) {
-    std::cout << label;
-    for (int c : cols) std::cout << ' ' << r.base[static_cast<std::size_t>(c)].name;
-    std::cout << '\n';
-  };
-  names("G1 (identifiable):", r.partition.g1);
-  names("G2 (non-identifiable):", r.partition.g2);
-  for (std::size_t g = 0; g < r.splitting.groups.size(); ++g) {
-    const auto& grp = r.splitting.groups[g];
-    std::cout << fmt::format("G3 group {} keeps {} of {}:", g + 1, grp.rank, grp.cols.size());
-    for (int c : grp.cols) std::cout << ' ' << r.base[static_cast<std::size_t>(c)].name;
-    std::cout << '\n';
-  }
-  std::cout << "kept:";
-  for (const auto& k : r.kept) std::cout << ' ' << k.parameter.name;
-  std::cout << '\n';
+  print_table1(std::cout, model, configs, measure, seed, complete_ranks);
   return 0;
 }
 
@@ -295,80 +196,22 @@ extern "C" void on_signal(int) { g_stop = true; }
 int replay(const std::string& data_path, int dof_from_rig, double rate_hz, double wait_s) {
   const auto table = read_stiffness_table(data_path, dof_from_rig, true);
   dds::Participant p(participant_options("hil-stiffness-replay"));
-  dds::Writer<hil_msgs::msg::StiffnessMeasurement> w(p, dds::topics::kStiffnessMeasurement);
-  if (wait_s > 0 && !w.wait_for_readers(1, std::chrono::milliseconds(static_cast<long>(wait_s * 1e3))))
-    spdlog::warn("replay: no reader matched within {} s; publishing anyway", wait_s);
-  std::size_t i = 0;
-  for (const auto& m : table.rows) {
-    hil_msgs::msg::StiffnessMeasurement msg;
-    try {
-      msg = to_message(m);
-    } catch (const std::invalid_argument& e) {
-      throw FormatError({data_path, table.lines[i], 0, "m1_dx"}, e.what());
-    }
-    if (!w.write(msg)) throw std::runtime_error("replay: DDS refused a sample");
-    ++i;
-    if (rate_hz > 0) std::this_thread::sleep_for(std::chrono::duration<double>(1.0 / rate_hz));
-  }
-  w.wait_for_acknowledgments(std::chrono::seconds(10));
-  std::cout << fmt::format("replay: {} measurements published on {}\n", table.rows.size(), dds::topics::kStiffnessMeasurement);
+  const std::size_t n = replay_measurements(p, table, data_path, rate_hz, wait_s);
+  std::cout << fmt::format("replay: {} measurements published on {}\n", n, dds::topics::kStiffnessMeasurement);
   return 0;
 }
 
 int worker(const std::string& rig, const std::string& model_path, const ReductionArgs& a, std::size_t count, double timeout_s) {
-  hc::SerialRobot robot = load_robot(rig);
-  const hc::VjmModel model(robot);
+  const hc::VjmModel model(load_robot(rig));
   if (!(a.noise_pos_m > 0.0) || !(a.noise_rot_rad > 0.0))
     throw FormatError({"command line", 0, 0, "--noise-pos-m"}, "the worker needs the noise: --noise-pos-m and --noise-rot-rad (> 0)");
-  const auto opt = pipeline_options(a, model);
-  std::unique_ptr<hc::OnlineIdentifier> id;
-  if (!model_path.empty()) {
-    // Keep the reduced model of an earlier `identify --json`: its kept parameters are estimated,
-    // its fixed ones stay at their values.
-    const auto j = load_json(model_path);
-    check_model_format(j, model_path, true);
-    const auto all = hc::m1_symmetrise(hc::complete_parameters(model));
-    auto lookup = [&](const nlohmann::json& e, const char* list) {
-      const std::string name = e.at("name").get<std::string>();
-      const int i = hc::find_parameter(all, name);
-      if (i < 0) throw FormatError({model_path, 0, 0, std::string(list) + ".name"}, "unknown parameter '" + name + "'");
-      return all[static_cast<std::size_t>(i)];
-    };
-    hc::ParameterSet free, fixed;
-    std::vector<double> vals;
-    try {
-      for (const auto& e : j.at("parameters")) free.push_back(lookup(e, "parameters"));
-      for (const auto& e : j.at("fixed")) {
-        fixed.push_back(lookup(e, "fixed"));
-        vals.push_back(e.at("value").get<double>());
-      }
-    } catch (const nlohmann::json::exception& e) {
-      throw FormatError({model_path, 0, 0, "parameters"}, std::string("not an identify --json model: ") + e.what());
-    }
-    id = std::make_unique<hc::OnlineIdentifier>(model, free, fixed, Eigen::Map<Eigen::VectorXd>(vals.data(), static_cast<Eigen::Index>(vals.size())),
-                                                hc::NoiseModel{a.noise_pos_m, a.noise_rot_rad}, opt, false);
-  } else {
-    std::vector<hc::ReductionLine> lines;
-    id = std::make_unique<hc::OnlineIdentifier>(model, hc::physical_reduction(model, opt, lines), hc::ParameterSet{}, Eigen::VectorXd(),
-                                                hc::NoiseModel{a.noise_pos_m, a.noise_rot_rad}, opt, true);
-  }
+  auto id = make_online_identifier(model, model_path, {a.noise_pos_m, a.noise_rot_rad}, pipeline_options(a, model));
   dds::Participant p(participant_options("hil-stiffness-worker"));
-  StiffnessWorker w(p, std::move(id));
   std::signal(SIGINT, on_signal);
   std::signal(SIGTERM, on_signal);
-  spdlog::info("stiffness worker: listening on {}, publishing on {}", dds::topics::kStiffnessMeasurement, dds::topics::kStiffnessEstimate);
-  const auto start = std::chrono::steady_clock::now();
-  while (!g_stop && (count == 0 || w.processed() < count)) {
-    if (timeout_s > 0 && std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() > timeout_s) break;
-    if (w.spin(std::chrono::milliseconds(200)) > 0) {
-      const auto& e = w.last();
-      spdlog::info("estimate after {} measurements ({} configurations): rank {}, {} parameters", e.measurements, e.configurations, e.rank,
-                   e.kept.size());
-    }
-  }
-  w.spin(std::chrono::milliseconds(0));
-  std::cout << fmt::format("worker: {} measurements processed, {} rejected; last rank {}\n", w.processed(), w.rejected(), w.last().rank);
-  return count > 0 && w.processed() < count ? 1 : 0;
+  const WorkerRun run = run_stiffness_worker(p, std::move(id), count, timeout_s, g_stop);
+  std::cout << fmt::format("worker: {} measurements processed, {} rejected; last rank {}\n", run.processed, run.rejected, run.last_rank);
+  return count > 0 && run.processed < count ? 1 : 0;
 }
 
 }  // namespace

@@ -5,6 +5,7 @@
 #include <Eigen/Geometry>
 #include <cstdint>
 
+#include <hil/format/samples.hpp>
 #include <hil/so3/so3.hpp>
 
 namespace hil::acquisition {
@@ -54,5 +55,8 @@ struct SyncedSample {
   double wrench_age_s = 0.0, pose_age_s = 0.0;
   std::uint32_t quality = 0;
 };
+
+/// A synchronized sample as a run-format row with time `t_s` (joints are kept apart).
+format::Sample to_row(const SyncedSample& s, double t_s);
 
 }  // namespace hil::acquisition

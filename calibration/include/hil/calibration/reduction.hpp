@@ -168,5 +168,7 @@ struct PaperTableRow {
   const char* count;
 };
 const std::vector<PaperTableRow>& paper_table1();
+/// Table I's count for a reduction step (e.g. "M4b"), or "" for a step the paper does not list.
+std::string paper_count(const std::string& step);
 
 }  // namespace hil::calibration

@@ -44,7 +44,7 @@ struct ModbusConfig {
   double reconnect_min_s = 0.05;  ///< back-off after a lost link, doubled per failed attempt...
   double reconnect_max_s = 2.0;   ///< ...up to this
   /// When the map has joints but no tool pose: the pose by the robot's forward kinematics (from the
-  /// rig's robot description, hil::rig_drivers; needs at least as many mapped joints).
+  /// rig's robot description, hil::rig_service; needs at least as many mapped joints).
   std::optional<ForwardKinematics> kinematics;
   /// \throws ConfigError naming the field.
   void validate() const;

@@ -53,7 +53,7 @@ std::string default_profile_path();
 
 /// The DDS domain id: $HIL_DDS_DOMAIN (hil's own variable wins), else $ROS_DOMAIN_ID (so hil
 /// joins the ROS 2 nodes of the same shell), else `fallback`. An empty variable counts as unset.
-/// \throws format::FormatError naming the variable when its value is not an integer 0..232.
+/// \throws error::FormatError naming the variable when its value is not an integer 0..232.
 int domain_from_env(int fallback = 0);
 /// The same precedence on given values (null or empty = unset); pure, for tests.
 int domain_from(const char* hil_dds_domain, const char* ros_domain_id, int fallback = 0);

@@ -12,7 +12,7 @@
 namespace hil::keystore {
 
 /// Makes DIR with both CAs and the signed governance; DIR must not hold a keystore already.
-/// \throws format::FormatError on a bad argument, std::runtime_error when openssl fails.
+/// \throws error::FormatError on a bad argument, std::runtime_error when openssl fails.
 void create(const std::string& dir, int days);
 
 /// Topics a participant may use, as DDS names (`rt/hil/pose_wrench`; wildcards allowed).
@@ -30,7 +30,7 @@ std::string dds_topic(const std::string& topic, const std::string& where);
 
 /// The files of participant NAME in DIR, each checked before Fast DDS sees them: present, the
 /// certificate signed by the identity CA and matching the key, governance and permissions signed by
-/// the permissions CA. \throws format::FormatError naming the file and what is wrong.
+/// the permissions CA. \throws error::FormatError naming the file and what is wrong.
 dds::SecurityFiles participant_files(const std::string& dir, const std::string& name);
 
 }  // namespace hil::keystore

@@ -4,7 +4,7 @@
 #include <string>
 
 #include <hil/format/rig.hpp>
-#include <hil/rig/contact.hpp>
+#include <hil/models/contact.hpp>
 
 namespace hil::contact_id::test {
 
@@ -18,7 +18,7 @@ struct AcuRun {
 
 /// Simulates test "1a" or "2a" at the trajectory rate (1 kHz) and keeps every `decimate`th sample.
 inline AcuRun acu_run(const std::string& test, int decimate = 20) {
-  namespace c = hil::rig;
+  namespace c = hil::models;
   const std::string dir = std::string(HIL_SOURCE_DIR) + "/examples/acu/";
   const auto rig = format::load_rig(dir + "acu.yaml");
   AcuRun r;

@@ -8,7 +8,7 @@
 #include <functional>
 #include <string>
 
-#include <hil/format/error.hpp>
+#include <hil/error/error.hpp>
 
 namespace hil::test {
 
@@ -38,7 +38,7 @@ inline ::testing::AssertionResult fails_with(const std::function<void()>& f, std
                                              const std::string& what) {
   try {
     f();
-  } catch (const hil::format::FormatError& e) {
+  } catch (const hil::error::FormatError& e) {
     const std::string msg = e.what();
     if (line != 0 && e.where().line != line)
       return ::testing::AssertionFailure() << "line " << e.where().line << " != " << line << " in: " << msg;

@@ -1,6 +1,6 @@
 #pragma once
 // The command framework (hil_cli): each subcommand group registers itself on the root app. A handler returns the exit status;
-// bad input is reported by throwing hil::format::FormatError (or std::runtime_error), which
+// bad input is reported by throwing hil::error::FormatError (or std::runtime_error), which
 // main() turns into one clear line on stderr and exit status 2.
 #include <CLI/CLI.hpp>
 #include <functional>

@@ -9,7 +9,7 @@ namespace hil::cli {
 
 /// Domain, profile and, with --secure KEYSTORE[:NAME], the checked security files. Without
 /// --secure-name or :NAME the keystore participant is the role: `name` without "hil-"
-/// (hil-replay -> replay). \throws format::FormatError naming a missing or bad keystore file.
+/// (hil-replay -> replay). \throws error::FormatError naming a missing or bad keystore file.
 dds::ParticipantOptions participant_options(const std::string& name);
 
 /// Only the security part of participant_options(); empty without --secure.

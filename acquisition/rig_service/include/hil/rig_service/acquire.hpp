@@ -1,0 +1,54 @@
+#pragma once
+// The acquisition run behind `hil acquire` and `hil demo`.
+#include <functional>
+#include <ostream>
+#include <string>
+#include <vector>
+
+#include <hil/acquisition/monitor.hpp>
+#include <hil/acquisition/streams.hpp>
+#include <hil/drivers/fake_devices.hpp>
+#include <hil/dds/bus.hpp>
+
+namespace hil::rig_service {
+
+struct AcquireOptions {
+  std::string rig, out;
+  double duration_s = 0.0;
+  double output_rate_hz = 50.0;
+  std::string can_interface, robot_host;
+  int robot_port = 0;
+  bool no_robot = false;
+  bool tare = false;
+  bool ros_topics = true;
+  bool no_bus = false;
+  bool progress = true;
+  int wait_subscribers = 0;
+  int rt_priority = 0;  ///< SCHED_FIFO priority of the device threads (0: normal)
+  std::string play;  ///< run folder for the in-process fake rig
+  double play_speed = 1.0;
+  bool play_over_socketcan = false;  ///< the fake plate talks on the SocketCAN interface instead of loopback
+  drivers::CanFaults plate_faults;
+  drivers::ModbusFaults robot_faults;
+  bool mcap = false;                     ///< also record run.mcap (docs/mcap.md)
+  std::string mcap_compression = "zstd";  ///< none | zstd | lz4
+  /// The bus participant (unless no_bus). The default is domain 0 with hil's host-only profile;
+  /// a command passes cli::participant_options() so that --dds-domain, --dds-profile and --secure hold.
+  dds::ParticipantOptions participant;
+};
+
+struct AcquireResult {
+  std::uint64_t samples = 0, gaps = 0;
+  std::vector<acquisition::DeviceHealth> health;
+  std::string summary;
+};
+
+/// Runs one acquisition to its end (duration, played run's end, or Ctrl-C). \throws on bad
+/// configuration or a device that cannot be started.
+AcquireResult run_acquisition(const AcquireOptions& o, const std::function<void(const acquisition::SyncedSample&)>& observer);
+
+/// `hil acquire --check`: each device's identity and one reading, printed to `out`.
+/// \returns 0 when every device answered, 1 otherwise. \throws on a bad rig file.
+int run_check(const AcquireOptions& o, std::ostream& out);
+
+}  // namespace hil::rig_service

@@ -1,0 +1,168 @@
+#pragma once
+/// \file A contact-family effect's model (one file per effect, diagnosis/src/effects/): the parameters
+/// it adds (units, scales, bounds), what it writes into the contact geometry (feature offsets, a
+/// delay, an ee deflection, the stiffness law), its design columns per contact or per row, its
+/// report lines, its physical-validity check, and its draw for the hidden-effect generator.
+///
+/// A ContactEffect (registered, stateless) binds to a run as a ContactTerm: the part of one
+/// ContactFamily that is this effect, with the choices it derives from the data (a basis, a
+/// reference component). Terms are immutable once bound, so families built from them can be shared.
+#include <Eigen/Geometry>
+#include <functional>
+#include <memory>
+#include <random>
+#include <string>
+#include <vector>
+
+#include <hil/contact_id/model.hpp>
+#include <hil/diagnose/effect.hpp>
+#include <hil/diagnose/engine.hpp>
+#include <hil/so3/so3.hpp>
+
+namespace hil::diagnose {
+
+struct ContactData;
+struct Effects;
+class ContactTerm;
+
+/// Where a term's parameters start in the family's θ and φ (-1: it has none of that kind).
+struct ContactSlots {
+  Eigen::Index linear = -1, nonlinear = -1;
+};
+
+/// What the terms write from φ into the contact model before the contacts are computed.
+struct ContactChannels {
+  Eigen::VectorXd x;                                ///< feature uncertainties x_u (m, rad), from the design
+  double delay_s = 0.0;                             ///< the wrench stream's lag behind the poses
+  hil::Matrix6d compliance = hil::Matrix6d::Zero();  ///< ee deflection per measured ee wrench (ee frame)
+  bool deflect = false;                             ///< the ee pose is deflected by `compliance`
+  double stiffness_exponent = 1.0;                  ///< normal force K δ_ref (δ/δ_ref)^p
+  bool recompute = false;                           ///< the contacts depend on φ: recomputed by mindist
+};
+
+/// One contact of one sample, as the per-contact columns see it.
+struct ContactAt {
+  const ContactData& data;
+  const contact_id::ContactPoint& contact;
+  const contact_id::Kinematics& rate_kinematics;  ///< the ee's kinematics, linear velocity the penetration-rate one
+  const Eigen::Vector3d& friction_point;          ///< where the tangential forces act (world)
+};
+
+/// What an effect may use when it binds to a run.
+struct ContactBinding {
+  const ContactData& data;
+  const std::vector<int>& samples;  ///< the samples its data-derived choices are made from (never a fold's held-out block)
+  /// A(φ) on every sample of the nominal model extended by `term` alone (its φ alone): e.g. the
+  /// Jacobian whose SVD keeps the identifiable directions of a compliance.
+  std::function<void(std::shared_ptr<const ContactTerm> term, const Eigen::VectorXd& phi, Eigen::MatrixXd& A)> design_alone;
+};
+
+/// One effect bound to a run: the part of a ContactFamily that is this effect. Every hook has a
+/// default that does nothing, so an effect writes only what it changes.
+class ContactTerm {
+ public:
+  virtual ~ContactTerm() = default;
+  /// θ entries it adds (appended after the nominal K, μK in the effects' layout order).
+  virtual std::vector<Param> linear() const { return {}; }
+  /// φ entries it adds.
+  virtual std::vector<Param> nonlinear() const { return {}; }
+  /// Starting points of φ besides 0: `zero` with this term's entries set.
+  virtual void starts(const ContactSlots&, const Eigen::VectorXd& zero, std::vector<Eigen::VectorXd>& out) const {
+    (void)zero;
+    (void)out;
+  }
+  /// Its contacts depend on φ (geometry, poses or time): the family tables the near pairs.
+  virtual bool moves_contacts() const { return false; }
+  /// Its columns need the penetration rates (ContactData::v_rate_world, delayed with the poses).
+  virtual bool needs_rates() const { return false; }
+  virtual void channels(const ContactSlots&, const Eigen::VectorXd& phi, ContactChannels& c) const {
+    (void)phi;
+    (void)c;
+  }
+  /// Adds its columns of one contact to the sample's 6 rows (`rows`: 6 x θ).
+  virtual void contact_columns(const ContactSlots&, const ContactAt& at, Eigen::Ref<Eigen::MatrixXd> rows) const {
+    (void)at;
+    (void)rows;
+  }
+  /// After every sample's contact columns: row scalings or constant columns (6N x θ).
+  virtual void finish(const ContactSlots&, const Eigen::VectorXd& phi, Eigen::MatrixXd& A) const {
+    (void)phi;
+    (void)A;
+  }
+  /// Adjusts the report line of its `index`-th θ (linear) or φ entry: a derived name, the nominal value, units.
+  virtual void report(const ContactSlots&, bool linear, Eigen::Index index, const Fit& f, Reported& r) const {
+    (void)linear;
+    (void)index;
+    (void)f;
+    (void)r;
+  }
+  /// Variance added to its `index`-th θ (linear) or φ entry's asymptotic one (e.g. a resolution's).
+  virtual double added_variance(bool linear, Eigen::Index index) const {
+    (void)linear;
+    (void)index;
+    return 0.0;
+  }
+  /// Derived lines after every parameter's (informative, not PNR-checked).
+  virtual void report_derived(const ContactSlots&, Eigen::Index theta_size, const Fit& f, std::vector<Reported>& out) const {
+    (void)theta_size;
+    (void)f;
+    (void)out;
+  }
+  /// Physical validity of one reported line (empty: valid), asked for every line in report order.
+  virtual std::string check_line(const Reported& q) const {
+    (void)q;
+    return "";
+  }
+  /// Physical validity of the whole fit, after every line's (empty: valid).
+  virtual std::string check(const ContactSlots&, Eigen::Index theta_size, const Fit& f) const {
+    (void)theta_size;
+    (void)f;
+    return "";
+  }
+  /// It derives choices from the data: a fold's family rebinds it on its training samples.
+  virtual bool derives_from_data() const { return false; }
+};
+
+/// A contact-family effect: its registry entry and the model it binds.
+class ContactEffect : public Effect {
+ public:
+  bool extends(FamilyKind family) const override { return family == FamilyKind::contact; }
+  const ContactEffect* contact() const override { return this; }
+  /// The order of its parameters in θ and φ, lowest first: the collinearity check takes columns in
+  /// this order, so an effect earlier in it keeps a parameter a later one is collinear with.
+  virtual int layout_order() const { return 1000; }
+  /// \throws std::runtime_error when the run cannot have it (e.g. no observable feature uncertainty).
+  virtual std::shared_ptr<const ContactTerm> bind(const ContactBinding& b) const = 0;
+  /// The hidden-effect generator: draws its magnitude (seeded) into `e`.
+  /// \throws std::invalid_argument when it cannot be injected (default: not injectable).
+  virtual void draw(unsigned seed, const contact_id::Scene& scene, Effects& e) const;
+  /// Whether `e` holds it (Effects::names).
+  virtual bool present(const Effects& e) const {
+    (void)e;
+    return false;
+  }
+  virtual bool injectable() const { return false; }
+};
+
+/// The generator's seeded random source for one effect (each effect draws from its own stream).
+class EffectDraw {
+ public:
+  EffectDraw(unsigned seed, const std::string& name) : rng_(seed * 7919ULL + std::hash<std::string>{}(name)) {}
+  double uniform() { return u_(rng_); }
+  double sign() { return u_(rng_) < 0.5 ? -1.0 : 1.0; }
+  /// A signed magnitude in [lo, hi): the sign drawn first.
+  double magnitude(double lo, double hi) {
+    const double s = sign();
+    return s * (lo + (hi - lo) * u_(rng_));
+  }
+
+ private:
+  std::mt19937_64 rng_;
+  std::uniform_real_distribution<double> u_{0.0, 1.0};
+};
+
+/// The wrench on the plate (fp frame, about the fp origin) of a force f (world) applied to object 1
+/// at the point p (world): the plate feels -f at p.
+hil::Vector6d plate_wrench_of(const Eigen::Isometry3d& T_world_fp, const Eigen::Vector3d& f_world, const Eigen::Vector3d& p_world);
+
+}  // namespace hil::diagnose

@@ -1,0 +1,273 @@
+#pragma once
+/// \file The contact model family of the diagnosis: the nominal surface-compliance model (contact
+/// paper eq. 2-7, θ = (K, μK)) and its candidate extensions, and the hidden-effect generator that
+/// injects the same effects into a simulation.
+///
+/// Each extension is one effect (contact_effect.hpp), one file in diagnosis/src/effects/, registered
+/// in the effect registry (effect.hpp); the family composes the effects it is built with. Their
+/// parameterisations: docs/diagnosis.md, "Candidate causes".
+/// Pure numerics on hil::contact_id: no I/O.
+#include <Eigen/Geometry>
+#include <array>
+#include <limits>
+#include <map>
+#include <memory>
+#include <optional>
+#include <set>
+#include <string>
+#include <vector>
+
+#include <hil/contact_id/identification.hpp>
+#include <hil/contact_id/model.hpp>
+#include <hil/diagnose/contact_effect.hpp>
+#include <hil/diagnose/effect.hpp>
+#include <hil/diagnose/engine.hpp>
+
+namespace hil::diagnose {
+
+namespace cid = hil::contact_id;
+using hil::Matrix6d;
+using hil::Vector6d;
+
+/// The candidate causes of the contact family, in the order they are reported: the registered
+/// effects that extend it (effect_names(FamilyKind::contact)).
+const std::vector<std::string>& contact_extensions();
+/// One sentence on what each extension means physically (the registry's Effect::description; "none"
+/// too; empty for an unknown name).
+std::string describe_extension(const std::string& name);
+
+/// The measured run in the form the contact family needs.
+struct ContactData {
+  cid::Scene scene;
+  double v_tm = 1e-3;                       ///< sticking threshold, m/s
+  std::vector<cid::Kinematics> kin;         ///< measured ee pose and twist per sample
+  Observations obs;                         ///< plate wrench (fp frame, about the fp origin)
+  std::vector<std::vector<cid::ContactPoint>> contacts;  ///< per sample, nominal geometry and measured pose
+  double delta_ref_m = 1e-4;                ///< median interference in contact (nonlinear_stiffness)
+  std::vector<int> fit_uncertainties;       ///< observable x_u (geometric_offset fits these)
+  std::vector<std::string> unfit_uncertainties;  ///< and why the others are not fitted
+  std::size_t samples_in_contact = 0;
+  /// Per plate component, the sensor's quantisation step seen in the data (0: not quantised). A
+  /// constant offset cannot be known better than step/√12, whatever the number of samples.
+  Vector6d resolution = Vector6d::Zero();
+  /// The ee's linear velocity (world) contact_damping takes its penetration rates from, per sample.
+  /// Per axis either the reported twist or, where both streams are quantised and the reported
+  /// twist's step is the coarser noise, the least-squares slope of the reported positions over
+  /// ± kRateHalfWindow samples (docs/diagnosis.md, "Penetration rates").
+  std::vector<Eigen::Vector3d> v_rate_world;
+  /// Per linear axis, whether v_rate_world is the pose slope (true) or the reported twist.
+  std::array<bool, 3> rate_from_poses{false, false, false};
+  /// Per linear axis, the quanta seen in the reported positions and twist (0: not quantised).
+  Eigen::Vector3d position_quantum_m = Eigen::Vector3d::Zero(), velocity_quantum_m_per_s = Eigen::Vector3d::Zero();
+  /// Per linear axis, the pose slope's estimated mean square error over the twist's (NaN: not compared).
+  Eigen::Vector3d rate_mse_ratio = Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
+  /// One line on where the penetration rates come from, for the report.
+  std::string rate_source() const;
+};
+
+/// Half-width of the pose slope's window, samples: measured on the blind suite (± 4 leaves the
+/// damping 2 std low at the fine resolution, ± 8 within 1.5 std at both).
+constexpr int kRateHalfWindow = 8;
+
+/// The step of a quantised signal: the smallest gap between its distinct values when every value
+/// lies on that grid (0: fewer than max(3, min_levels) distinct values, not on a grid, or a
+/// non-finite value).
+double quantum_of(std::vector<double> values, std::size_t min_levels = 3);
+
+/// Per sample, the least-squares slope of x over the samples within ± half_window of it (clipped at
+/// the ends of the run), against the sample times. \pre t increasing, t.size() == x.size().
+std::vector<double> windowed_slope(const std::vector<double>& t_s, const std::vector<double>& x, int half_window);
+
+/// Where contact_damping's penetration rates come from (ContactData::v_rate_world).
+enum class RateSource {
+  automatic,  ///< per axis, the pose slope where it is estimated to have less error than the twist
+  twist,      ///< the reported twist (a simulation whose twist is exact)
+  poses,      ///< the pose slope on every axis
+};
+
+/// One axis's penetration-rate source (ContactData::v_rate_world).
+struct RateChoice {
+  std::vector<double> v_m_per_s;       ///< per sample: the pose slope or the reported velocity
+  bool from_poses = false;
+  double position_quantum_m = 0.0, velocity_quantum_m_per_s = 0.0;  ///< 0: not quantised
+  /// The slope's estimated mean square error (noise + smoothing bias) over the twist's bound q_v²/12
+  /// (NaN: not compared; the slope is taken below 0.5 when the twist's error is seen at its bound).
+  double mse_ratio = std::numeric_limits<double>::quiet_NaN();
+};
+
+/// Chooses, for one axis, between the reported velocity and the slope of the reported positions
+/// over ± half_window samples (docs/diagnosis.md, "Penetration rates").
+/// \throws std::invalid_argument on mismatched sizes, fewer than 2 samples, half_window < 2, a
+/// non-finite value or times that do not increase (naming the sample).
+RateChoice choose_rate(const std::vector<double>& t_s, const std::vector<double>& x_m, const std::vector<double>& v_m_per_s,
+                       RateSource rates = RateSource::automatic, int half_window = kRateHalfWindow);
+
+/// \param force_scale_n, moment_scale_nm the weights' scales (0: the largest measured component).
+/// \throws std::runtime_error if no sample brings the objects into contact.
+ContactData make_contact_data(const cid::Scene& scene, double v_tm, const std::vector<cid::Measurement>& m,
+                              double force_scale_n = 0.0, double moment_scale_nm = 0.0,
+                              RateSource rates = RateSource::automatic);
+
+/// The nominal contact model with a set of extensions. Not thread-safe: when the contacts depend on
+/// φ (geometric_offset, robot_compliance, time_offset), design() keeps scratch and the last
+/// evaluation's contacts; use one object per thread.
+class ContactFamily : public ModelFamily {
+ public:
+  ContactFamily(const ContactData& d, std::set<std::string> extensions);
+  /// \param samples the samples the data-derived choices (robot_compliance's identifiable
+  /// directions, sensor_gain's reference component) are made from (empty: all).
+  ContactFamily(const ContactData& d, std::set<std::string> extensions, const std::vector<int>& samples);
+  std::string name() const override;
+  std::vector<Param> linear() const override { return linear_; }
+  std::vector<Param> nonlinear() const override { return nonlinear_; }
+  std::vector<Eigen::VectorXd> starts() const override;
+  void design(const Eigen::VectorXd& phi, Eigen::MatrixXd& A) const override;
+  std::vector<Reported> report(const Fit& f) const override;
+  /// K > 0, μ >= 0, c_v >= 0, D >= 0 (each within two standard deviations), p > 0, and a positive
+  /// semi-definite compliance.
+  std::string check(const Fit& f) const override;
+  /// With robot_compliance or sensor_gain: the family with its basis and reference chosen from `train`.
+  std::unique_ptr<ModelFamily> restricted(const std::vector<int>& train) const override;
+  /// Where the friction acts is a model form the data rarely decide: hil's contact point is the
+  /// centroid of the interference, a real contact's friction acts at its surface or, on a point
+  /// foot, at the tip. The two alternatives put the tangential forces' line of action ± 3δ/4 along
+  /// the normal from the centroid: a convex interference's centroid lies between 1/4 and 3/4 of its
+  /// depth from either side (Grünbaum), so that range holds every point of the interference on the
+  /// normal through the centroid (docs/diagnosis.md, "Model-form intervals").
+  std::vector<ModelForm> model_forms() const override;
+  /// κ: the tangential forces act at the centroid + κ δ e_n (0: the contact paper's model).
+  double friction_lever() const { return friction_lever_; }
+  const std::set<std::string>& extensions() const { return ext_; }
+  /// The measured kinematics at time t (time_offset's pose at t - τ): windowed-sinc (Lanczos, 8
+  /// lobes) interpolation of the samples, which keeps a quantised pose stream's noise level at every
+  /// fraction of a sample (docs/diagnosis.md); exact at the samples, the ends held beyond the run.
+  cid::Kinematics kinematics_at(double t) const;
+
+ private:
+  struct PairTable;
+  /// One effect of the family, bound to the run, and where its parameters sit.
+  struct Bound {
+    std::shared_ptr<const ContactTerm> term;
+    ContactSlots slots;
+    int report_rank = 0;  ///< its position among the family's effects in the registry's order
+  };
+  /// The nominal model with `terms` (already bound; `names`: their effects'), e.g. robot_compliance's
+  /// design on every symmetric direction while it chooses its identifiable ones.
+  ContactFamily(const ContactData& d, std::vector<std::shared_ptr<const ContactTerm>> terms, std::set<std::string> names,
+                std::shared_ptr<const PairTable> pairs);
+  ContactFamily(const ContactData& d, std::set<std::string> extensions, const std::vector<int>& samples,
+                std::shared_ptr<const PairTable> pairs);
+  void add_terms(std::vector<Bound> terms);
+  bool has(const std::string& e) const { return ext_.count(e) > 0; }
+  /// \param v_rate the ee's linear velocity the damping's penetration rates take (ContactData::v_rate_world).
+  void columns(const std::vector<cid::ContactPoint>& cs, const cid::Kinematics& k, const Eigen::Vector3d& v_rate, double p,
+               Eigen::Ref<Eigen::MatrixXd> out) const;
+  /// The Lanczos weights of kinematics_at: the window's first sample and its weights (taps 0: the
+  /// sample `first` itself). Fixed storage: one is made per sample of every design under a delay.
+  struct SincWeights {
+    static constexpr int kMaxTaps = 16;
+    std::ptrdiff_t first = 0;
+    int taps = 0;
+    std::array<double, kMaxTaps> h{};
+  };
+  SincWeights sinc_weights(double t) const;
+  Eigen::Vector3d rate_velocity_at(const SincWeights& w) const;
+  cid::Kinematics kinematics_at(const SincWeights& w) const;
+  const ContactData& d_;
+  std::set<std::string> ext_;
+  std::vector<Param> linear_, nonlinear_;
+  /// The effects in their parameters' layout order (ContactEffect::layout_order): designs, reports
+  /// and checks go through them in it; starts in the registry's order (report_rank).
+  std::vector<Bound> terms_;
+  std::vector<int> linear_owner_, nonlinear_owner_;  ///< per θ / φ entry: its term (-1: nominal)
+  bool moves_contacts_ = false, needs_rates_ = false;
+  double friction_lever_ = 0.0;
+
+  // Contacts recomputed for φ (docs/diagnosis.md, "Cost"). mindist on every pair of every sample is
+  // what a design costs; most pairs are provably apart or unchanged, and are skipped:
+  //  * pruning: a pair that was gap_m apart under the design geometry and the measured pose stays
+  //    apart while its polyhedra move by less than that in total (the features by x_u - x_u^d, the
+  //    held body with the ee pose);
+  //  * finite differences: only the pairs of features whose transform differs from the last
+  //    evaluation with the same ee poses (the base) are recomputed, the others copied from it.
+  // Both give exactly mindist's contacts, in its order.
+  struct NearPair {
+    int poly1, poly2;  ///< flattened polyhedron indices in object 1 and 2
+    double gap_m;      ///< lower bound on their distance at the design geometry (-inf: interfering)
+  };
+  struct PairTable {
+    std::vector<std::vector<NearPair>> near;                 ///< per sample, pairs closer than kReach_m
+    std::array<std::vector<std::pair<int, int>>, 2> index;   ///< flattened polyhedron -> (feature, polyhedron)
+    std::array<std::vector<double>, 2> radius_m;             ///< farthest vertex from the body origin (design)
+  };
+  /// Feature transforms at x and how far each polyhedron moved from the design geometry.
+  struct Geometry {
+    Eigen::VectorXd x;
+    std::array<std::vector<Eigen::Isometry3d>, 2> T_body_feature;
+    std::array<std::vector<double>, 2> moved_m;                ///< per flattened polyhedron
+    std::array<std::vector<bool>, 2> changed;                  ///< per feature: differs from the base
+  };
+  struct Base {
+    bool valid = false;
+    double tau_s = 0.0;
+    Matrix6d C = Matrix6d::Zero();
+    std::array<std::vector<Eigen::Isometry3d>, 2> T_body_feature;
+    std::vector<std::vector<cid::ContactPoint>> contacts;  ///< per sample
+    std::vector<bool> full;                                ///< per sample: by full mindist (not from the table)
+  };
+  struct Scratch {
+    cid::MindistWorkspace ws;
+    std::array<std::vector<cid::PosedPolyhedron>, 2> posed;
+    std::array<std::vector<char>, 2> done;
+  };
+  static constexpr double kReach_m = 5e-3;  ///< pairs farther apart are not tabled: beyond, full mindist
+  std::shared_ptr<const PairTable> pairs_;
+  mutable Base base_;
+  mutable Scratch scratch_;
+  static std::shared_ptr<const PairTable> make_pairs(const ContactData& d);
+  Geometry geometry_at(const Eigen::VectorXd& x) const;
+  /// mindist's contacts of sample k at the ee pose of `kin`; `base`: that sample's contacts in the
+  /// base (same ee pose), reused for the pairs of unchanged features. Returns false when it ran full mindist.
+  bool sample_contacts(std::size_t k, const cid::Kinematics& kin, const Geometry& g, const std::vector<cid::ContactPoint>* base,
+                       std::vector<cid::ContactPoint>& out) const;
+};
+
+/// max over z of the smallest eigenvalue of C + Σ z_k N_k (symmetric C, N_k): whether some matrix
+/// that agrees with C outside the free directions N_k is positive semi-definite (result >= 0).
+/// Subgradient ascent from z = 0 (the function is concave); stops once it is >= 0.
+double max_min_eigenvalue(const Matrix6d& C, const std::vector<Matrix6d>& free_directions, int iterations = 2000);
+
+// plate_wrench_of: contact_effect.hpp.
+
+// ---------------------------------------------------------------------------------------------
+// The hidden-effect generator.
+
+/// Effects injected into a simulation (zero / one = absent). Same parameterisations as above.
+struct Effects {
+  std::map<std::string, double> geometric;   ///< x_u true values by name (others at design)
+  Matrix6d compliance = Matrix6d::Zero();            ///< robot compliance C (ee frame; m/N, rad/N, rad/(N m))
+  double time_offset_s = 0.0;
+  Vector6d sensor_bias = Vector6d::Zero();
+  Vector6d sensor_gain = Vector6d::Zero();           ///< γ per component
+  double viscous_n_s_per_m = 0.0;
+  double damping_n_s_per_m = 0.0;
+  bool damping_friction = false;             ///< the friction bound follows the total normal force
+  double stiffness_exponent = 1.0;
+  double delta_ref_m = 1e-4;
+  std::vector<std::string> names() const;    ///< the effects present
+};
+
+/// Draws an effect of the named kind with a seeded random magnitude, sized to stand well above the
+/// sensor's resolution on the scene (the test knows the truth, the diagnosis does not).
+/// \throws std::invalid_argument on an unknown name.
+void draw_effect(const std::string& name, unsigned seed, const cid::Scene& scene, Effects& e);
+
+/// Forward simulation with effects: for each true (commanded) kinematics, the plate wrench of the
+/// extended model; the measured kinematics are the commanded ones (the pose the robot reports).
+/// `t_s` gives the times (for time_offset); the sensor model quantises and adds noise.
+std::vector<cid::SimulatedSample> simulate_with_effects(const cid::Scene& s, const cid::ContactModel& m,
+                                                        const Effects& e, const std::vector<double>& t_s,
+                                                        const std::vector<cid::Kinematics>& truth,
+                                                        const cid::SensorModel& sensor);
+
+}  // namespace hil::diagnose

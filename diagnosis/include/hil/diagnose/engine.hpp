@@ -1,0 +1,235 @@
+#pragma once
+/// \file The model-selection engine of the diagnosis: separable model families, their fit by
+/// variable projection, blocked cross-validation, information criteria and practical
+/// identifiability (parameter-to-noise ratio, stiffness paper eq. 10).
+///
+/// A model family predicts 6 components per sample (a wrench or a deflection) as A(φ) θ: θ enters
+/// linearly (solved by least squares on QR/SVD for each φ), φ nonlinearly (Levenberg-Marquardt on
+/// the projected residual, forward-difference Jacobian). Rows are weighted per component (1/scale),
+/// so residuals are relative errors. Pure numerics: no I/O.
+#include <Eigen/Core>
+#include <cmath>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace hil::diagnose {
+
+/// The measured outputs: 6 components per sample.
+struct Observations {
+  std::vector<double> t_s;                         ///< sample times, s (increasing)
+  Eigen::MatrixXd y;                               ///< N x 6, physical units
+  Eigen::Matrix<double, 6, 1> weight = Eigen::Matrix<double, 6, 1>::Ones();  ///< 1 / scale per component
+  std::vector<std::string> component{"fx", "fy", "fz", "mx", "my", "mz"};
+  std::vector<std::string> unit{"N", "N", "N", "N m", "N m", "N m"};
+  std::size_t size() const { return t_s.size(); }
+};
+
+/// One parameter of a family.
+struct Param {
+  std::string name;
+  std::string unit;
+  double scale = 1.0;       ///< typical magnitude: finite-difference steps, LM scaling
+  bool extension = false;   ///< belongs to the extension (PNR-checked), not to the nominal model
+  double lower = -1e300, upper = 1e300;  ///< bounds (nonlinear parameters only)
+};
+
+/// A reported (possibly derived) parameter with its standard deviation.
+struct Reported {
+  std::string name, unit;
+  double value = 0.0, std = 0.0;
+  bool extension = false;
+  double nominal = 0.0;  ///< the value under the nominal model (the PNR measures the distance from it)
+  /// The standard deviation from the spread of the cross-validation folds' estimates (delete-a-block
+  /// jackknife, scaled to Student's t of its degrees of freedom); 0: not computed. `std` is the
+  /// larger of it and the asymptotic one.
+  double std_folds = 0.0;
+  /// The asymptotic standard deviation, σ² (JᵀJ)⁻¹ inflated for autocorrelation (0: same as std).
+  double std_asymptotic = 0.0;
+  /// The model-form part (0: none): the largest shift of the value when the fit is repeated under
+  /// the family's alternative assumptions (ModelFamily::model_forms), taken as uniform over ± that
+  /// shift (shift / √3). `std` includes it in quadrature; the PNR does not.
+  double std_model_form = 0.0;
+  /// false: the value's meaning depends on data-derived choices a fold makes anew (e.g. the
+  /// coordinates of a compliance basis chosen from its samples), so the folds cannot measure its spread.
+  bool fold_comparable = true;
+  /// Parameter-to-noise ratio |value - nominal| / std (stiffness paper eq. 10), on the asymptotic
+  /// covariance as in the paper: a measure of the design's practical identifiability, used to
+  /// screen candidates. The reported interval (std) may be wider.
+  double pnr() const {
+    const double d = std::abs(value - nominal);
+    const double sd = std_asymptotic > 0 ? std_asymptotic : std;
+    return sd > 0 ? d / sd : (d != 0 ? 1e300 : 0.0);
+  }
+};
+
+struct Fit;
+
+/// A quantity a family locates from the data instead of fitting it (e.g. rest_change's event times):
+/// reported with the interval where it can be, not a standard deviation.
+struct LocatedEvent {
+  std::string name;        ///< e.g. event_1_s
+  double t_s = 0.0;        ///< where the model puts it
+  double lower_s = 0.0, upper_s = 0.0;
+  int first_sample = 0;    ///< the first sample (index into the observations) after it
+};
+
+/// A separable model family: prediction = A(φ) θ, 6 rows per sample (row 6k + c).
+class ModelFamily {
+ public:
+  virtual ~ModelFamily() = default;
+  virtual std::string name() const = 0;
+  virtual std::vector<Param> linear() const = 0;
+  virtual std::vector<Param> nonlinear() const { return {}; }
+  /// Starting points for φ (the best by projected cost starts LM). Default: φ = 0.
+  virtual std::vector<Eigen::VectorXd> starts() const;
+  /// A(φ) in physical units, 6N x linear().size(). Must be deterministic.
+  virtual void design(const Eigen::VectorXd& phi, Eigen::MatrixXd& A) const = 0;
+  /// The parameters people read (e.g. K and μ from θ = (K, μK)); default: θ and φ as they are.
+  virtual std::vector<Reported> report(const Fit& f) const;
+  /// Physical validity of fitted parameters (e.g. a compliance must be positive semi-definite):
+  /// empty when valid, else why not. Default: valid.
+  virtual std::string check(const Fit&) const { return ""; }
+  /// The same family with every choice it derives from the data (a basis of identifiable
+  /// directions, a reference component, event times) made from the samples `train` only: what a
+  /// cross-validation fold fits, so that nothing of its held-out block leaks into its prediction.
+  /// Its parameters must have the same names. Default: nullptr (the family derives nothing).
+  virtual std::unique_ptr<ModelFamily> restricted(const std::vector<int>& train) const {
+    (void)train;
+    return nullptr;
+  }
+  /// The family under each alternative assumption the run cannot decide (e.g. where in the
+  /// interference the friction acts), the ends of the plausible range: the same parameters, another
+  /// model form. score() refits under each and widens the intervals by the shifts
+  /// (Reported::std_model_form). Default: none.
+  struct ModelForm {
+    std::string assumption;
+    std::unique_ptr<ModelFamily> model;
+  };
+  virtual std::vector<ModelForm> model_forms() const { return {}; }
+  /// What the family located from the data on every sample (its effects' Effect::locates_events). Default: none.
+  virtual std::vector<LocatedEvent> located_events() const { return {}; }
+};
+
+/// A parameter the run cannot determine: fixed at its nominal value (0) and not reported.
+struct Unidentifiable {
+  std::string name;
+  std::string reason;                   ///< e.g. "collinear with muK, gain_fy"
+  std::vector<std::string> collinear_with;
+};
+
+struct Fit {
+  Eigen::VectorXd theta, phi;
+  /// Per parameter (θ then φ): fixed at its nominal value because the run cannot separate it from
+  /// the others (see `unidentifiable`); its covariance rows are 0. Empty: none fixed.
+  std::vector<bool> fixed;
+  std::vector<Unidentifiable> unidentifiable;
+  bool is_fixed(Eigen::Index j) const { return static_cast<std::size_t>(j) < fixed.size() && fixed[static_cast<std::size_t>(j)]; }
+  Eigen::MatrixXd cov;          ///< of (θ, φ): σ² (JᵀJ)⁺ at the optimum, times variance_inflation
+  double variance_inflation = 1.0;  ///< long-run variance factor of the autocorrelated residuals (>= 1)
+  int rank = 0;                 ///< numerical rank of J (θ and φ columns)
+  int parameters = 0;           ///< θ + φ
+  double rss = 0.0;             ///< weighted residual sum of squares over the fitted rows
+  double sigma2 = 0.0;          ///< rss / (rows - rank)
+  long rows = 0;
+  int evaluations = 0;          ///< designs computed
+  std::vector<std::string> phi_names;  ///< the names of φ's entries (the model's nonlinear())
+  bool converged = true;
+  std::vector<Reported> reported;
+  std::string invalid;          ///< why the fitted parameters are not physical (empty: they are)
+};
+
+struct FitOptions {
+  int max_iterations = 40;
+  double tolerance = 1e-6;      ///< relative cost decrease that ends LM
+  /// LM also ends when an iteration lowers the cost by less than this many residual variances
+  /// (cost / (rows - parameters)); 0: off. A change of the training cost that small moves no
+  /// prediction and no test statistic (a parameter one standard deviation off costs one variance).
+  double noise_tolerance = 0.0;
+  /// Broyden secant updates of the Jacobian allowed between finite-difference ones (0: finite
+  /// differences at every iteration). Convergence is always confirmed by finite differences.
+  int secant_updates = 4;
+  /// Identifiability before estimation: a parameter whose column of the scaled Jacobian (at the
+  /// start and at the optimum; columns taken in order, nominal parameters first) lies within this
+  /// sine of the span of the columns kept before it is fixed at its nominal value and listed as
+  /// not identifiable; so is a nonlinear one that ends at a bound. 0: off.
+  double collinearity_sine = 1e-3;
+};
+
+/// Fits `m` on the samples `train` (indices into obs). \throws std::runtime_error if the design is zero.
+Fit fit(const ModelFamily& m, const Observations& obs, const std::vector<int>& train, const FitOptions& o = {});
+/// N x 6 prediction of the fitted model on every sample.
+Eigen::MatrixXd predict(const ModelFamily& m, const Fit& f, std::size_t samples);
+
+/// sqrt(mean((w (y - ŷ))²)) over the rows of `samples`: the contact paper's mean relative error.
+double relative_error(const Observations& obs, const Eigen::MatrixXd& prediction, const std::vector<int>& samples);
+
+struct Score;
+
+struct CvOptions {
+  int folds = 5;                ///< contiguous time blocks
+  int gap_samples = 5;          ///< samples either side of a test block left out of training
+  FitOptions fit;
+  /// A fold's fit only predicts its held-out block: it starts from the family's own starts (and, in
+  /// a second step, from the same fold's fit of the model it extends), never from a point computed
+  /// with its held-out block, and stops when an iteration gains less than this many residual
+  /// variances (FitOptions::noise_tolerance).
+  double fold_noise_tolerance = 0.1;
+  /// Called after the full fit: a non-empty answer (why) skips the folds (Score::screened), for a
+  /// model that already fails a criterion needing no held-out data.
+  std::function<std::string(const Score&)> screen;
+  /// Refit the full model under the family's alternative model forms and widen the intervals by
+  /// the shifts (after the folds; a screened model is not refitted).
+  bool model_forms = true;
+  /// Repeated blocked CV: the folds are run once per offset of the block grid, i/offsets of a block
+  /// for i = 0 .. offsets - 1 (the block holding the run's end then also holds its start), and the
+  /// held-out error is pooled over them. One offset is plain blocked CV. Why more: a model whose
+  /// events are located from the data (rest_change) cannot predict an event inside a held-out
+  /// block, so its held-out error depends on where the block edges cut the events; averaging over
+  /// the grid's offsets removes that dependence (docs/diagnosis.md, "Repeated blocked CV"). The
+  /// intervals, warm starts and plotted held-out predictions of offset 0 are unchanged by it.
+  int offsets = 1;
+};
+
+/// The score of one model.
+struct Score {
+  std::string model;
+  Fit full;                     ///< fitted on every sample (parameters, intervals)
+  Eigen::MatrixXd cv_prediction;  ///< N x 6, each block predicted by the fit on the others
+  /// With CvOptions::offsets > 1: the same held-out prediction on the grid shifted by i/offsets of
+  /// a block, i = 1 .. offsets - 1.
+  std::vector<Eigen::MatrixXd> cv_shifted;
+  double cv_error = 0.0;        ///< held-out relative error (blocked CV; rms over the grid offsets)
+  double train_error = 0.0;     ///< relative error of the full fit on all samples
+  double bic = 0.0, aic = 0.0;  ///< n ln(rss/n) + k ln(n) | + 2k, n weighted rows, k = rank
+  double min_extension_pnr = 0.0;   ///< smallest PNR over the identifiable extension parameters
+  double max_extension_pnr = 0.0;
+  bool identifiable = false;    ///< some extension parameter has PNR >= 5 (G1+)
+  /// Why the folds were skipped (CvOptions::screen); then cv_error is NaN and cv_prediction empty.
+  std::string screened;
+  bool held_out() const { return screened.empty(); }
+  /// Per fold (in time_blocks order, empty blocks skipped, offset after offset): φ fitted without
+  /// the block; a second step's folds start from these of the model they extend.
+  std::vector<Eigen::VectorXd> fold_phi;
+  /// The names of each fold's φ: a fold's own model (ModelFamily::restricted) may have other parameters
+  /// than the full one (e.g. rest-pose events located from the training blocks alone).
+  std::vector<std::vector<std::string>> fold_phi_names;
+  /// The alternative assumptions the intervals account for (ModelFamily::model_forms).
+  std::vector<std::string> model_forms;
+  double seconds = 0.0;
+};
+
+/// \param extends the score of a model `m` extends (e.g. the cause, in the second step): its full
+/// fit's φ, by name, the others at 0, is one more start of the full fit, and each of its folds' φ
+/// one more start of the same fold.
+Score score(const ModelFamily& m, const Observations& obs, const CvOptions& o = {}, const Score* extends = nullptr);
+
+/// The sample indices of the blocked cross-validation folds (contiguous blocks).
+std::vector<std::vector<int>> time_blocks(std::size_t samples, int folds);
+/// The same grid shifted by `offset` of a block (0 <= offset < 1): sample k is in block
+/// floor(k folds / samples + offset) mod folds, so block 0 holds the run's end and its start.
+/// \throws std::invalid_argument on an offset outside [0, 1).
+std::vector<std::vector<int>> time_blocks(std::size_t samples, int folds, double offset);
+
+}  // namespace hil::diagnose

@@ -1,0 +1,763 @@
+#include <hil/diagnose/contact_family.hpp>
+#include <hil/so3/so3.hpp>
+
+#include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
+#include <Eigen/SVD>
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <random>
+#include <stdexcept>
+
+namespace hil::diagnose {
+
+namespace {
+
+using Vec3 = Eigen::Vector3d;
+
+Eigen::Isometry3d deflect(const Eigen::Isometry3d& T, const Vector6d& d) {
+  Eigen::Isometry3d D = Eigen::Isometry3d::Identity();
+  D.linear() = so3::exp(d.tail<3>());
+  D.translation() = d.head<3>();
+  return T * D;
+}
+
+double quantise(double v, double step) { return step > 0 ? step * std::round(v / step) : v; }
+
+/// Linear interpolation of the rows of a per-sample signal at time t (clamped at the ends).
+template <class Get>
+void interpolate(const std::vector<double>& t, double tq, Get&& get) {
+  const auto it = std::upper_bound(t.begin(), t.end(), tq);
+  if (it == t.begin()) return get(0, 0, 0.0);
+  if (it == t.end()) return get(t.size() - 1, t.size() - 1, 0.0);
+  const std::size_t j1 = static_cast<std::size_t>(it - t.begin()), j0 = j1 - 1;
+  const double a = (tq - t[j0]) / (t[j1] - t[j0]);
+  get(j0, j1, a);
+}
+
+}  // namespace
+
+const std::vector<std::string>& contact_extensions() { return effect_names(FamilyKind::contact); }
+
+std::string describe_extension(const std::string& n) {
+  if (n == "none") return "no extension predicts held-out data better than the nominal model beyond the noise";
+  const Effect* e = find_effect(n);
+  return e ? e->description() : "";
+}
+
+double quantum_of(std::vector<double> v, std::size_t min_levels) {
+  if (!std::all_of(v.begin(), v.end(), [](double x) { return std::isfinite(x); })) return 0.0;  // (and sort needs an order)
+  std::sort(v.begin(), v.end());
+  v.erase(std::unique(v.begin(), v.end()), v.end());
+  if (v.size() < std::max<std::size_t>(3, min_levels)) return 0.0;
+  double step = 0.0;
+  for (std::size_t i = 1; i < v.size(); ++i) {
+    const double g = v[i] - v[i - 1];
+    if (g > 1e-12 * std::max(1.0, std::abs(v[i])) && (step == 0.0 || g < step)) step = g;
+  }
+  const double scale = std::max(std::abs(v.front()), std::abs(v.back()));
+  if (step == 0.0 || step < 1e-9 * scale) return 0.0;
+  for (const double x : v) {
+    const double r = (x - v.front()) / step;
+    if (std::abs(r - std::round(r)) > 1e-3) return 0.0;  // not on the grid: not quantised
+  }
+  return step;
+}
+
+std::vector<double> windowed_slope(const std::vector<double>& t_s, const std::vector<double>& x, int half_window) {
+  const auto n = static_cast<std::ptrdiff_t>(x.size());
+  std::vector<double> out(x.size(), 0.0);
+  for (std::ptrdiff_t k = 0; k < n; ++k) {
+    const std::ptrdiff_t lo = std::max<std::ptrdiff_t>(0, k - half_window), hi = std::min<std::ptrdiff_t>(n - 1, k + half_window);
+    double tm = 0.0, xm = 0.0;
+    for (std::ptrdiff_t j = lo; j <= hi; ++j) {
+      tm += t_s[static_cast<std::size_t>(j)];
+      xm += x[static_cast<std::size_t>(j)];
+    }
+    tm /= static_cast<double>(hi - lo + 1);
+    xm /= static_cast<double>(hi - lo + 1);
+    double stt = 0.0, stx = 0.0;
+    for (std::ptrdiff_t j = lo; j <= hi; ++j) {
+      const double dt = t_s[static_cast<std::size_t>(j)] - tm;
+      stt += dt * dt;
+      stx += dt * (x[static_cast<std::size_t>(j)] - xm);
+    }
+    out[static_cast<std::size_t>(k)] = stt > 0 ? stx / stt : 0.0;
+  }
+  return out;
+}
+
+RateChoice choose_rate(const std::vector<double>& t_s, const std::vector<double>& x_m, const std::vector<double>& v_m_per_s,
+                       RateSource rates, int half_window) {
+  const std::size_t n = t_s.size();
+  if (x_m.size() != n || v_m_per_s.size() != n || n < 2 || half_window < 2)
+    throw std::invalid_argument("choose_rate: needs as many positions and velocities as times (>= 2), and a half-window >= 2");
+  for (std::size_t k = 0; k < n; ++k)
+    if (!std::isfinite(t_s[k]) || !std::isfinite(x_m[k]) || !std::isfinite(v_m_per_s[k]) || (k > 0 && !(t_s[k] > t_s[k - 1])))
+      throw std::invalid_argument("choose_rate: sample " + std::to_string(k) + ": non-finite value or time not increasing");
+  RateChoice c;
+  c.v_m_per_s = v_m_per_s;
+  c.position_quantum_m = quantum_of(x_m);
+  c.velocity_quantum_m_per_s = quantum_of(v_m_per_s);
+  std::vector<double> dts(n - 1);
+  for (std::size_t k = 1; k < n; ++k) dts[k - 1] = t_s[k] - t_s[k - 1];
+  std::nth_element(dts.begin(), dts.begin() + static_cast<long>(dts.size() / 2), dts.end());
+  const double dt = dts[dts.size() / 2];
+  // White noise of variance σ² on the positions gives a slope over ± h samples the variance σ²/Σt².
+  // The two streams' errors are independent: E(slope - twist)² = mse_slope + mse_twist. A twist
+  // quantised at q has mse_twist = q²/12 when the motion crosses its levels (the error is then
+  // uniform), less where the motion sits on the grid (a commanded speed may). So:
+  //  * E(slope - twist)² < 3/4 q²/12: the twist's error is below its bound and its size unknown:
+  //    the reported twist is kept (the conservative choice);
+  //  * else mse_slope = E(slope - twist)² - q²/12 (noise and smoothing bias together), and the
+  //    slope is taken when that is below half the twist's.
+  const double var_twist = c.velocity_quantum_m_per_s * c.velocity_quantum_m_per_s / 12.0;
+  const double var_x = c.position_quantum_m * c.position_quantum_m / 12.0;
+  const double var_slope = var_x / (dt * dt * half_window * (half_window + 1.0) * (2.0 * half_window + 1.0) / 3.0);
+  const bool quantised = c.position_quantum_m > 0 && var_twist > 0;
+  if (rates == RateSource::twist || (rates == RateSource::automatic && !(quantised && var_slope < 0.5 * var_twist))) return c;
+  const std::vector<double> slope = windowed_slope(t_s, x_m, half_window);
+  double msd = 0.0;
+  for (std::size_t k = 0; k < n; ++k) msd += (slope[k] - v_m_per_s[k]) * (slope[k] - v_m_per_s[k]);
+  msd /= static_cast<double>(n);
+  const double mse = std::max(var_slope, msd - var_twist);
+  if (var_twist > 0) c.mse_ratio = mse / var_twist;
+  c.from_poses = rates == RateSource::poses || (msd >= 0.75 * var_twist && mse < 0.5 * var_twist);
+  if (c.from_poses) c.v_m_per_s = slope;
+  return c;
+}
+
+std::string ContactData::rate_source() const {
+  static const char* axis[] = {"x", "y", "z"};
+  std::string from_poses, detail;
+  char buf[160];
+  for (int a = 0; a < 3; ++a) {
+    if (!rate_from_poses[static_cast<std::size_t>(a)]) continue;
+    from_poses += std::string(from_poses.empty() ? "" : ", ") + axis[a];
+    if (std::isnan(rate_mse_ratio(a)))
+      std::snprintf(buf, sizeof buf, "%s%s: chosen", detail.empty() ? "" : "; ", axis[a]);
+    else
+      std::snprintf(buf, sizeof buf, "%s%s: position step %.3g m, twist step %.3g m/s, the slope's estimated mean square error %.2f of the twist's bound",
+                    detail.empty() ? "" : "; ", axis[a], position_quantum_m(a), velocity_quantum_m_per_s(a), rate_mse_ratio(a));
+    detail += buf;
+  }
+  if (from_poses.empty()) return "penetration rates from the reported twist";
+  return "penetration rates along " + from_poses + " from the slope of the reported positions over +-" +
+         std::to_string(kRateHalfWindow) + " samples (" + detail + ")";
+}
+
+Vector6d plate_wrench_of(const Eigen::Isometry3d& T_world_fp, const Vec3& f, const Vec3& p) {
+  // The plate feels -f applied at p; moment about the plate origin, both in the plate frame.
+  const Vec3 o = T_world_fp.translation();
+  Vector6d w;
+  w.head<3>() = T_world_fp.linear().transpose() * (-f);
+  w.tail<3>() = T_world_fp.linear().transpose() * (p - o).cross(-f);
+  return w;
+}
+
+ContactData make_contact_data(const cid::Scene& scene, double v_tm, const std::vector<cid::Measurement>& m,
+                              double force_scale_n, double moment_scale_nm, RateSource rates) {
+  ContactData d;
+  d.scene = scene;
+  d.v_tm = v_tm;
+  const std::size_t n = m.size();
+  if (n < 10) throw std::runtime_error("the run has " + std::to_string(n) + " samples: too few to diagnose");
+  d.obs.t_s.resize(n);
+  d.obs.y.resize(static_cast<Eigen::Index>(n), 6);
+  d.kin.resize(n);
+  d.contacts.resize(n);
+  const Eigen::VectorXd xd = scene.design();
+  cid::MindistWorkspace ws;
+  std::vector<double> deltas;
+  double fmax = 0.0, mmax = 0.0;
+  for (std::size_t k = 0; k < n; ++k) {
+    if (!m[k].w_fp.allFinite() || !m[k].kin.T_world_ee.matrix().allFinite() || !m[k].kin.v_world_ee.allFinite() ||
+        !m[k].kin.w_world_ee.allFinite() || !std::isfinite(m[k].t_s))
+      throw std::runtime_error("sample " + std::to_string(k) + " (t = " + std::to_string(m[k].t_s) + " s): non-finite value");
+    if (k > 0 && !(m[k].t_s > m[k - 1].t_s))
+      throw std::runtime_error("sample " + std::to_string(k) + ": time does not increase");
+    d.obs.t_s[k] = m[k].t_s;
+    d.obs.y.row(static_cast<Eigen::Index>(k)) = m[k].w_fp.transpose();
+    d.kin[k] = m[k].kin;
+    cid::mindist(scene, m[k].kin, xd, v_tm, d.contacts[k], ws);
+    if (!d.contacts[k].empty()) ++d.samples_in_contact;
+    for (const auto& c : d.contacts[k]) deltas.push_back(c.delta);
+    fmax = std::max(fmax, m[k].w_fp.head<3>().cwiseAbs().maxCoeff());
+    mmax = std::max(mmax, m[k].w_fp.tail<3>().cwiseAbs().maxCoeff());
+  }
+  if (d.samples_in_contact == 0)
+    throw std::runtime_error("no sample brings the objects into contact under the nominal geometry: nothing to diagnose");
+  for (int c = 0; c < 6; ++c) d.resolution(c) = quantum_of({d.obs.y.col(c).data(), d.obs.y.col(c).data() + n});
+
+  // The damping's penetration rates. Their noise attenuates the fitted D (errors in variables) and,
+  // at a coarse twist step, hides the rate altogether; a quantised pose stream's slope is often far
+  // less noisy than a quantised twist.
+  d.v_rate_world.resize(n);
+  for (int a = 0; a < 3; ++a) {
+    std::vector<double> x(n), v(n);
+    for (std::size_t k = 0; k < n; ++k) {
+      x[k] = d.kin[k].T_world_ee.translation()(a);
+      v[k] = d.kin[k].v_world_ee(a);
+    }
+    const RateChoice c = choose_rate(d.obs.t_s, x, v, rates);
+    d.position_quantum_m(a) = c.position_quantum_m;
+    d.velocity_quantum_m_per_s(a) = c.velocity_quantum_m_per_s;
+    d.rate_mse_ratio(a) = c.mse_ratio;
+    d.rate_from_poses[static_cast<std::size_t>(a)] = c.from_poses;
+    for (std::size_t k = 0; k < n; ++k) d.v_rate_world[k](a) = c.v_m_per_s[k];
+  }
+  std::nth_element(deltas.begin(), deltas.begin() + static_cast<long>(deltas.size() / 2), deltas.end());
+  d.delta_ref_m = deltas[deltas.size() / 2];
+  const double fs = force_scale_n > 0 ? force_scale_n : (fmax > 0 ? fmax : 1.0);
+  const double ms = moment_scale_nm > 0 ? moment_scale_nm : (mmax > 0 ? mmax : 1.0);
+  d.obs.weight << 1 / fs, 1 / fs, 1 / fs, 1 / ms, 1 / ms, 1 / ms;
+
+  // Which feature uncertainties the data can inform (contact paper sec. 7.2.1).
+  if (!scene.uncertainties.empty()) {
+    try {
+      cid::ContactProblem p(scene, m);
+      const auto obs = cid::analyse_observability(p, xd);
+      for (int j = 0; j < p.uncertainties(); ++j) {
+        const auto& name = scene.uncertainties[static_cast<std::size_t>(j)].name;
+        const bool unobs = std::find(obs.unobservable.begin(), obs.unobservable.end(), name) != obs.unobservable.end();
+        const bool weak = std::find(obs.weak.begin(), obs.weak.end(), name) != obs.weak.end();
+        if (unobs || weak)
+          d.unfit_uncertainties.push_back(name + (unobs ? " (unobservable)" : " (weakly observable)"));
+        else
+          d.fit_uncertainties.push_back(j);
+      }
+    } catch (const std::exception& e) {
+      d.unfit_uncertainties.push_back(std::string("all (") + e.what() + ")");
+    }
+  }
+  return d;
+}
+
+ContactFamily::ContactFamily(const ContactData& d, std::set<std::string> extensions)
+    : ContactFamily(d, std::move(extensions), std::vector<int>{}) {}
+
+std::unique_ptr<ModelFamily> ContactFamily::restricted(const std::vector<int>& train) const {
+  if (std::none_of(terms_.begin(), terms_.end(), [](const Bound& b) { return b.term->derives_from_data(); })) return nullptr;
+  // The pair table depends on the design geometry and the measured poses only: shared.
+  return std::unique_ptr<ModelFamily>(new ContactFamily(d_, ext_, train, pairs_));
+}
+
+std::vector<ModelFamily::ModelForm> ContactFamily::model_forms() const {
+  std::vector<ModelForm> out;
+  for (const double kappa : {-0.75, 0.75}) {
+    auto m = std::make_unique<ContactFamily>(*this);
+    m->friction_lever_ = kappa;
+    m->base_ = Base{};  // contacts are the same, but the cached design columns are not
+    out.push_back({std::string("the friction's line of action 3/4 of the interference's depth from its centroid ") +
+                       (kappa < 0 ? "against" : "along") + " the normal",
+                   std::move(m)});
+  }
+  return out;
+}
+
+ContactFamily::ContactFamily(const ContactData& d, std::set<std::string> extensions, const std::vector<int>& samples)
+    : ContactFamily(d, std::move(extensions), samples, nullptr) {}
+
+ContactFamily::ContactFamily(const ContactData& d, std::vector<std::shared_ptr<const ContactTerm>> terms, std::set<std::string> names,
+                             std::shared_ptr<const PairTable> pairs)
+    : d_(d), ext_(std::move(names)), pairs_(std::move(pairs)) {
+  std::vector<Bound> bound;
+  for (auto& t : terms) bound.push_back({std::move(t), {}, static_cast<int>(bound.size())});
+  add_terms(std::move(bound));
+}
+
+ContactFamily::ContactFamily(const ContactData& d, std::set<std::string> extensions, const std::vector<int>& samples,
+                             std::shared_ptr<const PairTable> pairs)
+    : d_(d), ext_(std::move(extensions)), pairs_(std::move(pairs)) {
+  std::vector<int> used = samples;
+  if (used.empty()) {
+    used.resize(d.obs.size());
+    for (std::size_t k = 0; k < used.size(); ++k) used[k] = static_cast<int>(k);
+  }
+  const auto& names = contact_extensions();
+  for (const auto& e : ext_)
+    if (std::find(names.begin(), names.end(), e) == names.end()) throw std::invalid_argument("unknown extension '" + e + "'");
+  // The effects in the registry's order (report_rank), bound in their layout order: an effect that
+  // derives a choice from the design (robot_compliance) finds the pair table made.
+  std::vector<std::pair<const ContactEffect*, int>> effects;
+  for (const auto& n : names)
+    if (has(n)) effects.emplace_back(find_effect(n)->contact(), static_cast<int>(effects.size()));
+  std::stable_sort(effects.begin(), effects.end(),
+                   [](const auto& a, const auto& b) { return a.first->layout_order() < b.first->layout_order(); });
+  const ContactBinding binding{d, used, [&](std::shared_ptr<const ContactTerm> term, const Eigen::VectorXd& phi, Eigen::MatrixXd& A) {
+                                 if (!pairs_) pairs_ = make_pairs(d);
+                                 ContactFamily alone(d, {std::move(term)}, {}, pairs_);
+                                 alone.design(phi, A);
+                               }};
+  std::vector<Bound> bound;
+  for (const auto& [effect, rank] : effects) bound.push_back({effect->bind(binding), {}, rank});
+  add_terms(std::move(bound));
+}
+
+void ContactFamily::add_terms(std::vector<Bound> terms) {
+  linear_.push_back({"K", "N/m", 1e5, false});
+  linear_.push_back({"muK", "N/m", 1e4, false});
+  linear_owner_.assign(2, -1);
+  terms_ = std::move(terms);
+  for (std::size_t t = 0; t < terms_.size(); ++t) {
+    auto& b = terms_[t];
+    for (const auto& q : b.term->linear()) {
+      if (b.slots.linear < 0) b.slots.linear = static_cast<Eigen::Index>(linear_.size());
+      linear_.push_back(q);
+      linear_owner_.push_back(static_cast<int>(t));
+    }
+    for (const auto& q : b.term->nonlinear()) {
+      if (b.slots.nonlinear < 0) b.slots.nonlinear = static_cast<Eigen::Index>(nonlinear_.size());
+      nonlinear_.push_back(q);
+      nonlinear_owner_.push_back(static_cast<int>(t));
+    }
+    moves_contacts_ = moves_contacts_ || b.term->moves_contacts();
+    needs_rates_ = needs_rates_ || b.term->needs_rates();
+  }
+  if (!pairs_ && moves_contacts_) pairs_ = make_pairs(d_);
+}
+
+std::string ContactFamily::name() const {
+  if (ext_.empty()) return "nominal";
+  std::string s;
+  for (const auto& e : contact_extensions())
+    if (has(e)) s += (s.empty() ? "" : "+") + e;
+  return s;
+}
+
+std::vector<Eigen::VectorXd> ContactFamily::starts() const {
+  const Eigen::VectorXd zero = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(nonlinear_.size()));
+  std::vector<Eigen::VectorXd> out{zero};
+  std::vector<const Bound*> ranked;
+  for (const auto& b : terms_) ranked.push_back(&b);
+  std::sort(ranked.begin(), ranked.end(), [](const Bound* a, const Bound* b) { return a->report_rank < b->report_rank; });
+  for (const Bound* b : ranked) b->term->starts(b->slots, zero, out);
+  return out;
+}
+
+void ContactFamily::columns(const std::vector<cid::ContactPoint>& cs, const cid::Kinematics& k, const Vec3& v_rate, double p,
+                            Eigen::Ref<Eigen::MatrixXd> out) const {
+  const auto& T = d_.scene.T_world_fp;
+  cid::Kinematics k_rate = k;
+  k_rate.v_world_ee = v_rate;
+  for (const auto& c : cs) {
+    const double de = p == 1.0 ? c.delta : d_.delta_ref_m * std::pow(c.delta / d_.delta_ref_m, p);
+    const Eigen::Vector3d pt = c.point + friction_lever_ * c.delta * c.normal;  // the tangential forces' point
+    out.col(0) += plate_wrench_of(T, de * c.normal, c.point);
+    out.col(1) += plate_wrench_of(T, de * c.tangent, pt);
+    const ContactAt at{d_, c, k_rate, pt};
+    for (const auto& b : terms_) b.term->contact_columns(b.slots, at, out);
+  }
+}
+
+// Lobes of the Lanczos window of the pose interpolation (2 kSincLobes samples per instant).
+// Why not a linear blend of the two neighbours: the reported poses are quantised (2 µm on the
+// paper's rig) and a blend halves the quantisation noise's variance at a half-sample shift, so a
+// fitted delay drifted towards fractional shifts (τ 10 % high on the blind suite's 20 ms). The
+// windowed sinc keeps 92-100 % of white noise's variance at every fraction. Its weights get the
+// least change that makes them reproduce cubics exactly (a truncated sinc alone shifts a ramp by up
+// to 0.007 of a sample); exact at the samples, so τ = 0 gives the measured kinematics.
+constexpr int kSincLobes = 8;
+
+ContactFamily::SincWeights ContactFamily::sinc_weights(double t) const {
+  const auto& ts = d_.obs.t_s;
+  // The interval [t_j0, t_j0+1) holding t and the fraction a in it (the sample times may jitter:
+  // the neighbours count as evenly spaced).
+  const auto it = std::upper_bound(ts.begin(), ts.end(), t);
+  const std::ptrdiff_t j0 = std::max<std::ptrdiff_t>(0, (it - ts.begin()) - 1);
+  const auto at = [&](std::ptrdiff_t j) { return ts[static_cast<std::size_t>(j)]; };
+  const double a = it == ts.begin() || it == ts.end() ? 0.0 : (t - at(j0)) / (at(j0 + 1) - at(j0));
+  SincWeights w;
+  w.first = j0;
+  if (a == 0.0) return w;
+
+  constexpr int m = 2 * kSincLobes;
+  static_assert(m <= SincWeights::kMaxTaps);
+  constexpr double pi = 3.14159265358979323846;
+  const auto sinc = [](double x) { return x == 0.0 ? 1.0 : std::sin(pi * x) / (pi * x); };
+  Eigen::Matrix<double, m, 1> h;
+  Eigen::Matrix<double, 4, m> B;  // rows: the offsets' powers 0..3
+  for (int i = 0; i < m; ++i) {
+    const double x = (i + 1 - kSincLobes) - a;
+    h(i) = sinc(x) * sinc(x / kSincLobes);
+    B.col(i) << 1.0, x, x * x, x * x * x;
+  }
+  // Σ h x^p = [p = 0] for p = 0..3, by the least-norm correction.
+  const Eigen::Vector4d miss = B * h - Eigen::Vector4d::UnitX();
+  h -= B.transpose() * (B * B.transpose()).ldlt().solve(miss);
+  w.first = j0 + 1 - kSincLobes;
+  w.taps = m;
+  std::copy(h.data(), h.data() + m, w.h.begin());
+  return w;
+}
+
+cid::Kinematics ContactFamily::kinematics_at(double t) const { return kinematics_at(sinc_weights(t)); }
+
+cid::Kinematics ContactFamily::kinematics_at(const SincWeights& sw) const {
+  const auto n = static_cast<std::ptrdiff_t>(d_.kin.size());
+  const auto sample = [&](std::ptrdiff_t j) -> const cid::Kinematics& {
+    return d_.kin[static_cast<std::size_t>(std::clamp<std::ptrdiff_t>(j, 0, n - 1))];
+  };
+  if (sw.taps == 0) return sample(sw.first);
+  const cid::Kinematics& centre = sample(sw.first + kSincLobes - 1);
+  const Eigen::Quaterniond qc(centre.T_world_ee.linear());
+  Eigen::Vector3d p = Eigen::Vector3d::Zero(), v = Eigen::Vector3d::Zero(), w = Eigen::Vector3d::Zero();
+  Eigen::Vector4d q = Eigen::Vector4d::Zero();  // blended quaternions: the rotations within a window are close
+  for (int i = 0; i < sw.taps; ++i) {
+    const auto& k = sample(sw.first + i);
+    const double hi = sw.h[static_cast<std::size_t>(i)];
+    Eigen::Quaterniond qk(k.T_world_ee.linear());
+    if (qk.dot(qc) < 0.0) qk.coeffs() = -qk.coeffs();
+    p += hi * k.T_world_ee.translation();
+    v += hi * k.v_world_ee;
+    w += hi * k.w_world_ee;
+    q += hi * qk.coeffs();
+  }
+  cid::Kinematics out = centre;
+  out.T_world_ee.translation() = p;
+  out.v_world_ee = v;
+  out.w_world_ee = w;
+  out.T_world_ee.linear() = Eigen::Quaterniond(q).normalized().toRotationMatrix();
+  return out;
+}
+
+Vec3 ContactFamily::rate_velocity_at(const SincWeights& sw) const {
+  const auto n = static_cast<std::ptrdiff_t>(d_.v_rate_world.size());
+  const auto sample = [&](std::ptrdiff_t j) -> const Vec3& {
+    return d_.v_rate_world[static_cast<std::size_t>(std::clamp<std::ptrdiff_t>(j, 0, n - 1))];
+  };
+  if (sw.taps == 0) return sample(sw.first);
+  Vec3 v = Vec3::Zero();
+  for (int i = 0; i < sw.taps; ++i) v += sw.h[static_cast<std::size_t>(i)] * sample(sw.first + i);
+  return v;
+}
+
+std::shared_ptr<const ContactFamily::PairTable> ContactFamily::make_pairs(const ContactData& d) {
+  auto t = std::make_shared<PairTable>();
+  const Eigen::VectorXd xd = d.scene.design();
+  for (int b = 0; b < 2; ++b) {
+    const auto& body = d.scene.bodies[static_cast<std::size_t>(b)];
+    auto& index = t->index[static_cast<std::size_t>(b)];
+    index = d.scene.polyhedron_index(b);
+    for (const auto& [f, q] : index) {
+      const Eigen::Isometry3d T = cid::feature_transform(d.scene.uncertainties, xd, b, f);
+      double r = 0.0;
+      for (const auto& v : body.features[static_cast<std::size_t>(f)].polyhedra[static_cast<std::size_t>(q)].vertices())
+        r = std::max(r, (T * v).norm());
+      t->radius_m[static_cast<std::size_t>(b)].push_back(r);
+    }
+  }
+  cid::PosedScene ps;
+  t->near.resize(d.obs.size());
+  for (std::size_t k = 0; k < d.obs.size(); ++k) {
+    cid::pose_scene(d.scene, xd, d.kin[k].T_world_ee, ps);
+    const auto& A = ps.polys[0];
+    const auto& B = ps.polys[1];
+    for (std::size_t i = 0; i < A.size(); ++i)
+      for (std::size_t j = 0; j < B.size(); ++j) {
+        if (!cid::near(A[i], B[j], kReach_m)) continue;
+        const double gap = cid::separation_lower_bound(A[i], B[j], kReach_m);
+        if (gap > kReach_m) continue;
+        t->near[k].push_back({static_cast<int>(i), static_cast<int>(j), gap > 0 ? gap : -std::numeric_limits<double>::infinity()});
+      }
+  }
+  return t;
+}
+
+ContactFamily::Geometry ContactFamily::geometry_at(const Eigen::VectorXd& x) const {
+  Geometry g;
+  g.x = x;
+  const Eigen::VectorXd xd = d_.scene.design();
+  for (int b = 0; b < 2; ++b) {
+    const auto bi = static_cast<std::size_t>(b);
+    const auto& body = d_.scene.bodies[bi];
+    for (std::size_t f = 0; f < body.features.size(); ++f)
+      g.T_body_feature[bi].push_back(cid::feature_transform(d_.scene.uncertainties, x, b, static_cast<int>(f)));
+    for (const auto& [f, q] : pairs_->index[bi]) {
+      // A rigid motion moves a convex polyhedron's points farthest at a vertex.
+      const Eigen::Isometry3d Td = cid::feature_transform(d_.scene.uncertainties, xd, b, f);
+      double m = 0.0;
+      for (const auto& v : body.features[static_cast<std::size_t>(f)].polyhedra[static_cast<std::size_t>(q)].vertices())
+        m = std::max(m, (g.T_body_feature[bi][static_cast<std::size_t>(f)] * v - Td * v).norm());
+      g.moved_m[bi].push_back(m);
+    }
+    g.changed[bi].assign(body.features.size(), true);
+    if (base_.valid)
+      for (std::size_t f = 0; f < body.features.size(); ++f)
+        g.changed[bi][f] = !(g.T_body_feature[bi][f].matrix().array() == base_.T_body_feature[bi][f].matrix().array()).all();
+  }
+  return g;
+}
+
+bool ContactFamily::sample_contacts(std::size_t k, const cid::Kinematics& kin, const Geometry& g,
+                                    const std::vector<cid::ContactPoint>* base, std::vector<cid::ContactPoint>& out) const {
+  const auto& sc = d_.scene;
+  auto& w = scratch_;
+  // How far each body moved from its measured pose: translation of its origin and turn angle.
+  std::array<Eigen::Isometry3d, 2> T;
+  std::array<double, 2> shift_m{}, turn_rad{}, reach_m{};
+  // The most a point of polyhedron q of body b moved from the table's configuration.
+  auto moved = [&](std::size_t b, std::size_t q) { return g.moved_m[b][q] + shift_m[b] + turn_rad[b] * pairs_->radius_m[b][q]; };
+  for (std::size_t b = 0; b < 2; ++b) {
+    T[b] = cid::body_pose(sc.bodies[b], kin.T_world_ee);
+    if (sc.bodies[b].on_end_effector) {
+      const Eigen::Isometry3d T0 = cid::body_pose(sc.bodies[b], d_.kin[k].T_world_ee);
+      shift_m[b] = (T[b].translation() - T0.translation()).norm();
+      turn_rad[b] = so3::angle(T[b].linear() * T0.linear().transpose());
+    }
+    w.done[b].assign(pairs_->index[b].size(), 0);
+    w.posed[b].resize(pairs_->index[b].size());
+    for (std::size_t q = 0; q < pairs_->index[b].size(); ++q)
+      reach_m[b] = std::max(reach_m[b], moved(b, q));
+  }
+  if (reach_m[0] + reach_m[1] >= 0.5 * kReach_m) {  // beyond the table: every pair
+    cid::mindist(sc, kin, g.x, d_.v_tm, out, w.ws);
+    return false;
+  }
+  auto posed = [&](std::size_t b, int q) -> const cid::PosedPolyhedron& {
+    const auto qi = static_cast<std::size_t>(q);
+    if (!w.done[b][qi]) {
+      const auto [f, p] = pairs_->index[b][qi];
+      const Eigen::Isometry3d Tf = T[b] * g.T_body_feature[b][static_cast<std::size_t>(f)];  // as pose_scene
+      w.posed[b][qi].pose(sc.bodies[b].features[static_cast<std::size_t>(f)].polyhedra[static_cast<std::size_t>(p)], Tf);
+      w.done[b][qi] = 1;
+    }
+    return w.posed[b][qi];
+  };
+  out.clear();
+  auto from_base = base ? base->begin() : std::vector<cid::ContactPoint>::const_iterator{};
+  for (const auto& np : pairs_->near[k]) {
+    const auto i = static_cast<std::size_t>(np.poly1), j = static_cast<std::size_t>(np.poly2);
+    if (base && !g.changed[0][static_cast<std::size_t>(pairs_->index[0][i].first)] &&
+        !g.changed[1][static_cast<std::size_t>(pairs_->index[1][j].first)]) {
+      // Both features and the ee pose as in the base: the base's contact (if any) is this pair's.
+      while (from_base != base->end() && std::make_pair(from_base->poly1, from_base->poly2) < std::make_pair(np.poly1, np.poly2))
+        ++from_base;
+      if (from_base != base->end() && from_base->poly1 == np.poly1 && from_base->poly2 == np.poly2) out.push_back(*from_base);
+      continue;
+    }
+    if (np.gap_m > (moved(0, i) + moved(1, j)) * (1.0 + 1e-9) + 1e-12) continue;  // still apart
+    const auto& A = posed(0, np.poly1);
+    const auto& B = posed(1, np.poly2);
+    cid::PairContact pc;
+    if (!cid::near(A, B) || !cid::penetration(A, B, pc, w.ws.clip)) continue;
+    cid::ContactPoint c{pc.delta, pc.point, pc.normal, Vec3::Zero(), 0.0, np.poly1, np.poly2};
+    cid::tangent(sc, kin, d_.v_tm, c);
+    out.push_back(c);
+  }
+  return true;
+}
+
+void ContactFamily::design(const Eigen::VectorXd& phi, Eigen::MatrixXd& A) const {
+  const std::size_t n = d_.obs.size();
+  const Eigen::Index p = static_cast<Eigen::Index>(linear_.size());
+  A.setZero(static_cast<Eigen::Index>(6 * n), p);
+  ContactChannels ch;
+  ch.x = d_.scene.design();
+  for (const auto& b : terms_) b.term->channels(b.slots, phi, ch);
+  const double expo = ch.stiffness_exponent;
+  const double tau = ch.delay_s;
+  const bool recompute = ch.recompute;
+  const Eigen::VectorXd& x = ch.x;
+  const Matrix6d& C = ch.compliance;
+  if (!recompute) {
+    for (std::size_t k = 0; k < n; ++k)
+      columns(d_.contacts[k], d_.kin[k], d_.v_rate_world[k], expo, A.block(static_cast<Eigen::Index>(6 * k), 0, 6, p));
+  } else {
+    if (!base_.valid) {
+      // The first base: the contacts at the design geometry and the measured poses.
+      base_.contacts = d_.contacts;  // every interfering pair is in the table (gap -inf)
+      base_.full.assign(n, false);
+      base_.T_body_feature = geometry_at(d_.scene.design()).T_body_feature;
+      base_.valid = true;
+    }
+    const Geometry g = geometry_at(x);
+    const bool same_poses = tau == base_.tau_s && C == base_.C;
+    int changed = 0;
+    for (const auto& b : g.changed) changed += static_cast<int>(std::count(b.begin(), b.end(), true));
+    std::vector<std::vector<cid::ContactPoint>> cs(n);
+    std::vector<bool> full(n);
+    for (std::size_t k = 0; k < n; ++k) {
+      // A delayed wrench stream: the wrench at t_k is the one of the pose at t_k - τ.
+      const SincWeights sw = tau != 0.0 ? sinc_weights(d_.obs.t_s[k] - tau) : SincWeights{static_cast<std::ptrdiff_t>(k)};
+      cid::Kinematics kin = tau != 0.0 ? kinematics_at(sw) : d_.kin[k];
+      const Vec3 v_rate = !needs_rates_ ? Vec3::Zero() : tau != 0.0 ? rate_velocity_at(sw) : d_.v_rate_world[k];
+      if (ch.deflect) {
+        // The measured contact wrench on the held object, about the ee origin, in ee.
+        const Vector6d w_ee = cid::plate_to_object1(d_.obs.y.row(static_cast<Eigen::Index>(k)).transpose(), d_.scene.T_world_fp,
+                                               kin.T_world_ee);
+        kin.T_world_ee = deflect(kin.T_world_ee, C * w_ee);
+      }
+      const bool reuse = same_poses && !base_.full[k];
+      full[k] = !sample_contacts(k, kin, g, reuse ? &base_.contacts[k] : nullptr, cs[k]);
+      columns(cs[k], kin, v_rate, expo, A.block(static_cast<Eigen::Index>(6 * k), 0, 6, p));
+    }
+    // A finite-difference step moves one feature: the point it steps from stays the base.
+    if (!same_poses || changed > 1) {
+      base_.tau_s = tau;
+      base_.C = C;
+      base_.T_body_feature = g.T_body_feature;
+      base_.contacts = std::move(cs);
+      base_.full = std::move(full);
+    }
+  }
+  // Row scalings (sensor_gain) before constant columns (sensor_bias): the layout order.
+  for (const auto& b : terms_) b.term->finish(b.slots, phi, A);
+}
+
+std::vector<Reported> ContactFamily::report(const Fit& f) const {
+  std::vector<Reported> out;
+  const double K = f.theta(0), muK = f.theta(1);
+  out.push_back({"K", "N/m", K, std::sqrt(std::max(0.0, f.cov(0, 0))), false});
+  const double mu = K != 0 ? muK / K : 0.0;
+  const double vmu = (f.cov(1, 1) - 2 * mu * f.cov(0, 1) + mu * mu * f.cov(0, 0)) / (K * K);
+  if (!f.is_fixed(1)) out.push_back({"mu", "", mu, std::sqrt(std::max(0.0, vmu)), false});  // fixed: nothing slides
+  const Eigen::Index p = static_cast<Eigen::Index>(linear_.size());
+  // Each parameter's line as fitted, then as its effect reads it (a derived name, a nominal value).
+  auto line = [&](bool linear, Eigen::Index j, const Param& q, double value, Eigen::Index cov_index) {
+    const Bound& b = terms_[static_cast<std::size_t>((linear ? linear_owner_ : nonlinear_owner_)[static_cast<std::size_t>(j)])];
+    const Eigen::Index index = j - (linear ? b.slots.linear : b.slots.nonlinear);
+    const double var = std::max(0.0, f.cov(cov_index, cov_index)) + b.term->added_variance(linear, index);
+    Reported r{q.name, q.unit, value, std::sqrt(var), true};
+    b.term->report(b.slots, linear, index, f, r);
+    out.push_back(r);
+  };
+  for (Eigen::Index j = 2; j < p; ++j) line(true, j, linear_[static_cast<std::size_t>(j)], f.theta(j), j);
+  for (Eigen::Index j = 0; j < static_cast<Eigen::Index>(nonlinear_.size()); ++j)
+    line(false, j, nonlinear_[static_cast<std::size_t>(j)], f.phi(j), p + j);
+  for (const auto& b : terms_) b.term->report_derived(b.slots, p, f, out);
+  return out;
+}
+
+double max_min_eigenvalue(const Matrix6d& C, const std::vector<Matrix6d>& free_directions, int iterations) {
+  Matrix6d X = C;
+  Eigen::SelfAdjointEigenSolver<Matrix6d> es(X);
+  double best = es.eigenvalues()(0);
+  if (free_directions.empty()) return best;
+  const double step0 = std::max(C.norm(), 1e-12);
+  for (int it = 0; it < iterations && best < 0; ++it) {
+    const Vector6d u = es.eigenvectors().col(0);
+    Eigen::VectorXd g(static_cast<Eigen::Index>(free_directions.size()));
+    for (std::size_t k = 0; k < free_directions.size(); ++k) g(static_cast<Eigen::Index>(k)) = u.dot(free_directions[k] * u);
+    const double gn = g.norm();
+    if (!(gn > 1e-12)) break;  // no free direction moves the lowest eigenvalue
+    const double step = step0 / std::sqrt(1.0 + it);
+    for (std::size_t k = 0; k < free_directions.size(); ++k) X += (step * g(static_cast<Eigen::Index>(k)) / gn) * free_directions[k];
+    es.compute(X);
+    best = std::max(best, es.eigenvalues()(0));
+  }
+  return best;
+}
+
+std::string ContactFamily::check(const Fit& f) const {
+  for (const auto& q : f.reported) {
+    if (q.name == "K" && !(q.value > 0)) return "K = " + std::to_string(q.value) + " N/m is not positive";
+    if (q.name == "mu" && q.value < -2.0 * q.std) return q.name + " = " + std::to_string(q.value) + " is negative";
+    for (const auto& b : terms_)
+      if (auto why = b.term->check_line(q); !why.empty()) return why;
+  }
+  for (const auto& b : terms_)
+    if (auto why = b.term->check(b.slots, static_cast<Eigen::Index>(linear_.size()), f); !why.empty()) return why;
+  return "";
+}
+
+// ---------------------------------------------------------------------------------------------
+
+void ContactEffect::draw(unsigned, const cid::Scene&, Effects&) const {
+  throw std::invalid_argument("'" + name() + "' cannot be injected into a simulation");
+}
+
+std::vector<std::string> Effects::names() const {
+  std::vector<std::string> n;
+  for (const Effect* e : registered_effects())
+    if (e->contact() && e->contact()->present(*this)) n.push_back(e->name());
+  return n;
+}
+
+void draw_effect(const std::string& name, unsigned seed, const cid::Scene& scene, Effects& e) {
+  const Effect* effect = find_effect(name);
+  if (!effect || !effect->contact() || !effect->contact()->injectable())
+    throw std::invalid_argument("unknown effect '" + name + "' (expected one of the diagnosis' candidates)");
+  effect->contact()->draw(seed, scene, e);
+}
+
+std::vector<cid::SimulatedSample> simulate_with_effects(const cid::Scene& s, const cid::ContactModel& m, const Effects& e,
+                                                        const std::vector<double>& t_s,
+                                                        const std::vector<cid::Kinematics>& truth,
+                                                        const cid::SensorModel& sensor) {
+  m.check();
+  if (t_s.size() != truth.size()) throw std::invalid_argument("simulate_with_effects: times and kinematics differ in length");
+  Eigen::VectorXd x = s.design();
+  for (const auto& [name, v] : e.geometric) {
+    bool found = false;
+    for (std::size_t j = 0; j < s.uncertainties.size(); ++j)
+      if (s.uncertainties[j].name == name) {
+        x(static_cast<Eigen::Index>(j)) = v;
+        found = true;
+      }
+    if (!found) throw std::invalid_argument("unknown geometric uncertainty '" + name + "'");
+  }
+  cid::MindistWorkspace ws;
+  std::vector<cid::ContactPoint> cs;
+  const std::size_t n = truth.size();
+  std::vector<Vector6d> w(n);
+  std::vector<int> count(n);
+  auto wrench = [&](const cid::Kinematics& k) {
+    cid::mindist(s, k, x, m.v_tm, cs, ws);
+    Vector6d out = Vector6d::Zero();
+    for (const auto& c : cs) {
+      const double de = e.stiffness_exponent == 1.0 ? c.delta
+                                                    : e.delta_ref_m * std::pow(c.delta / e.delta_ref_m, e.stiffness_exponent);
+      const double rate = -cid::relative_velocity(s, k, c.point).dot(c.normal);
+      const double damping_n = e.damping_n_s_per_m * rate;
+      const double friction_n = m.mu * (m.K * de + (e.damping_friction ? damping_n : 0.0));
+      const Vec3 f = (m.K * de + damping_n) * c.normal + (friction_n + e.viscous_n_s_per_m * c.slip_speed) * c.tangent;
+      out += plate_wrench_of(s.T_world_fp, f, c.point);
+    }
+    return out;
+  };
+  for (std::size_t k = 0; k < n; ++k) {
+    cid::Kinematics kin = truth[k];
+    w[k] = wrench(kin);
+    if (!e.compliance.isZero()) {
+      // The deflected pose and its load agree: fixed point T = T_cmd Exp(C w_ee(T)).
+      for (int it = 0; it < 50; ++it) {
+        const Vector6d w_ee = cid::plate_to_object1(w[k], s.T_world_fp, kin.T_world_ee);
+        const Eigen::Isometry3d T = deflect(truth[k].T_world_ee, e.compliance * w_ee);
+        const double change = (T.matrix() - kin.T_world_ee.matrix()).norm();
+        kin.T_world_ee = T;
+        w[k] = wrench(kin);
+        if (change < 1e-13) break;
+      }
+    }
+    count[k] = static_cast<int>(cs.size());
+  }
+  std::mt19937_64 rng(sensor.seed);
+  std::normal_distribution<double> g(0.0, 1.0);
+  std::vector<cid::SimulatedSample> out(n);
+  for (std::size_t k = 0; k < n; ++k) {
+    auto& smp = out[k];
+    smp.contacts = count[k];
+    Vector6d wt = w[k];
+    if (e.time_offset_s != 0)
+      interpolate(t_s, t_s[k] - e.time_offset_s, [&](std::size_t j0, std::size_t j1, double a) { wt = (1 - a) * w[j0] + a * w[j1]; });
+    wt = wt.cwiseProduct(Vector6d::Ones() + e.sensor_gain) + e.sensor_bias;
+    smp.w_fp_true = wt;
+    smp.kin = truth[k];
+    for (int i = 0; i < 3; ++i) {
+      smp.kin.T_world_ee.translation()[i] = quantise(truth[k].T_world_ee.translation()[i], sensor.position_resolution_m);
+      smp.kin.v_world_ee[i] = quantise(truth[k].v_world_ee[i], sensor.velocity_resolution_m_per_s);
+    }
+    for (int i = 0; i < 6; ++i) {
+      const bool force = i < 3;
+      const double noise = force ? sensor.force_noise_n : sensor.moment_noise_nm;
+      const double step = force ? sensor.force_resolution_n : sensor.moment_resolution_nm;
+      smp.w_fp[i] = quantise(wt[i] + noise * g(rng), step);
+    }
+  }
+  return out;
+}
+
+}  // namespace hil::diagnose

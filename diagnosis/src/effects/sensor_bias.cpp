@@ -1,0 +1,48 @@
+// sensor_bias: b per plate component (N, N m), added to the prediction. A constant offset is not known
+// better than the quantisation step seen in the data over √12, whatever the number of samples.
+#include <hil/diagnose/contact_family.hpp>
+
+namespace hil::diagnose {
+namespace {
+
+class Term : public ContactTerm {
+ public:
+  explicit Term(const ContactData& d) : d_(d) {}
+  std::vector<Param> linear() const override {
+    std::vector<Param> p;
+    for (std::size_t c = 0; c < 6; ++c) p.push_back({"bias_" + d_.obs.component[c], d_.obs.unit[c], 1, true});
+    return p;
+  }
+  void finish(const ContactSlots& s, const Eigen::VectorXd&, Eigen::MatrixXd& A) const override {
+    const auto n = static_cast<Eigen::Index>(d_.obs.size());
+    for (Eigen::Index k = 0; k < n; ++k)
+      for (int c = 0; c < 6; ++c) A(6 * k + c, s.linear + c) = 1.0;
+  }
+  double added_variance(bool linear, Eigen::Index j) const override {
+    return linear ? d_.resolution(j) * d_.resolution(j) / 12.0 : 0.0;
+  }
+
+ private:
+  const ContactData& d_;
+};
+
+class SensorBias : public ContactEffect {
+ public:
+  std::string name() const override { return "sensor_bias"; }
+  std::string description() const override { return "the force plate has a constant offset per component"; }
+  bool extends(FamilyKind f) const override { return f == FamilyKind::contact || f == FamilyKind::stiffness; }
+  int layout_order() const override { return 80; }
+  std::shared_ptr<const ContactTerm> bind(const ContactBinding& b) const override { return std::make_shared<Term>(b.data); }
+  bool injectable() const override { return true; }
+  bool present(const Effects& e) const override { return !e.sensor_bias.isZero(); }
+  void draw(unsigned seed, const contact_id::Scene&, Effects& e) const override {
+    EffectDraw r(seed, name());
+    for (int c = 0; c < 6; ++c) e.sensor_bias(c) = c < 3 ? r.magnitude(3.0, 8.0) : r.magnitude(0.3, 0.8);
+  }
+};
+
+}  // namespace
+
+std::shared_ptr<const Effect> make_sensor_bias() { return std::make_shared<SensorBias>(); }
+
+}  // namespace hil::diagnose

@@ -1,0 +1,193 @@
+#pragma once
+/// \file The fake devices (what `hil fake-rig` runs): a fake ATI F/T CAN force plate answering the protocol on any CanChannel,
+/// and a fake robot controller (a libmodbus TCP server on 127.0.0.0/8) serving a register map.
+/// Both play a Scenario (e.g. a recorded run) in real time or faster, with fault injection.
+/// Product features: users test their setups with them; the tests use them as real peers.
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <atomic>
+#include <chrono>
+#include <cstdint>
+#include <memory>
+#include <mutex>
+#include <span>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <hil/drivers/ati_protocol.hpp>
+#include <hil/drivers/can_channel.hpp>
+#include <hil/drivers/force_plate.hpp>
+#include <hil/drivers/register_map.hpp>
+
+namespace hil::drivers {
+
+/// The state of the rig at one instant.
+struct ScenarioPoint {
+  double t_s = 0.0;
+  Vector6d w_fp = Vector6d::Zero();  ///< wrench on the plate, plate frame [N; N·m]
+  std::vector<double> joints_rad;
+  Eigen::Vector3d p_base_tcp_m = Eigen::Vector3d::Zero();  ///< tool pose in the robot base frame
+  Eigen::Quaterniond q_base_tcp = Eigen::Quaterniond::Identity();
+};
+
+/// A timeline of states, interpolated (linear; slerp for orientation).
+class Scenario {
+ public:
+  /// \throws ConfigError if empty, times not strictly increasing, or joint counts differ.
+  explicit Scenario(std::vector<ScenarioPoint> points, bool loop = false);
+  /// State at scenario time t (clamped to the ends, or wrapped when looping). Allocation-free when
+  /// `out.joints_rad` already has the right size.
+  void at(double t_s, ScenarioPoint& out) const;
+  double duration_s() const noexcept { return points_.back().t_s - points_.front().t_s; }
+  std::size_t size() const noexcept { return points_.size(); }
+  bool loop() const noexcept { return loop_; }
+
+ private:
+  std::vector<ScenarioPoint> points_;
+  bool loop_;
+};
+
+/// A device clock: scenario time = ((wall - start) · (1 + drift_ppm·1e-6) + offset_s) · speed.
+struct DeviceClock {
+  double offset_s = 0.0;
+  double drift_ppm = 0.0;
+  double speed = 1.0;  ///< playback speed factor
+  double scenario_time(double wall_s) const noexcept { return (wall_s * (1.0 + drift_ppm * 1e-6) + offset_s) * speed; }
+};
+
+/// A time window relative to the fake's start.
+struct TimeWindow {
+  double start_s = 0.0;
+  double duration_s = 0.0;
+  bool contains(double t) const noexcept { return t >= start_s && t < start_s + duration_s; }
+};
+
+struct CanFaults {
+  double drop_fraction = 0.0;     ///< share of response frames not sent
+  double corrupt_fraction = 0.0;  ///< share of responses sent with a wrong length (truncated)
+  std::vector<TimeWindow> silent;   ///< no answers at all
+  std::vector<TimeWindow> bus_off;  ///< a bus-off error frame, silence, then "controller restarted"
+  double error_frame_rate_hz = 0.0; ///< error-passive error frames per second (status bit 0x4000 set meanwhile)
+  double extra_delay_s = 0.0;       ///< every answer this much later
+  bool silent_now = false;          ///< switch: silent until cleared
+};
+
+struct ModbusFaults {
+  double exception_fraction = 0.0;  ///< share of requests answered with exception 6 (server busy)
+  std::vector<TimeWindow> exception_windows;  ///< every request answered with an exception
+  double slow_fraction = 0.0;       ///< share of requests answered after slow_delay_s
+  double slow_delay_s = 0.0;
+  std::vector<TimeWindow> silent;   ///< requests not answered
+  double extra_delay_s = 0.0;       ///< every answer this much later
+  bool silent_now = false;
+};
+
+// ---- fake ATI F/T CAN plate --------------------------------------------------------------------
+
+/// A plausible, well-conditioned calibration matrix (gauges → counts) for fakes and tests.
+Matrix6d default_ati_calibration();
+
+struct FakeAtiConfig {
+  std::uint32_t base_id = 0;
+  Matrix6d calibration = default_ati_calibration();
+  std::int32_t counts_per_force = 1000;
+  std::int32_t counts_per_torque = 100000;
+  std::uint8_t force_units = 2;   ///< N
+  std::uint8_t torque_units = 3;  ///< N·m
+  std::string serial = "FT-FAKE1";
+  ati::Firmware firmware{1, 0, 42};
+  Eigen::Isometry3d T_fp_sensor = Eigen::Isometry3d::Identity();  ///< how the sensor is mounted
+  CanFaults faults;
+  DeviceClock clock;
+  std::uint64_t seed = 1;
+};
+
+/// The gauges that a wrench on the plate produces: w_fp → sensor frame → device units → counts →
+/// M⁻¹ → rounded int16. `saturated` is set when a gauge had to be clamped. Pure.
+class AtiGaugeModel {
+ public:
+  explicit AtiGaugeModel(const FakeAtiConfig& cfg);
+  ati::Gauges gauges(const Vector6d& w_fp, bool& saturated) const noexcept;
+
+ private:
+  Matrix6d A_;  ///< w_fp → gauges (real valued)
+};
+
+class FakeAtiForcePlate {
+ public:
+  /// \param scenario wrench source; null = the value of set_wrench().
+  FakeAtiForcePlate(FakeAtiConfig cfg, std::unique_ptr<CanChannel> channel, std::shared_ptr<const Scenario> scenario = nullptr);
+  ~FakeAtiForcePlate();
+  FakeAtiForcePlate(const FakeAtiForcePlate&) = delete;
+  FakeAtiForcePlate& operator=(const FakeAtiForcePlate&) = delete;
+
+  /// Starts answering (a thread). The fault windows and the clock count from here.
+  void start();
+  void stop() noexcept;
+  void set_wrench(const Vector6d& w_fp);
+  void set_faults(const CanFaults& f);
+
+  struct Stats {
+    std::uint64_t requests = 0, gauge_answers = 0, frames_sent = 0, frames_dropped = 0, answers_corrupted = 0,
+                  error_frames_sent = 0, ignored_silent = 0;
+    /// Gauge answers whose frames all went out intact (none dropped, corrupted or refused by the
+    /// channel): the readings a driver could have received.
+    std::uint64_t gauge_answers_delivered = 0;
+  };
+  Stats stats() const;
+
+ private:
+  void run() noexcept;
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+  std::jthread thread_;
+};
+
+// ---- fake robot controller ---------------------------------------------------------------------
+
+struct FakeRobotConfig {
+  std::string host = "127.0.0.1";  ///< must be in 127.0.0.0/8
+  int port = 0;                    ///< 0 = an ephemeral port (see port())
+  RegisterMap map = ur_register_map();
+  ModbusFaults faults;
+  DeviceClock clock;
+  std::uint64_t seed = 1;
+};
+
+/// A libmodbus TCP server. Reads of holding (and input, same contents) registers answer the
+/// current state; writes are refused with "illegal function" and counted.
+class FakeRobotController {
+ public:
+  /// Binds and listens. \throws DeviceError (port in use, ...) or ConfigError (not loopback, bad map).
+  explicit FakeRobotController(FakeRobotConfig cfg, std::shared_ptr<const Scenario> scenario = nullptr);
+  ~FakeRobotController();
+  FakeRobotController(const FakeRobotController&) = delete;
+  FakeRobotController& operator=(const FakeRobotController&) = delete;
+
+  int port() const noexcept;
+  void start();
+  void stop() noexcept;
+  /// State served when there is no scenario.
+  void set_state(std::span<const double> joints_rad, const Eigen::Vector3d& p_base_tcp_m,
+                 const Eigen::Quaterniond& q_base_tcp);
+  void set_faults(const ModbusFaults& f);
+
+  struct Stats {
+    std::uint64_t connections = 0, requests = 0, replies = 0, exceptions = 0, slow = 0, ignored_silent = 0,
+                  writes_refused = 0;
+  };
+  Stats stats() const;
+
+ private:
+  void run() noexcept;
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+  std::jthread thread_;
+};
+
+/// Writes a state into a register image (size ≥ highest address + 2) through a map. Pure.
+void encode_state(const RegisterMap& map, std::span<const double> joints_rad, const Eigen::Vector3d& p_m,
+                  const Eigen::Quaterniond& q, std::span<std::uint16_t> holding);
+
+}  // namespace hil::drivers

@@ -1,0 +1,51 @@
+#pragma once
+/// \file `hil diagnose` on a run: the model family from the rig (contact scene -> contact family;
+/// no contact model -> deflection family) and the diagnosis; its outputs are diagnose_output.hpp's.
+#include <nlohmann/json.hpp>
+#include <memory>
+#include <ostream>
+#include <string>
+
+#include <hil/diagnose/contact_family.hpp>
+#include <hil/diagnose/deflection_family.hpp>
+#include <hil/diagnose/stiffness_family.hpp>
+#include <hil/diagnose/diagnose.hpp>
+#include <hil/format/run.hpp>
+
+namespace hil::services::diagnose {
+
+struct Options {
+  std::vector<std::string> candidates;  ///< empty: all that apply
+  int folds = 5;
+  /// Offsets of the block grid the cross-validation is repeated over (CvOptions::offsets); 0: the
+  /// most any candidate asks for (Effect::cv_offsets: 8 with rest_change, whose held-out error
+  /// depends on where the blocks cut its events), else 1.
+  int cv_offsets = 0;
+  /// Where contact_damping's penetration rates come from (contact runs).
+  hil::diagnose::RateSource damping_rates = hil::diagnose::RateSource::automatic;
+  hil::diagnose::Progress progress;
+};
+
+struct RunDiagnosis {
+  std::string run_name, mode;  ///< mode: "contact", "deflection" or "stiffness" (a stiffness table)
+  std::unique_ptr<hil::diagnose::ContactData> contact;
+  std::unique_ptr<hil::diagnose::DeflectionData> deflection;
+  std::unique_ptr<hil::diagnose::StiffnessData> stiffness;
+  hil::diagnose::Context context;
+  /// The run's model family for a set of extensions (what the diagnosis fitted; the outputs ask it
+  /// for what an effect locates rather than fits).
+  hil::diagnose::ModelFactory make;
+  hil::diagnose::Diagnosis result;
+  std::vector<std::string> notes;
+  const hil::diagnose::Observations& obs() const {
+    return contact ? contact->obs : deflection ? deflection->obs : stiffness->obs;
+  }
+};
+
+/// \throws error::FormatError / std::runtime_error naming the run on bad input.
+RunDiagnosis diagnose_run(const format::Run& run, const Options& o);
+/// A stiffness-experiment table (docs/calibration.md) of the robot in `rig_path`, against the
+/// joint-compliance model. \throws error::FormatError / std::runtime_error naming the file.
+RunDiagnosis diagnose_table(const std::string& table_path, const std::string& rig_path, const Options& o);
+
+}  // namespace hil::services::diagnose

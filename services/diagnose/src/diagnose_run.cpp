@@ -1,0 +1,194 @@
+#include <hil/services/diagnose_run.hpp>
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <set>
+
+#include <hil/format/output.hpp>
+#include <hil/error/error.hpp>
+#include <hil/report/html.hpp>
+#include <hil/models/contact.hpp>
+#include <hil/models/stiffness.hpp>
+
+namespace hil::services::diagnose {
+
+namespace dg = hil::diagnose;
+namespace cid = hil::contact_id;
+namespace fs = std::filesystem;
+
+namespace {
+
+dg::Context contact_context(const dg::ContactData& d) {
+  dg::Context ctx;
+  const std::size_t n = d.obs.size();
+  auto& s = ctx.signals;
+  for (const char* k : {"speed", "acceleration", "interference", "penetration_rate", "slip_speed", "load", "time", "px",
+                        "py", "pz", "vx", "vy", "vz"})
+    s[k].resize(n);
+  for (std::size_t k = 0; k < n; ++k) {
+    const auto& kin = d.kin[k];
+    const auto& cs = d.contacts[k];
+    double delta = 0, rate = 0, slip = 0;
+    bool sliding = false;
+    for (const auto& c : cs) {
+      delta += c.delta;
+      rate += -cid::relative_velocity(d.scene, kin, c.point).dot(c.normal);
+      slip = std::max(slip, c.slip_speed);
+      sliding = sliding || !c.tangent.isZero();
+    }
+    ctx.state.push_back(cs.empty() ? "no contact"
+                                   : fmt::format("{} contact{}, {}", cs.size(), cs.size() > 1 ? "s" : "", sliding ? "sliding" : "sticking"));
+    s["speed"][k] = kin.v_world_ee.norm();
+    const std::size_t a = k > 0 ? k - 1 : 0, b = k + 1 < n ? k + 1 : n - 1;
+    s["acceleration"][k] = b > a ? (d.kin[b].v_world_ee - d.kin[a].v_world_ee).norm() / (d.obs.t_s[b] - d.obs.t_s[a]) : 0.0;
+    s["interference"][k] = delta;
+    s["penetration_rate"][k] = rate;
+    s["slip_speed"][k] = slip;
+    s["load"][k] = d.obs.y.row(static_cast<Eigen::Index>(k)).head<3>().norm();
+    s["time"][k] = d.obs.t_s[k];
+    for (int i = 0; i < 3; ++i) {
+      s[std::string("p") + "xyz"[i]][k] = kin.T_world_ee.translation()[i];
+      s[std::string("v") + "xyz"[i]][k] = kin.v_world_ee[i];
+    }
+  }
+  return ctx;
+}
+
+dg::Context deflection_context(const dg::DeflectionData& d) {
+  dg::Context ctx;
+  const char* names[6] = {"load_fx", "load_fy", "load_fz", "load_mx", "load_my", "load_mz"};
+  for (int c = 0; c < 6; ++c) {
+    auto& v = ctx.signals[names[c]];
+    v.assign(d.load.col(c).data(), d.load.col(c).data() + d.load.rows());
+  }
+  ctx.signals["speed"] = d.speed_m_per_s;
+  ctx.signals["time"] = d.obs.t_s;
+  return ctx;
+}
+
+/// A fraction as a percentage with `pattern`, "-" when not computed (a candidate screened before
+/// its held-out scoring).
+}  // namespace
+
+/// The --candidates asked for (all that apply when none), each checked against those that apply.
+static std::vector<std::string> checked_candidates(const Options& o, const std::vector<std::string>& all) {
+  for (const auto& c : o.candidates)
+    if (std::find(all.begin(), all.end(), c) == all.end())
+      throw error::FormatError({"command line", 0, 0, "--candidates"},
+                                fmt::format("'{}' is not a candidate here (expected one of {})", c, fmt::join(all, ", ")));
+  return o.candidates.empty() ? all : o.candidates;
+}
+
+/// Options::cv_offsets, its default resolved for these candidates (the most any of them asks for).
+static int cv_offsets(const Options& o, const std::vector<std::string>& candidates) {
+  if (o.cv_offsets < 0) throw std::invalid_argument("diagnose: cv_offsets must be >= 0 (0: automatic), not " + std::to_string(o.cv_offsets));
+  if (o.cv_offsets > 0) return o.cv_offsets;
+  return dg::default_cv_offsets(candidates);
+}
+
+/// Why the candidates asked for repeated CV (Effect::cv_offsets_reason), "" when none did.
+static std::string cv_offsets_reasons(const std::vector<std::string>& candidates) {
+  std::vector<std::string> why;
+  for (const auto& c : candidates)
+    if (const dg::Effect* e = dg::find_effect(c); e && e->cv_offsets() > 1 && !e->cv_offsets_reason().empty())
+      why.push_back(e->cv_offsets_reason());
+  return fmt::format("{}", fmt::join(why, "; "));
+}
+
+RunDiagnosis diagnose_table(const std::string& table_path, const std::string& rig_path, const Options& o) {
+  if (rig_path.empty()) throw error::FormatError({table_path, 0, 0, ""}, "a stiffness table needs --rig (the robot's rig file)");
+  const calibration::VjmModel model(models::load_robot(rig_path));
+  const auto table = models::read_stiffness_table(table_path, model.dof(), true);
+  RunDiagnosis r;
+  r.run_name = fs::path(table_path).filename().string();
+  r.mode = "stiffness";
+  const auto candidates = checked_candidates(o, dg::stiffness_extensions());
+  dg::DiagnoseOptions dopt;
+  dopt.cv.folds = o.folds;
+  dopt.cv.offsets = cv_offsets(o, candidates);
+  try {
+    r.stiffness = std::make_unique<dg::StiffnessData>(dg::make_stiffness_data(model, table.rows));
+    const auto& d = *r.stiffness;
+    static const char* wn[6] = {"fx", "fy", "fz", "mx", "my", "mz"};
+    for (int c = 0; c < 6; ++c) {
+      std::vector<double> v;
+      for (const auto& w : d.load) v.push_back(w(c));
+      r.context.signals[std::string("load_") + wn[c]] = v;
+    }
+    for (int j = 0; j < model.dof(); ++j) {
+      std::vector<double> v;
+      for (const auto& m : table.rows) v.push_back(m.q_rad(j));
+      r.context.signals["q" + std::to_string(j + 1)] = v;
+    }
+    r.notes.push_back("stiffness table: the rows stand for time (blocked folds hold out neighbouring rows, i.e. whole "
+                      "configurations); nominal model: joint compliances only, rigid links");
+    const dg::StiffnessData* dp = r.stiffness.get();
+    r.make = [dp](const std::set<std::string>& e) { return std::make_unique<dg::StiffnessFamily>(*dp, e); };
+    r.result = dg::diagnose(r.make, candidates, r.obs(), r.context, dopt, o.progress);
+  } catch (const std::exception& e) {
+    throw std::runtime_error(table_path + ": " + e.what());
+  }
+  return r;
+}
+
+RunDiagnosis diagnose_run(const format::Run& run, const Options& o) {
+  if (!run.rig) throw error::FormatError({run.dir, 0, 0, ""}, "no rig: pass --rig or put rig.yaml in the run folder");
+  const auto& rig = *run.rig;
+  RunDiagnosis r;
+  r.run_name = fs::path(run.dir).filename().string();
+  if (r.run_name.empty()) r.run_name = fs::path(run.dir).parent_path().filename().string();
+  dg::DiagnoseOptions dopt;
+  dopt.cv.folds = o.folds;
+  dg::ModelFactory make;
+  const auto candidates = checked_candidates(o, rig.model.contact ? dg::contact_extensions() : dg::deflection_extensions());
+  dopt.cv.offsets = cv_offsets(o, candidates);
+  if (dopt.cv.offsets > 1)
+    r.notes.push_back(fmt::format("held-out errors are pooled over {} offsets of the {}-block grid (repeated blocked CV{}); "
+                                  "the plotted held-out predictions are the unshifted grid's",
+                                  dopt.cv.offsets, o.folds,
+                                  o.cv_offsets > 0 || cv_offsets_reasons(candidates).empty() ? "" : ": " + cv_offsets_reasons(candidates)));
+  try {
+    if (rig.model.contact) {
+      r.mode = "contact";
+      const auto scene = models::scene_from_rig(rig);
+      const auto model = models::model_from_rig(rig);
+      r.contact = std::make_unique<dg::ContactData>(dg::make_contact_data(
+          scene, model.v_tm, models::measurements(run.samples), rig.model.contact->force_scale_n, rig.model.contact->moment_scale_nm,
+          o.damping_rates));
+      r.context = contact_context(*r.contact);
+      for (const auto& u : r.contact->unfit_uncertainties) r.notes.push_back("geometric_offset does not fit " + u);
+      r.notes.push_back("contact_damping takes its " + r.contact->rate_source());
+      const dg::ContactData* d = r.contact.get();
+      make = [d](const std::set<std::string>& e) { return std::make_unique<dg::ContactFamily>(*d, e); };
+    } else {
+      r.mode = "deflection";
+      std::vector<double> t;
+      std::vector<cid::Kinematics> kin;
+      std::vector<Eigen::Matrix<double, 6, 1>> w;
+      for (const auto& m : models::measurements(run.samples)) {
+        t.push_back(m.t_s);
+        kin.push_back(m.kin);
+        w.push_back(m.w_fp);
+      }
+      const Eigen::Isometry3d T_fp = rig.frame("force_plate") ? rig.T_world("force_plate") : Eigen::Isometry3d::Identity();
+      r.deflection = std::make_unique<dg::DeflectionData>(dg::make_deflection_data(t, kin, w, T_fp));
+      r.context = deflection_context(*r.deflection);
+      r.notes.push_back("the rig has no contact model: the diagnosis explains the ee's motion from its rest pose "
+                        "(rigid nominal model) by the load the force plate measures");
+      const dg::DeflectionData* d = r.deflection.get();
+      make = [d](const std::set<std::string>& e) { return std::make_unique<dg::DeflectionFamily>(*d, e); };
+    }
+    r.make = make;
+    r.result = dg::diagnose(make, candidates, r.obs(), r.context, dopt, o.progress);
+  } catch (const error::FormatError&) {
+    throw;
+  } catch (const std::exception& e) {
+    throw std::runtime_error(run.dir + ": " + e.what());
+  }
+  return r;
+}
+
+}  // namespace hil::services::diagnose

@@ -1,0 +1,49 @@
+// `hil fake-rig` as users run it: the fake robot controller replaying the example run, read by the
+// driver over Modbus TCP on 127.0.0.1 (the force plate half runs in the vcan suite).
+#include <gtest/gtest.h>
+
+#include <hil/rig_service/drivers_from_rig.hpp>
+#include <hil/test/drivers.hpp>
+
+using namespace hil;
+using namespace hil::drivers;
+
+namespace {
+const std::string kHil = HIL_EXECUTABLE;
+const std::string kRun = std::string(HIL_SOURCE_DIR) + "/examples/runs/press_slide";
+
+/// "fake-rig: robot controller Modbus TCP 127.0.0.1:PORT map ur" -> PORT
+int port_of(const std::string& line) {
+  const auto colon = line.rfind(':');
+  if (line.find("robot controller") == std::string::npos || colon == std::string::npos) return -1;
+  return std::atoi(line.c_str() + colon + 1);
+}
+}  // namespace
+
+TEST(HilFakeRig, ServesTheRunOverModbus) {
+  // Speed ~0 freezes the replay at the run's first sample, so the check is exact.
+  hil::test::Child fake({kHil, "--log-level", "warn", "fake-rig", "--run", kRun, "--no-plate", "--port", "0", "--speed",
+                         "1e-9", "--duration", "60"});
+  ASSERT_TRUE(fake.ok());
+  const std::string line = fake.read_line();
+  const int port = port_of(line);
+  ASSERT_GT(port, 0) << "unexpected first line: " << line;
+
+  const auto run = format::load_run(kRun);
+  ModbusConfig mc = rig_service::robot_controller_config(*run.rig);
+  mc.port = port;
+  mc.timeout_s = 2.0;
+  RobotControllerDriver drv(mc);
+  drv.connect();
+  RobotSample s;
+  ASSERT_EQ(drv.poll(s), PollStatus::ok) << drv.last_problem();
+  ASSERT_TRUE(s.has_pose);
+  const Eigen::Isometry3d T_world_base = rig_service::world_to_base(*run.rig);
+  EXPECT_LT((T_world_base * s.p_base_tcp_m - run.samples.samples[0].p_world_ee_m).norm(), 1e-4);
+}
+
+TEST(HilFakeRig, FaultOptionsAreChecked) {
+  hil::test::Child fake({kHil, "fake-rig", "--run", kRun, "--no-plate", "--port", "0", "--modbus-silent", "3"});
+  ASSERT_TRUE(fake.ok());
+  EXPECT_NE(fake.wait(), 0);
+}

@@ -1,0 +1,136 @@
+// The effect registry (issue 26, item 2): an effect is one file. This fixture defines a toy effect
+// here and nowhere else — a constant offset of the plate's fz — and shows it registered, listed,
+// fitted, reported and checked by the contact family and named by the diagnosis; and that the
+// built-in effects' lists (the CLI's, the hidden-effects schema's) are the registry's.
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include <hil/diagnose/contact_family.hpp>
+#include <hil/diagnose/deflection_family.hpp>
+#include <hil/diagnose/diagnose.hpp>
+#include <hil/diagnose/effect.hpp>
+#include "scenes.hpp"
+
+namespace hil::diagnose {
+namespace {
+
+using ::testing::HasSubstr;
+
+// --- the toy effect: the whole of it -------------------------------------------------------------
+
+/// fz_meas = fz + b: one linear parameter, a constant column in the fz rows.
+class ToyFzOffsetTerm : public ContactTerm {
+ public:
+  std::vector<Param> linear() const override { return {{"toy_offset_fz_n", "N", 1.0, true}}; }
+  void finish(const ContactSlots& s, const Eigen::VectorXd&, Eigen::MatrixXd& A) const override {
+    for (Eigen::Index k = 0; k < A.rows() / 6; ++k) A(6 * k + 2, s.linear) = 1.0;
+  }
+  void report_derived(const ContactSlots& s, Eigen::Index, const Fit& f, std::vector<Reported>& out) const override {
+    out.push_back({"toy_offset_fz_kn", "kN", f.theta(s.linear) / 1e3, std::sqrt(std::max(0.0, f.cov(s.linear, s.linear))) / 1e3, false});
+  }
+  std::string check_line(const Reported& q) const override {
+    return q.name == "toy_offset_fz_n" && std::abs(q.value) > 1e3 ? "a toy offset beyond 1 kN is not physical" : "";
+  }
+};
+
+class ToyFzOffset : public ContactEffect {
+ public:
+  std::string name() const override { return "toy_fz_offset"; }
+  std::string description() const override { return "the plate's fz reads a constant too much (a toy)"; }
+  std::shared_ptr<const ContactTerm> bind(const ContactBinding&) const override { return std::make_shared<ToyFzOffsetTerm>(); }
+};
+
+const bool toy_registered = register_effect(std::make_shared<ToyFzOffset>());
+
+// --- what the registry gives it ------------------------------------------------------------------
+
+TEST(EffectRegistry, ATestFixtureEffectIsRegisteredAndListedAfterTheBuiltInOnes) {
+  ASSERT_TRUE(toy_registered);
+  const auto& contact = contact_extensions();
+  ASSERT_FALSE(contact.empty());
+  EXPECT_EQ(contact.front(), "geometric_offset");
+  EXPECT_EQ(contact.back(), "toy_fz_offset");
+  EXPECT_EQ(describe_extension("toy_fz_offset"), "the plate's fz reads a constant too much (a toy)");
+  const auto& deflection = deflection_extensions();
+  EXPECT_EQ(std::count(deflection.begin(), deflection.end(), "toy_fz_offset"), 0);
+  ASSERT_NE(find_effect("toy_fz_offset"), nullptr);
+  EXPECT_EQ(find_effect("toy_fz_offset")->cv_offsets(), 1);
+  EXPECT_THAT([] { register_effect(std::make_shared<ToyFzOffset>()); },
+              ::testing::ThrowsMessage<std::invalid_argument>(HasSubstr("'toy_fz_offset' is registered already")));
+  // Not injectable: the generator refuses it as it refuses an unknown name.
+  Effects e;
+  EXPECT_THROW(draw_effect("toy_fz_offset", 1, {}, e), std::invalid_argument);
+  EXPECT_TRUE(e.names().empty());
+}
+
+TEST(EffectRegistry, TheBuiltInListsAreTheRegistrys) {
+  EXPECT_EQ(std::vector<std::string>(contact_extensions().begin(), contact_extensions().end() - 1),
+            (std::vector<std::string>{"geometric_offset", "robot_compliance", "time_offset", "sensor_bias", "sensor_gain",
+                                      "viscous_friction", "contact_damping", "nonlinear_stiffness"}));
+  EXPECT_EQ(deflection_extensions(), (std::vector<std::string>{"robot_compliance", "time_offset", "rest_change"}));
+  // Repeated blocked CV: asked for by rest_change (its events), by nothing else.
+  EXPECT_EQ(default_cv_offsets({"robot_compliance", "time_offset"}), 1);
+  EXPECT_EQ(default_cv_offsets({"robot_compliance", "rest_change"}), 8);
+  EXPECT_TRUE(find_effect("rest_change")->locates_events());
+  EXPECT_EQ(describe_extension("none"), "no extension predicts held-out data better than the nominal model beyond the noise");
+  EXPECT_EQ(describe_extension("gravity"), "");
+}
+
+TEST(EffectRegistry, TheHiddenEffectsSchemaListsTheInjectableEffects) {
+  std::ifstream in(std::string(HIL_SOURCE_DIR) + "/docs/schemas/hil.hidden_effects.schema.json");
+  ASSERT_TRUE(in) << "docs/schemas/hil.hidden_effects.schema.json";
+  const auto schema = nlohmann::json::parse(in);
+  const auto listed = schema["properties"]["effects"]["items"]["enum"].get<std::vector<std::string>>();
+  std::vector<std::string> injectable;
+  for (const Effect* e : registered_effects())
+    if (e->contact() && e->contact()->injectable()) injectable.push_back(e->name());
+  EXPECT_EQ(listed, injectable);
+}
+
+// --- fitted, reported, checked, named ------------------------------------------------------------
+
+TEST(EffectRegistry, AToyEffectIsFittedReportedCheckedAndNamed) {
+  const auto r = test::scene_run("press_slide");
+  Effects e;
+  e.sensor_bias(2) = 6.0;  // what the toy models: fz reads 6 N too much
+  const auto data = make_contact_data(r.scene, r.model.v_tm, test::measure(r, e, 7), r.force_scale_n, r.moment_scale_nm);
+
+  const ContactFamily fam(data, {"toy_fz_offset"});
+  EXPECT_EQ(fam.name(), "toy_fz_offset");
+  ASSERT_EQ(fam.linear().size(), 3u);
+  EXPECT_EQ(fam.linear()[2].name, "toy_offset_fz_n");
+  std::vector<int> all(data.obs.size());
+  for (std::size_t k = 0; k < all.size(); ++k) all[k] = static_cast<int>(k);
+  Fit f = fit(fam, data.obs, all);
+  const auto line = [&](const std::string& name) {
+    const auto it = std::find_if(f.reported.begin(), f.reported.end(), [&](const Reported& q) { return q.name == name; });
+    return it == f.reported.end() ? std::optional<Reported>{} : std::optional<Reported>{*it};
+  };
+  ASSERT_TRUE(line("toy_offset_fz_n"));
+  EXPECT_NEAR(line("toy_offset_fz_n")->value, 6.0, 3 * line("toy_offset_fz_n")->std + 0.05);
+  EXPECT_TRUE(line("toy_offset_fz_n")->extension);
+  ASSERT_TRUE(line("toy_offset_fz_kn"));  // its derived line, after the parameters
+  EXPECT_DOUBLE_EQ(line("toy_offset_fz_kn")->value, line("toy_offset_fz_n")->value / 1e3);
+  EXPECT_EQ(fam.check(f), "");
+  for (auto& q : f.reported)
+    if (q.name == "toy_offset_fz_n") q.value = 2e3;
+  EXPECT_EQ(fam.check(f), "a toy offset beyond 1 kN is not physical");
+
+  // With another effect: the layout puts the toy after the built-in ones.
+  const ContactFamily both(data, {"viscous_friction", "toy_fz_offset"});
+  EXPECT_EQ(both.name(), "viscous_friction+toy_fz_offset");
+  ASSERT_EQ(both.linear().size(), 4u);
+  EXPECT_EQ(both.linear()[3].name, "toy_offset_fz_n");
+
+  const ModelFactory make = [&data](const std::set<std::string>& x) { return std::make_unique<ContactFamily>(data, x); };
+  const Diagnosis d = diagnose(make, {"viscous_friction", "toy_fz_offset"}, data.obs, {});
+  EXPECT_EQ(d.cause, "toy_fz_offset");
+  ASSERT_TRUE(d.extended);
+  EXPECT_GT(d.gain_percent, 2.0);
+}
+
+}  // namespace
+}  // namespace hil::diagnose
