@@ -107,7 +107,8 @@ def check(layers):
 
 def main(argv):
     if len(argv) == 2 and argv[1] == '--self-test':
-        return unittest.main(argv=[argv[0]], exit=False).result.wasSuccessful() and 0 or 1
+        ok = unittest.main(argv=[argv[0]], exit=False).result.wasSuccessful()
+        return 0 if ok else 1
     if len(argv) != 2:
         print(__doc__, file=sys.stderr)
         return 2
