@@ -8,18 +8,12 @@ py::object to_python(const nlohmann::json& j) {
   using V = nlohmann::json::value_t;
   switch (j.type()) {
     case V::null:
-    case V::discarded:
-      return py::none();
-    case V::boolean:
-      return py::bool_(j.get<bool>());
-    case V::number_integer:
-      return py::int_(j.get<std::int64_t>());
-    case V::number_unsigned:
-      return py::int_(j.get<std::uint64_t>());
-    case V::number_float:
-      return py::float_(j.get<double>());
-    case V::string:
-      return py::str(j.get_ref<const std::string&>());
+    case V::discarded: return py::none();
+    case V::boolean: return py::bool_(j.get<bool>());
+    case V::number_integer: return py::int_(j.get<std::int64_t>());
+    case V::number_unsigned: return py::int_(j.get<std::uint64_t>());
+    case V::number_float: return py::float_(j.get<double>());
+    case V::string: return py::str(j.get_ref<const std::string&>());
     case V::array: {
       py::list l;
       for (const auto& e : j) l.append(to_python(e));
@@ -30,8 +24,7 @@ py::object to_python(const nlohmann::json& j) {
       for (const auto& [k, v] : j.items()) d[py::str(k)] = to_python(v);
       return d;
     }
-    case V::binary:
-      break;
+    case V::binary: break;
   }
   throw std::logic_error("hil: a JSON value of binary type has no Python form");
 }

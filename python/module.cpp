@@ -19,7 +19,7 @@ PYBIND11_MODULE(hil, m) {
 
   format_error = new py::exception<hil::error::FormatError>(m, "FormatError", PyExc_ValueError);
   format_error->doc() = "Bad input: the message reads FILE:LINE:COL: field 'F': MESSAGE; also as attributes file, line, "
-                       "column (1-based, 0 = not applicable), field and message.";
+                        "column (1-based, 0 = not applicable), field and message.";
   py::register_exception_translator([](std::exception_ptr p) {
     try {
       if (p) std::rethrow_exception(p);

@@ -82,9 +82,8 @@ py::dict instant_dict(const std::vector<cid::InstantEstimate>& v) {
   return d;
 }
 
-py::dict identify_contact(const Path& run_path, const Path& rig, bool geometric, const std::string& lambda,
-                          const std::string& solver, const std::string& jacobian, int window, int lcurve_points,
-                          bool include_weak) {
+py::dict identify_contact(const Path& run_path, const Path& rig, bool geometric, const std::string& lambda, const std::string& solver,
+                          const std::string& jacobian, int window, int lcurve_points, bool include_weak) {
   if (window < 1) throw py::value_error("window: expected >= 1 used samples, got " + std::to_string(window));
   if (lcurve_points < 3) throw py::value_error("lcurve_points: expected >= 3, got " + std::to_string(lcurve_points));
   nlohmann::json j;
@@ -128,8 +127,8 @@ py::dict identify_contact(const Path& run_path, const Path& rig, bool geometric,
 /// the callback's own). Not a std::exception, so that the command's catch-alls let it through.
 struct StopForPython {};
 
-py::dict diagnose(const Path& path, const Path& rig, const std::vector<std::string>& candidates, int folds,
-                  const py::object& progress, int cv_offsets) {
+py::dict diagnose(const Path& path, const Path& rig, const std::vector<std::string>& candidates, int folds, const py::object& progress,
+                  int cv_offsets) {
   if (folds < 2) throw py::value_error("folds: must be at least 2, got " + std::to_string(folds));
   if (cv_offsets < 0 || cv_offsets > 64)
     throw py::value_error("cv_offsets: must be 0 (automatic) to 64, got " + std::to_string(cv_offsets));
@@ -165,8 +164,7 @@ py::dict diagnose(const Path& path, const Path& rig, const std::vector<std::stri
   return to_python(j);
 }
 
-py::dict identify_stiffness(const Path& table_path, const Path& rig, double noise_pos_m, double noise_rot_rad,
-                            double neglect_below) {
+py::dict identify_stiffness(const Path& table_path, const Path& rig, double noise_pos_m, double noise_rot_rad, double neglect_below) {
   if (!(noise_pos_m >= 0.0) || !(noise_rot_rad >= 0.0))
     throw py::value_error("noise_pos_m, noise_rot_rad: expected >= 0 (0: estimated from the residuals)");
   if (!(neglect_below >= 0.0)) throw py::value_error("neglect_below: expected >= 0 (0: M6 off)");
@@ -247,12 +245,11 @@ void add_numerics(py::module_& m) {
         "offsets of the block grid the cross-validation is repeated over (0: 8 with rest_change, else 1).");
   m.def(
       "simulate_contact",
-      [](const Path& rig, const Path& trajectory, const py::object& K, const py::object& mu,
-         const std::map<std::string, double>& geometric, double position_resolution_m, double velocity_resolution_m_per_s,
-         double force_resolution_n, double moment_resolution_nm, double force_noise_n, double moment_noise_nm,
-         unsigned seed) {
-        const double v[] = {position_resolution_m, velocity_resolution_m_per_s, force_resolution_n,
-                            moment_resolution_nm, force_noise_n, moment_noise_nm};
+      [](const Path& rig, const Path& trajectory, const py::object& K, const py::object& mu, const std::map<std::string, double>& geometric,
+         double position_resolution_m, double velocity_resolution_m_per_s, double force_resolution_n, double moment_resolution_nm,
+         double force_noise_n, double moment_noise_nm, unsigned seed) {
+        const double v[] = {position_resolution_m, velocity_resolution_m_per_s, force_resolution_n, moment_resolution_nm, force_noise_n,
+                            moment_noise_nm};
         for (double x : v)
           if (!(x >= 0.0) || !std::isfinite(x)) throw py::value_error("sensor resolutions and noise: expected finite values >= 0");
         return simulate_contact(rig, trajectory, K, mu, geometric,
@@ -261,9 +258,8 @@ void add_numerics(py::module_& m) {
       },
       py::arg("rig"), py::arg("trajectory"), py::arg("K") = py::none(), py::arg("mu") = py::none(),
       py::arg("geometric") = std::map<std::string, double>{}, py::arg("position_resolution_m") = 0.0,
-      py::arg("velocity_resolution_m_per_s") = 0.0, py::arg("force_resolution_n") = 0.0,
-      py::arg("moment_resolution_nm") = 0.0, py::arg("force_noise_n") = 0.0, py::arg("moment_noise_nm") = 0.0,
-      py::arg("seed") = 1u,
+      py::arg("velocity_resolution_m_per_s") = 0.0, py::arg("force_resolution_n") = 0.0, py::arg("moment_resolution_nm") = 0.0,
+      py::arg("force_noise_n") = 0.0, py::arg("moment_noise_nm") = 0.0, py::arg("seed") = 1u,
       "The rig's contact scene along a trajectory CSV (t, px..qz[, vx..wz]), as `hil contact simulate`: the "
       "read_samples arrays as a sensor measures them (f, m quantised and noisy), f_true, m_true, contacts, K, mu. "
       "K and mu default to the rig's model; geometric: uncertainty name -> true value (m or rad).");

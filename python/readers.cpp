@@ -49,10 +49,8 @@ py::dict extra_columns(const fmt_::SampleTable& t) {
       if (used != c.size() || c.empty() || !std::isfinite(x)) break;
       v.push_back(x);
     }
-    if (v.size() == cells.size())
-      d[py::str(name)] = array(v);
-    else
-      d[py::str(name)] = py::cast(cells);
+    if (v.size() == cells.size()) d[py::str(name)] = array(v);
+    else d[py::str(name)] = py::cast(cells);
   }
   return d;
 }

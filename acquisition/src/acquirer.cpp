@@ -29,8 +29,7 @@ using messages::to_time;
 class RawWriter {
  public:
   explicit RawWriter(const RunRecorder& rec) {
-    plate_ = open(rec.raw_path("force_plate.csv"),
-                  "t_ns,seq,stamp,status_word,g0,g1,g2,g3,g4,g5,fx,fy,fz,mx,my,mz\n");
+    plate_ = open(rec.raw_path("force_plate.csv"), "t_ns,seq,stamp,status_word,g0,g1,g2,g3,g4,g5,fx,fy,fz,mx,my,mz\n");
     robot_ = open(rec.raw_path("robot.csv"), "t_ns,rtt_ns,seq,px,py,pz,qw,qx,qy,qz,joints\n");
   }
   ~RawWriter() {
@@ -40,14 +39,14 @@ class RawWriter {
   }
   void plate(const drivers::WrenchSample& s) {
     fmt::format_to(std::back_inserter(plate_buf_), "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n", s.t_ns, s.sequence,
-                   static_cast<int>(s.stamp), s.status_word, s.gauges[0], s.gauges[1], s.gauges[2], s.gauges[3], s.gauges[4],
-                   s.gauges[5], s.w_fp[0], s.w_fp[1], s.w_fp[2], s.w_fp[3], s.w_fp[4], s.w_fp[5]);
+                   static_cast<int>(s.stamp), s.status_word, s.gauges[0], s.gauges[1], s.gauges[2], s.gauges[3], s.gauges[4], s.gauges[5],
+                   s.w_fp[0], s.w_fp[1], s.w_fp[2], s.w_fp[3], s.w_fp[4], s.w_fp[5]);
   }
   void robot(const drivers::RobotSample& s, const Eigen::Isometry3d& T_world_ee) {
     const Eigen::Quaterniond q(T_world_ee.linear());
     const auto& p = T_world_ee.translation();
-    fmt::format_to(std::back_inserter(robot_buf_), "{},{},{},{},{},{},{},{},{},{},", s.t_ns, s.rtt_ns, s.sequence, p.x(), p.y(),
-                   p.z(), q.w(), q.x(), q.y(), q.z());
+    fmt::format_to(std::back_inserter(robot_buf_), "{},{},{},{},{},{},{},{},{},{},", s.t_ns, s.rtt_ns, s.sequence, p.x(), p.y(), p.z(),
+                   q.w(), q.x(), q.y(), q.z());
     for (unsigned j = 0; j < s.joint_count; ++j) fmt::format_to(std::back_inserter(robot_buf_), "{}{}", j ? " " : "", s.joints[j]);
     robot_buf_ += '\n';
   }
@@ -115,8 +114,7 @@ hil_msgs::msg::DeviceStatus to_msg(const DeviceHealth& h, std::int64_t now_ns) {
 Acquirer::Acquirer(AcquirerOptions options, std::unique_ptr<drivers::ForcePlate> plate,
                    std::unique_ptr<drivers::RobotControllerDriver> robot, dds::Participant* bus, RunRecorder* recorder)
     : opt_(std::move(options)), plate_(std::move(plate)), robot_(std::move(robot)), bus_(bus), recorder_(recorder),
-      sync_(opt_.sync, [this](const SyncedSample& s) { emit(s); }),
-      plate_mon_(opt_.force_plate_name, opt_.sync.wrench_rate_hz),
+      sync_(opt_.sync, [this](const SyncedSample& s) { emit(s); }), plate_mon_(opt_.force_plate_name, opt_.sync.wrench_rate_hz),
       robot_mon_(opt_.robot_name, robot_ ? robot_->config().rate_hz : 1.0) {
   if (!plate_) throw std::invalid_argument("acquirer: a force plate is required");
   if (bus_) {
@@ -124,8 +122,7 @@ Acquirer::Acquirer(AcquirerOptions options, std::unique_ptr<drivers::ForcePlate>
     // are kept for it to catch up.
     dds::StreamQos q{true, 5000, 0};
     w_sample_ = std::make_unique<dds::Writer<hil_msgs::msg::PoseWrenchSample>>(*bus_, dds::topics::kPoseWrenchSample, q);
-    w_status_ = std::make_unique<dds::Writer<hil_msgs::msg::DeviceStatus>>(*bus_, dds::topics::kDeviceStatus,
-                                                                          dds::StreamQos{true, 10, 10});
+    w_status_ = std::make_unique<dds::Writer<hil_msgs::msg::DeviceStatus>>(*bus_, dds::topics::kDeviceStatus, dds::StreamQos{true, 10, 10});
     if (opt_.ros_topics) {
       w_wrench_ = std::make_unique<dds::Writer<geometry_msgs::msg::WrenchStamped>>(*bus_, dds::topics::kWrench, q);
       w_pose_ = std::make_unique<dds::Writer<geometry_msgs::msg::PoseStamped>>(*bus_, dds::topics::kPose, q);
@@ -136,7 +133,7 @@ Acquirer::Acquirer(AcquirerOptions options, std::unique_ptr<drivers::ForcePlate>
         w_tf_static_ = std::make_unique<dds::Writer<tf2_msgs::msg::TFMessage>>(*bus_, dds::topics::kTfStatic, dds::StreamQos{true, 1, 1});
       // diagnostic_updater's QoS: reliable, volatile, a short keep-last history.
       w_diagnostics_ = std::make_unique<dds::Writer<diagnostic_msgs::msg::DiagnosticArray>>(*bus_, dds::topics::kDiagnostics,
-                                                                                          dds::StreamQos{true, 10, 0});
+                                                                                            dds::StreamQos{true, 10, 0});
     }
   }
   if (recorder_) raw_ = std::make_unique<RawWriter>(*recorder_);
@@ -165,8 +162,7 @@ void Acquirer::start() {
                        plate_->channel().name();
   if (robot_) robot_hardware_id_ = robot_->config().describe();
   if (w_tf_static_) w_tf_static_->write(to_tf_message(opt_.static_frames, to_time(static_cast<double>(realtime_ns()) * 1e-9)));
-  if (opt_.wait_for_subscribers > 0 && w_sample_ &&
-      !w_sample_->wait_for_readers(opt_.wait_for_subscribers, std::chrono::seconds(10)))
+  if (opt_.wait_for_subscribers > 0 && w_sample_ && !w_sample_->wait_for_readers(opt_.wait_for_subscribers, std::chrono::seconds(10)))
     spdlog::warn("acquire: fewer than {} subscribers after 10 s; starting anyway", opt_.wait_for_subscribers);
   running_ = true;
   plate_thread_ = std::thread([this] { plate_loop(); });
@@ -210,9 +206,8 @@ void Acquirer::enter_rt(const char* device) {
     ++rt_threads_;
     spdlog::info("{}: device thread at real-time priority {} (SCHED_FIFO)", device, opt_.rt_priority);
   } else {
-    spdlog::warn("{}: real-time priority {} not permitted ({}); the device thread runs at normal priority{}", device,
-                 opt_.rt_priority, std::strerror(e),
-                 e == EPERM ? " (needs CAP_SYS_NICE or an RLIMIT_RTPRIO of at least the priority)" : "");
+    spdlog::warn("{}: real-time priority {} not permitted ({}); the device thread runs at normal priority{}", device, opt_.rt_priority,
+                 std::strerror(e), e == EPERM ? " (needs CAP_SYS_NICE or an RLIMIT_RTPRIO of at least the priority)" : "");
   }
 }
 
@@ -240,9 +235,9 @@ void Acquirer::plate_loop() {
       switch (st) {
         case drivers::PollStatus::ok: {
           if (r.quality & kDeviceFault) {
-            plate_mon_.error(s.error_frames > 0 ? fmt::format("{} CAN error frame(s): {}", s.error_frames,
-                                                              drivers::describe(plate_->last_bus_error()))
-                                                : std::string("force plate reports a CAN bus error (status 0x4000)"),
+            plate_mon_.error(s.error_frames > 0
+                                 ? fmt::format("{} CAN error frame(s): {}", s.error_frames, drivers::describe(plate_->last_bus_error()))
+                                 : std::string("force plate reports a CAN bus error (status 0x4000)"),
                              now);
           }
           plate_mon_.sample(r.t_ns);
@@ -261,9 +256,7 @@ void Acquirer::plate_loop() {
           plate_mon_.error(fmt::format("{}: {}", drivers::to_string(st), plate_->last_problem()), now);
           break;
         case drivers::PollStatus::disconnected:
-        case drivers::PollStatus::closed:
-          plate_mon_.link(false, now);
-          break;
+        case drivers::PollStatus::closed: plate_mon_.link(false, now); break;
       }
       // The driver's counters change in poll(), outside the lock: the other threads read this
       // copy, taken under it (TSan found health() and the robot thread reading them mid-poll).
@@ -319,17 +312,14 @@ void Acquirer::robot_loop() {
           if (raw_) raw_->robot(s, T_world_ee);
           sync_.push_pose(r);
           break;
-        case drivers::PollStatus::timeout:
-          break;
+        case drivers::PollStatus::timeout: break;
         case drivers::PollStatus::bad_frame:
         case drivers::PollStatus::bus_error:
         case drivers::PollStatus::exception:
           robot_mon_.error(fmt::format("{}: {}", drivers::to_string(st), robot_->last_problem()), now);
           break;
         case drivers::PollStatus::disconnected:
-        case drivers::PollStatus::closed:
-          robot_mon_.link(false, now);
-          break;
+        case drivers::PollStatus::closed: robot_mon_.link(false, now); break;
       }
       check_health(now, false);
     }

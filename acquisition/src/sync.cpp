@@ -141,8 +141,7 @@ bool Synchronizer::fill_pose(SyncedSample& s, bool force) const {
 
   // Twist: least-squares slope over the poses within +-W of the sample time.
   double st = 0, stt = 0;
-  Eigen::Vector3d sp = Eigen::Vector3d::Zero(), stp = Eigen::Vector3d::Zero(), sr = Eigen::Vector3d::Zero(),
-                  str = Eigen::Vector3d::Zero();
+  Eigen::Vector3d sp = Eigen::Vector3d::Zero(), stp = Eigen::Vector3d::Zero(), sr = Eigen::Vector3d::Zero(), str = Eigen::Vector3d::Zero();
   int n = 0;
   const Eigen::Quaterniond q_ref_inv = s.q_world_ee.conjugate();
   for (const auto& p : poses_) {
@@ -176,8 +175,10 @@ void Synchronizer::emit_ready(std::int64_t now_ns, bool force) {
   // pending (or next) output, plus one before it for interpolation.
   const std::int64_t W = static_cast<std::int64_t>(cfg_.twist_half_window_s * 1e9);
   const std::int64_t oldest_needed =
-      (pending_.empty() ? (window_.empty() ? now_ns : window_[std::min<std::size_t>(window_.size() - 1, static_cast<std::size_t>(half_))].t_ns)
-                        : pending_.front().t_ns) - W;
+      (pending_.empty()
+           ? (window_.empty() ? now_ns : window_[std::min<std::size_t>(window_.size() - 1, static_cast<std::size_t>(half_))].t_ns)
+           : pending_.front().t_ns) -
+      W;
   while (poses_.size() > 2 && poses_[1].t_ns < oldest_needed) poses_.pop_front();
 }
 

@@ -5,11 +5,12 @@
 
 namespace hil::calibration {
 
-std::vector<Measurement> simulate(const VjmModel& model, const ComplianceSet& truth, const ExperimentPlan& plan,
-                                  const NoiseModel& noise) {
+std::vector<Measurement> simulate(const VjmModel& model, const ComplianceSet& truth, const ExperimentPlan& plan, const NoiseModel& noise) {
   check_shapes(model, truth);
-  if (plan.configurations < 1 || plan.loads_per_config < 1) throw std::invalid_argument("simulate: need at least one configuration and load");
-  if (plan.kind == MeasurementKind::markers && plan.p_ee_marker_m.empty()) throw std::invalid_argument("simulate: markers kind without markers");
+  if (plan.configurations < 1 || plan.loads_per_config < 1)
+    throw std::invalid_argument("simulate: need at least one configuration and load");
+  if (plan.kind == MeasurementKind::markers && plan.p_ee_marker_m.empty())
+    throw std::invalid_argument("simulate: markers kind without markers");
   std::mt19937_64 rng(plan.seed);
   std::uniform_real_distribution<double> unit(0.0, 1.0);
   std::normal_distribution<double> gauss(0.0, 1.0);

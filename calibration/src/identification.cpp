@@ -71,7 +71,8 @@ LsqSolution solve(const CompressedSystem& sys, const std::vector<int>& free_cols
   LsqSolution out;
   const auto n = static_cast<Eigen::Index>(free_cols.size());
   Eigen::VectorXd rhs = sys.z;
-  for (std::size_t i = 0; i < fixed_cols.size(); ++i) rhs.noalias() -= sys.R.col(fixed_cols[i]) * fixed_values[static_cast<Eigen::Index>(i)];
+  for (std::size_t i = 0; i < fixed_cols.size(); ++i)
+    rhs.noalias() -= sys.R.col(fixed_cols[i]) * fixed_values[static_cast<Eigen::Index>(i)];
   if (n == 0) {
     out.rss = sys.rss_outside + rhs.squaredNorm();
     out.dof = sys.rows;

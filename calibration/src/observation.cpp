@@ -118,8 +118,7 @@ Eigen::MatrixXd projection(const Measurement& m, const Eigen::Isometry3d& T_worl
   return S;
 }
 
-WeightedSystem build_system(const VjmModel& model, const ParameterSet& set, const std::vector<Measurement>& data,
-                            const NoiseModel& noise) {
+WeightedSystem build_system(const VjmModel& model, const ParameterSet& set, const std::vector<Measurement>& data, const NoiseModel& noise) {
   Eigen::Index m = 0;
   for (const auto& d : data) m += measurement_rows(d);
   const auto n = static_cast<Eigen::Index>(set.size());

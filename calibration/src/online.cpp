@@ -8,8 +8,8 @@
 
 namespace hil::calibration {
 
-OnlineIdentifier::OnlineIdentifier(VjmModel model, ParameterSet free, ParameterSet fixed, Eigen::VectorXd fixed_values,
-                                   NoiseModel noise, PipelineOptions options, bool reduce)
+OnlineIdentifier::OnlineIdentifier(VjmModel model, ParameterSet free, ParameterSet fixed, Eigen::VectorXd fixed_values, NoiseModel noise,
+                                   PipelineOptions options, bool reduce)
     : model_(std::move(model)), fixed_values_(std::move(fixed_values)), noise_(noise), options_(std::move(options)), reduce_(reduce) {
   if (fixed_values_.size() != static_cast<Eigen::Index>(fixed.size())) throw std::invalid_argument("online: one value per fixed parameter");
   if (reduce_ && !fixed.empty()) throw std::invalid_argument("online: reduction runs on free parameters only");
@@ -105,8 +105,8 @@ OnlineEstimate OnlineIdentifier::estimate() const {
       fixed_vals.push_back(fixed_values_[static_cast<Eigen::Index>(i - n_free_)]);
       steps.emplace_back("given");
     }
-    s = solve(sys_, free_cols, fixed_cols, Eigen::Map<const Eigen::VectorXd>(fixed_vals.data(), static_cast<Eigen::Index>(fixed_vals.size())),
-              options_.algebraic.rank);
+    s = solve(sys_, free_cols, fixed_cols,
+              Eigen::Map<const Eigen::VectorXd>(fixed_vals.data(), static_cast<Eigen::Index>(fixed_vals.size())), options_.algebraic.rank);
   }
   out.rank = s.rank;
   out.full_rank = s.full_rank;

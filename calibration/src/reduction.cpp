@@ -91,7 +91,7 @@ Partition m4a_partition(const CompressedSystem& sys, const std::vector<int>& col
     const int c = cols[static_cast<std::size_t>(i)];
     if (null_part < options.v_tolerance) out.g1.push_back(c);        // rule 1
     else if (range_part < options.v_tolerance) out.g2.push_back(c);  // rule 2
-    else out.g3.push_back(c);                                         // rule 3
+    else out.g3.push_back(c);                                        // rule 3
   }
   return out;
 }
@@ -109,7 +109,8 @@ struct UnionFind {
   std::vector<int> parent;
   explicit UnionFind(std::size_t n) : parent(n) { std::iota(parent.begin(), parent.end(), 0); }
   int find(int x) {
-    while (parent[static_cast<std::size_t>(x)] != x) x = parent[static_cast<std::size_t>(x)] = parent[static_cast<std::size_t>(parent[static_cast<std::size_t>(x)])];
+    while (parent[static_cast<std::size_t>(x)] != x)
+      x = parent[static_cast<std::size_t>(x)] = parent[static_cast<std::size_t>(parent[static_cast<std::size_t>(x)])];
     return x;
   }
   void unite(int a, int b) { parent[static_cast<std::size_t>(find(a))] = find(b); }
@@ -152,7 +153,8 @@ Splitting m5a_split(const CompressedSystem& sys, const std::vector<int>& g3, con
   for (Eigen::Index i = 0; i < r; ++i)
     if (row_root[static_cast<std::size_t>(i)] >= 0) ++groups[uf.find(row_root[static_cast<std::size_t>(i)])].rank;
   for (auto& [root, g] : groups) out.groups.push_back(g);
-  std::sort(out.groups.begin(), out.groups.end(), [](const CoupledGroup& a, const CoupledGroup& b) { return a.cols.front() < b.cols.front(); });
+  std::sort(out.groups.begin(), out.groups.end(),
+            [](const CoupledGroup& a, const CoupledGroup& b) { return a.cols.front() < b.cols.front(); });
   return out;
 }
 
@@ -161,9 +163,8 @@ Selection m5bc_select(const CompressedSystem& sys, const Splitting& split, const
   Selection out;
   for (const CoupledGroup& g : split.groups) {
     std::vector<int> order = g.cols;
-    std::stable_sort(order.begin(), order.end(), [&](int a, int b) {
-      return priority[static_cast<std::size_t>(a)] > priority[static_cast<std::size_t>(b)];
-    });
+    std::stable_sort(order.begin(), order.end(),
+                     [&](int a, int b) { return priority[static_cast<std::size_t>(a)] > priority[static_cast<std::size_t>(b)]; });
     std::vector<int> chosen;
     for (int c : order) {
       if (static_cast<int>(chosen.size()) == g.rank) {
@@ -240,8 +241,8 @@ void residual_stats(const WeightedSystem& sys, const Eigen::VectorXd& all_values
 }
 
 /// Noise per group (position rows, rotation rows) from the residuals of a first, unweighted fit.
-NoiseModel estimate_noise(const VjmModel& model, const ParameterSet& set, const std::vector<Measurement>& data,
-                          const NoiseModel& given, const RankOptions& rank) {
+NoiseModel estimate_noise(const VjmModel& model, const ParameterSet& set, const std::vector<Measurement>& data, const NoiseModel& given,
+                          const RankOptions& rank) {
   const NoiseModel unit{1.0, 1.0};
   const WeightedSystem sys = build_system(model, set, data, unit);
   const CompressedSystem c = compress(sys.A_w, sys.t_w);
@@ -303,16 +304,19 @@ void fill_outputs(const VjmModel& model, const ParameterSet& base, const Weighte
 
 }  // namespace
 
-AlgebraicResult reduce_algebraic(const VjmModel& model, const CompressedSystem& c, const ParameterSet& base, const std::vector<int>& phys_cols,
-                                 const PipelineOptions& options, std::vector<ReductionLine>* lines) {
+AlgebraicResult reduce_algebraic(const VjmModel& model, const CompressedSystem& c, const ParameterSet& base,
+                                 const std::vector<int>& phys_cols, const PipelineOptions& options, std::vector<ReductionLine>* lines) {
   AlgebraicResult r;
   // M4
   r.partition = m4a_partition(c, phys_cols, options.algebraic);
-  if (lines) lines->push_back({"M4a", "partitioning: G1 " + std::to_string(r.partition.g1.size()) + ", G2 " + std::to_string(r.partition.g2.size()) +
-                              ", G3 " + std::to_string(r.partition.g3.size()),
-                   static_cast<int>(phys_cols.size()), r.partition.rank});
+  if (lines)
+    lines->push_back({"M4a",
+                      "partitioning: G1 " + std::to_string(r.partition.g1.size()) + ", G2 " + std::to_string(r.partition.g2.size()) +
+                          ", G3 " + std::to_string(r.partition.g3.size()),
+                      static_cast<int>(phys_cols.size()), r.partition.rank});
   const std::vector<int> after_m4 = m4b_eliminate(phys_cols, r.partition);
-  if (lines) lines->push_back({"M4b", "elimination of G2", static_cast<int>(after_m4.size()), rank_of(c, after_m4, options.algebraic.rank)});
+  if (lines)
+    lines->push_back({"M4b", "elimination of G2", static_cast<int>(after_m4.size()), rank_of(c, after_m4, options.algebraic.rank)});
 
   // M5
   r.splitting = m5a_split(c, r.partition.g3, options.algebraic);
@@ -322,9 +326,11 @@ AlgebraicResult reduce_algebraic(const VjmModel& model, const CompressedSystem& 
     if (!groups_text.empty()) groups_text += ", ";
     groups_text += std::to_string(g.rank) + " of " + std::to_string(g.cols.size());
   }
-  if (lines) lines->push_back({"M5a", "splitting G3 into " + std::to_string(r.splitting.groups.size()) + " coupled groups (keep " +
-                              (groups_text.empty() ? std::string("-") : groups_text) + ")",
-                   static_cast<int>(after_m4.size()), -1});
+  if (lines)
+    lines->push_back({"M5a",
+                      "splitting G3 into " + std::to_string(r.splitting.groups.size()) + " coupled groups (keep " +
+                          (groups_text.empty() ? std::string("-") : groups_text) + ")",
+                      static_cast<int>(after_m4.size()), -1});
   std::vector<double> priority(base.size());
   for (std::size_t i = 0; i < base.size(); ++i) {
     const auto it = options.priorities.find(base[i].name);
@@ -350,12 +356,14 @@ AlgebraicResult reduce_algebraic(const VjmModel& model, const CompressedSystem& 
     fixed_steps.push_back("M5c");
   }
   r.rank_algebraic = rank_of(c, free_cols, options.algebraic.rank);
-  if (lines) lines->push_back({"M5b/c", "selection and assigning: " + std::to_string(sel.fixed.size()) + " fixed", static_cast<int>(free_cols.size()),
-                   r.rank_algebraic});
+  if (lines)
+    lines->push_back({"M5b/c", "selection and assigning: " + std::to_string(sel.fixed.size()) + " fixed",
+                      static_cast<int>(free_cols.size()), r.rank_algebraic});
 
   // M6: neglect, one at a time, the parameter with the lowest parameter-to-noise ratio below the threshold.
   auto solve_now = [&] {
-    return solve(c, free_cols, fixed_cols, Eigen::Map<const Eigen::VectorXd>(fixed_vals.data(), static_cast<Eigen::Index>(fixed_vals.size())),
+    return solve(c, free_cols, fixed_cols,
+                 Eigen::Map<const Eigen::VectorXd>(fixed_vals.data(), static_cast<Eigen::Index>(fixed_vals.size())),
                  options.algebraic.rank);
   };
   LsqSolution s = solve_now();
@@ -438,7 +446,8 @@ CalibrationResult calibrate(const VjmModel& model, const std::vector<Measurement
   const std::vector<std::string>& fixed_steps = a.fixed_steps;
   out.reduction = lines;
   fill_outputs(model, before_m3, sys, free_cols, fixed_cols,
-               Eigen::Map<const Eigen::VectorXd>(fixed_vals.data(), static_cast<Eigen::Index>(fixed_vals.size())), fixed_steps, options.pnr, out);
+               Eigen::Map<const Eigen::VectorXd>(fixed_vals.data(), static_cast<Eigen::Index>(fixed_vals.size())), fixed_steps, options.pnr,
+               out);
   return out;
 }
 

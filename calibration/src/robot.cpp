@@ -26,7 +26,7 @@ Eigen::Isometry3d dh_transform(DhConvention convention, const DhRow& row, double
         0.0, 0.0, 0.0, 1.0;
   } else {
     // Rx(α) Tx(a) Rz(θ) Tz(d)
-    M << ct, -st, 0.0, row.a_m,         //
+    M << ct, -st, 0.0, row.a_m,          //
         st * ca, ct * ca, -sa, -sa * d,  //
         st * sa, ct * sa, ca, ca * d,    //
         0.0, 0.0, 0.0, 1.0;
@@ -62,9 +62,7 @@ ChainPoses forward(const SerialRobot& robot, const Eigen::Ref<const Eigen::Vecto
   return p;
 }
 
-Eigen::Isometry3d tool_pose(const SerialRobot& robot, const Eigen::Ref<const Eigen::VectorXd>& q) {
-  return forward(robot, q).T_world_ee;
-}
+Eigen::Isometry3d tool_pose(const SerialRobot& robot, const Eigen::Ref<const Eigen::VectorXd>& q) { return forward(robot, q).T_world_ee; }
 
 Eigen::Isometry3d tool_in_base(const SerialRobot& robot, const double* q) noexcept {
   Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
@@ -104,12 +102,9 @@ SerialRobot kr270_like() {
   r.name = "kr270_like";
   r.convention = DhConvention::standard;
   r.joints = {
-      {"a1", JointKind::revolute, 0.350, -kHalfPi, 0.675, 0.0, -3.2, 3.2},
-      {"a2", JointKind::revolute, 1.150, 0.0, 0.0, 0.0, -2.44, -0.09},
-      {"a3", JointKind::revolute, 0.041, -kHalfPi, 0.0, 0.0, -2.1, 2.7},
-      {"a4", JointKind::revolute, 0.0, kHalfPi, 1.200, 0.0, -6.1, 6.1},
-      {"a5", JointKind::revolute, 0.0, -kHalfPi, 0.0, 0.0, -2.1, 2.1},
-      {"a6", JointKind::revolute, 0.0, 0.0, 0.215, 0.0, -6.1, 6.1},
+      {"a1", JointKind::revolute, 0.350, -kHalfPi, 0.675, 0.0, -3.2, 3.2}, {"a2", JointKind::revolute, 1.150, 0.0, 0.0, 0.0, -2.44, -0.09},
+      {"a3", JointKind::revolute, 0.041, -kHalfPi, 0.0, 0.0, -2.1, 2.7},   {"a4", JointKind::revolute, 0.0, kHalfPi, 1.200, 0.0, -6.1, 6.1},
+      {"a5", JointKind::revolute, 0.0, -kHalfPi, 0.0, 0.0, -2.1, 2.1},     {"a6", JointKind::revolute, 0.0, 0.0, 0.215, 0.0, -6.1, 6.1},
   };
   r.T_flange_ee = Eigen::Isometry3d::Identity();
   r.T_flange_ee.translation() = Eigen::Vector3d(0.0, 0.0, 0.2);

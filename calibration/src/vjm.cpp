@@ -107,10 +107,8 @@ void VjmModel::jacobians(const Eigen::Ref<const Eigen::VectorXd>& q, VjmWorkspac
       const auto j = static_cast<std::size_t>(sp.index - 1);
       const Eigen::Vector3d& z = ws.poses.joint_axis_world[j];
       J.setZero();
-      if (robot_.joints[j].kind == JointKind::revolute)
-        J.col(0) << z.cross(p_ee - ws.poses.p_world_joint_m[j]), z;
-      else
-        J.col(0) << z, Eigen::Vector3d::Zero();
+      if (robot_.joints[j].kind == JointKind::revolute) J.col(0) << z.cross(p_ee - ws.poses.p_world_joint_m[j]), z;
+      else J.col(0) << z, Eigen::Vector3d::Zero();
     }
   }
 }

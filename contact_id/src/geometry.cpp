@@ -148,12 +148,10 @@ Eigen::Isometry3d uncertainty_transform(const Uncertainty& u, double x) {
   return T;
 }
 
-Eigen::Isometry3d feature_transform(const std::vector<Uncertainty>& us, const Eigen::VectorXd& x, int body,
-                                    int feature) {
+Eigen::Isometry3d feature_transform(const std::vector<Uncertainty>& us, const Eigen::VectorXd& x, int body, int feature) {
   Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
   for (std::size_t j = 0; j < us.size(); ++j)
-    if (us[j].body == body && us[j].feature == feature)
-      T = uncertainty_transform(us[j], x[static_cast<Eigen::Index>(j)]) * T;
+    if (us[j].body == body && us[j].feature == feature) T = uncertainty_transform(us[j], x[static_cast<Eigen::Index>(j)]) * T;
   return T;
 }
 

@@ -85,7 +85,8 @@ LinearEstimate solve_theta(const Eigen::MatrixX2d& A, const Eigen::VectorXd& b) 
   e.mu = e.theta[1] / e.theta[0];
   const Eigen::Vector2d g(-e.theta[1] / (e.theta[0] * e.theta[0]), 1.0 / e.theta[0]);
   e.mu_std = std::sqrt(std::max(0.0, g.dot(e.cov * g)));
-  if (!(e.K > 0.0)) e.note += (e.note.empty() ? "" : "; ") + std::string("the identified K is not positive: the data do not fit the contact model");
+  if (!(e.K > 0.0))
+    e.note += (e.note.empty() ? "" : "; ") + std::string("the identified K is not positive: the data do not fit the contact model");
   return e;
 }
 

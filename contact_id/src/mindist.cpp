@@ -322,9 +322,8 @@ bool penetration_or_gap(const PosedPolyhedron& a, const PosedPolyhedron& b, doub
   return true;
 }
 
-
-bool penetration_recorded(const PosedPolyhedron& a, const PosedPolyhedron& b, double max_turn_rad, PairContact& out,
-                          SatRecord& record, ClipWorkspace& ws) {
+bool penetration_recorded(const PosedPolyhedron& a, const PosedPolyhedron& b, double max_turn_rad, PairContact& out, SatRecord& record,
+                          ClipWorkspace& ws) {
   if (!near(a, b)) {
     // A lower bound on the distance from the broad phase: bounding spheres or world boxes.
     double g = (a.center - b.center).norm() - a.radius - b.radius;
@@ -344,8 +343,8 @@ bool penetration_recorded(const PosedPolyhedron& a, const PosedPolyhedron& b, do
   return true;
 }
 
-bool penetration_after_motion(const PosedPolyhedron& a, const PosedPolyhedron& b, const SatRecord& record, double moved_m,
-                              double turn_rad, PairContact& out, ClipWorkspace& ws) {
+bool penetration_after_motion(const PosedPolyhedron& a, const PosedPolyhedron& b, const SatRecord& record, double moved_m, double turn_rad,
+                              PairContact& out, ClipWorkspace& ws) {
   // The distance of convex sets changes by at most the largest vertex displacement.
   if (record.gap >= 0.0 && record.gap > moved_m) return false;
   // A push changes by at most moved_m + (turn rate) turn_rad span (docs/contact_id.md). The best

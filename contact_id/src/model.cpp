@@ -23,15 +23,13 @@ std::vector<std::pair<int, int>> Scene::polyhedron_index(int body) const {
   std::vector<std::pair<int, int>> out;
   const auto& b = bodies[static_cast<std::size_t>(body)];
   for (std::size_t f = 0; f < b.features.size(); ++f)
-    for (std::size_t p = 0; p < b.features[f].polyhedra.size(); ++p)
-      out.emplace_back(static_cast<int>(f), static_cast<int>(p));
+    for (std::size_t p = 0; p < b.features[f].polyhedra.size(); ++p) out.emplace_back(static_cast<int>(f), static_cast<int>(p));
   return out;
 }
 
 void ContactModel::check() const {
   if (!(std::isfinite(K) && K > 0.0)) throw std::invalid_argument("contact stiffness K must be > 0, got " + std::to_string(K));
-  if (!(std::isfinite(mu) && mu >= 0.0))
-    throw std::invalid_argument("friction coefficient mu must be >= 0, got " + std::to_string(mu));
+  if (!(std::isfinite(mu) && mu >= 0.0)) throw std::invalid_argument("friction coefficient mu must be >= 0, got " + std::to_string(mu));
   if (!(std::isfinite(v_tm) && v_tm >= 0.0))
     throw std::invalid_argument("sticking threshold v_t,m must be >= 0, got " + std::to_string(v_tm));
 }
@@ -138,8 +136,8 @@ Vector6d object1_to_plate(const Vector6d& w_o1, const Eigen::Isometry3d& T_world
   return out;
 }
 
-Vector6d plate_wrench(const Scene& s, const ContactModel& m, const Eigen::VectorXd& x, const Kinematics& k,
-                  MindistWorkspace& ws, std::vector<ContactPoint>& contacts) {
+Vector6d plate_wrench(const Scene& s, const ContactModel& m, const Eigen::VectorXd& x, const Kinematics& k, MindistWorkspace& ws,
+                      std::vector<ContactPoint>& contacts) {
   mindist(s, k, x, m.v_tm, contacts, ws);
   const Eigen::Isometry3d T_world_o1 = body_pose(s.bodies[0], k.T_world_ee);
   const Vector6d w_o1 = regressor(contacts, T_world_o1) * m.theta();

@@ -17,7 +17,9 @@ Observability analyse_observability(const ContactProblem& p, const Eigen::Vector
   p.regressor(x, A);
   const Eigen::Index n = A.rows();
   auto centred = [](const Eigen::VectorXd& v) { return Eigen::VectorXd(v.array() - v.mean()); };
-  auto sd = [&](const Eigen::VectorXd& v) { return std::sqrt(centred(v).squaredNorm() / std::max<double>(1.0, static_cast<double>(v.size()) - 1.0)); };
+  auto sd = [&](const Eigen::VectorXd& v) {
+    return std::sqrt(centred(v).squaredNorm() / std::max<double>(1.0, static_cast<double>(v.size()) - 1.0));
+  };
   std::array<Eigen::MatrixXd, 2> C;
   for (int c = 0; c < 2; ++c) {
     C[static_cast<std::size_t>(c)].resize(n, M + 1);
@@ -58,8 +60,7 @@ Observability analyse_observability(const ContactProblem& p, const Eigen::Vector
   for (int j = 0; j < M; ++j) {
     if (!o.touched[static_cast<std::size_t>(j)]) continue;
     const double c1 = std::abs(o.P1(0, j + 1)), c2 = col2 ? std::abs(o.P2(0, j + 1)) : 1.0;
-    if (c1 >= 0.85 && c2 >= 0.85)
-      o.coupled.emplace_back(sc.uncertainties[static_cast<std::size_t>(j)].name, "theta");
+    if (c1 >= 0.85 && c2 >= 0.85) o.coupled.emplace_back(sc.uncertainties[static_cast<std::size_t>(j)].name, "theta");
     for (int l = j + 1; l < M; ++l) {
       const double d1 = std::abs(o.P1(j + 1, l + 1)), d2 = col2 ? std::abs(o.P2(j + 1, l + 1)) : 1.0;
       if (d1 >= 0.85 && d2 >= 0.85)

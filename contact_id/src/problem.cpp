@@ -34,7 +34,8 @@ ContactProblem::ContactProblem(Scene scene, std::vector<Measurement> data, const
   const Eigen::VectorXd xd = scene_.design();
   for (int b = 0; b < 2; ++b) index_[static_cast<std::size_t>(b)] = scene_.polyhedron_index(b);
   std::vector<std::vector<bool>> uncertain(2);
-  for (int b = 0; b < 2; ++b) uncertain[static_cast<std::size_t>(b)].assign(scene_.bodies[static_cast<std::size_t>(b)].features.size(), false);
+  for (int b = 0; b < 2; ++b)
+    uncertain[static_cast<std::size_t>(b)].assign(scene_.bodies[static_cast<std::size_t>(b)].features.size(), false);
   for (const auto& u : scene_.uncertainties) uncertain[static_cast<std::size_t>(u.body)][static_cast<std::size_t>(u.feature)] = true;
   touched_.assign(M, false);
 
@@ -76,7 +77,8 @@ ContactProblem::ContactProblem(Scene scene, std::vector<Measurement> data, const
     if (scene_.uncertainties[static_cast<std::size_t>(j)].kind == Uncertainty::Kind::rotation)
       max_turn_rad_ = std::max(max_turn_rad_, fd_step(j) * (1.0 + 1e-6));  // room for rounding
   for (int b = 0; b < 2; ++b)
-    if (fixed_body_[static_cast<std::size_t>(b)]) pose_body(b, scene_.bodies[static_cast<std::size_t>(b)].T_attach, posed_[static_cast<std::size_t>(b)]);
+    if (fixed_body_[static_cast<std::size_t>(b)])
+      pose_body(b, scene_.bodies[static_cast<std::size_t>(b)].T_attach, posed_[static_cast<std::size_t>(b)]);
 
   ClipWorkspace clip;
   std::vector<VarPair> pending;
@@ -203,13 +205,15 @@ void ContactProblem::prepare(const Eigen::VectorXd& x) const {
     disp_[static_cast<std::size_t>(us[u].body)][static_cast<std::size_t>(us[u].feature)] +=
         reach_[u] * std::abs(x[static_cast<Eigen::Index>(u)] - us[u].design_value);
   for (int b = 0; b < 2; ++b)
-    if (fixed_body_[static_cast<std::size_t>(b)]) pose_body(b, scene_.bodies[static_cast<std::size_t>(b)].T_attach, posed_[static_cast<std::size_t>(b)]);
+    if (fixed_body_[static_cast<std::size_t>(b)])
+      pose_body(b, scene_.bodies[static_cast<std::size_t>(b)].T_attach, posed_[static_cast<std::size_t>(b)]);
 }
 
 const PosedPolyhedron& ContactProblem::posed(int b, int q, int a, const Eigen::Isometry3d& Tf, PosedPolyhedron& scratch) const {
   const auto [f, k] = index_[static_cast<std::size_t>(b)][static_cast<std::size_t>(q)];
   const auto& T = (b == 0 ? T_o1_ : T_o2_)[static_cast<std::size_t>(a)];
-  scratch.pose(scene_.bodies[static_cast<std::size_t>(b)].features[static_cast<std::size_t>(f)].polyhedra[static_cast<std::size_t>(k)], T * Tf);
+  scratch.pose(scene_.bodies[static_cast<std::size_t>(b)].features[static_cast<std::size_t>(f)].polyhedra[static_cast<std::size_t>(k)],
+               T * Tf);
   return scratch;
 }
 
@@ -252,8 +256,10 @@ void ContactProblem::regressor(const Eigen::VectorXd& x, Eigen::MatrixX2d& A, st
       base_sat_[i].gap = vp.gap - (d1 + d2) * (1.0 + 1e-9) - 1e-12;  // > 0: a lower bound on their distance at x
       continue;
     }
-    const auto& P1 = fixed_body_[0] ? posed_[0][static_cast<std::size_t>(vp.p1)] : posed(0, vp.p1, vp.a, Tf_[0][static_cast<std::size_t>(vp.f1)], pa_);
-    const auto& P2 = fixed_body_[1] ? posed_[1][static_cast<std::size_t>(vp.p2)] : posed(1, vp.p2, vp.a, Tf_[1][static_cast<std::size_t>(vp.f2)], pb_);
+    const auto& P1 = fixed_body_[0] ? posed_[0][static_cast<std::size_t>(vp.p1)]
+                                    : posed(0, vp.p1, vp.a, Tf_[0][static_cast<std::size_t>(vp.f1)], pa_);
+    const auto& P2 = fixed_body_[1] ? posed_[1][static_cast<std::size_t>(vp.p2)]
+                                    : posed(1, vp.p2, vp.a, Tf_[1][static_cast<std::size_t>(vp.f2)], pb_);
     PairContact pc;
     if (!penetration_recorded(P1, P2, max_turn_rad_, pc, base_sat_[i], clip_)) continue;
     A.block<6, 2>(6 * vp.a, 0) += pair_rows(vp, pc);

@@ -41,8 +41,7 @@ struct Vp {
     return x;
   }
   /// Residual [r/sqrt(n); sqrt(λ/m) z]; fills the SVD of A if asked.
-  double residual(const Eigen::VectorXd& z, Eigen::VectorXd& R, Eigen::Vector2d& theta, double* fc = nullptr,
-                  double* gc = nullptr) {
+  double residual(const Eigen::VectorXd& z, Eigen::VectorXd& R, Eigen::Vector2d& theta, double* fc = nullptr, double* gc = nullptr) {
     ++evaluations;
     p.regressor(x_of(z), A);
     const double n = static_cast<double>(A.rows());
@@ -59,8 +58,7 @@ struct Vp {
     return f + lambda * g;
   }
   /// Jacobian of the residual at z (after residual(z) filled A and theta).
-  void jacobian(const Eigen::VectorXd& z, const Eigen::VectorXd& R, const Eigen::Vector2d& theta, VpJacobian kind,
-                Eigen::MatrixXd& J) {
+  void jacobian(const Eigen::VectorXd& z, const Eigen::VectorXd& R, const Eigen::Vector2d& theta, VpJacobian kind, Eigen::MatrixXd& J) {
     ++jacobians;
     const Eigen::Index n = A.rows();
     const double sn = std::sqrt(static_cast<double>(n));
@@ -107,8 +105,7 @@ GeometricEstimate identify_geometry(const ContactProblem& p, const GeometricOpti
   if (!(o.lambda >= 0.0) || !std::isfinite(o.lambda)) throw std::invalid_argument("lambda must be finite and >= 0");
   const int M = p.uncertainties();
   std::vector<bool> fitted(static_cast<std::size_t>(M), false);
-  for (int j = 0; j < M; ++j)
-    fitted[static_cast<std::size_t>(j)] = (o.fit.empty() || o.fit[static_cast<std::size_t>(j)]) && p.touches(j);
+  for (int j = 0; j < M; ++j) fitted[static_cast<std::size_t>(j)] = (o.fit.empty() || o.fit[static_cast<std::size_t>(j)]) && p.touches(j);
   Vp vp(p, o.lambda, fitted);
   if (vp.m() == 0)
     throw std::runtime_error("no geometric uncertainty can be fitted: the features they move are never near a contact "

@@ -136,16 +136,16 @@ std::string ContactData::rate_source() const {
   for (int a = 0; a < 3; ++a) {
     if (!rate_from_poses[static_cast<std::size_t>(a)]) continue;
     from_poses += std::string(from_poses.empty() ? "" : ", ") + axis[a];
-    if (std::isnan(rate_mse_ratio(a)))
-      std::snprintf(buf, sizeof buf, "%s%s: chosen", detail.empty() ? "" : "; ", axis[a]);
+    if (std::isnan(rate_mse_ratio(a))) std::snprintf(buf, sizeof buf, "%s%s: chosen", detail.empty() ? "" : "; ", axis[a]);
     else
-      std::snprintf(buf, sizeof buf, "%s%s: position step %.3g m, twist step %.3g m/s, the slope's estimated mean square error %.2f of the twist's bound",
+      std::snprintf(buf, sizeof buf,
+                    "%s%s: position step %.3g m, twist step %.3g m/s, the slope's estimated mean square error %.2f of the twist's bound",
                     detail.empty() ? "" : "; ", axis[a], position_quantum_m(a), velocity_quantum_m_per_s(a), rate_mse_ratio(a));
     detail += buf;
   }
   if (from_poses.empty()) return "penetration rates from the reported twist";
-  return "penetration rates along " + from_poses + " from the slope of the reported positions over +-" +
-         std::to_string(kRateHalfWindow) + " samples (" + detail + ")";
+  return "penetration rates along " + from_poses + " from the slope of the reported positions over +-" + std::to_string(kRateHalfWindow) +
+         " samples (" + detail + ")";
 }
 
 Vector6d plate_wrench_of(const Eigen::Isometry3d& T_world_fp, const Vec3& f, const Vec3& p) {
@@ -157,8 +157,8 @@ Vector6d plate_wrench_of(const Eigen::Isometry3d& T_world_fp, const Vec3& f, con
   return w;
 }
 
-ContactData make_contact_data(const cid::Scene& scene, double v_tm, const std::vector<cid::Measurement>& m,
-                              double force_scale_n, double moment_scale_nm, RateSource rates) {
+ContactData make_contact_data(const cid::Scene& scene, double v_tm, const std::vector<cid::Measurement>& m, double force_scale_n,
+                              double moment_scale_nm, RateSource rates) {
   ContactData d;
   d.scene = scene;
   d.v_tm = v_tm;
@@ -176,8 +176,7 @@ ContactData make_contact_data(const cid::Scene& scene, double v_tm, const std::v
     if (!m[k].w_fp.allFinite() || !m[k].kin.T_world_ee.matrix().allFinite() || !m[k].kin.v_world_ee.allFinite() ||
         !m[k].kin.w_world_ee.allFinite() || !std::isfinite(m[k].t_s))
       throw std::runtime_error("sample " + std::to_string(k) + " (t = " + std::to_string(m[k].t_s) + " s): non-finite value");
-    if (k > 0 && !(m[k].t_s > m[k - 1].t_s))
-      throw std::runtime_error("sample " + std::to_string(k) + ": time does not increase");
+    if (k > 0 && !(m[k].t_s > m[k - 1].t_s)) throw std::runtime_error("sample " + std::to_string(k) + ": time does not increase");
     d.obs.t_s[k] = m[k].t_s;
     d.obs.y.row(static_cast<Eigen::Index>(k)) = m[k].w_fp.transpose();
     d.kin[k] = m[k].kin;
@@ -223,10 +222,8 @@ ContactData make_contact_data(const cid::Scene& scene, double v_tm, const std::v
         const auto& name = scene.uncertainties[static_cast<std::size_t>(j)].name;
         const bool unobs = std::find(obs.unobservable.begin(), obs.unobservable.end(), name) != obs.unobservable.end();
         const bool weak = std::find(obs.weak.begin(), obs.weak.end(), name) != obs.weak.end();
-        if (unobs || weak)
-          d.unfit_uncertainties.push_back(name + (unobs ? " (unobservable)" : " (weakly observable)"));
-        else
-          d.fit_uncertainties.push_back(j);
+        if (unobs || weak) d.unfit_uncertainties.push_back(name + (unobs ? " (unobservable)" : " (weakly observable)"));
+        else d.fit_uncertainties.push_back(j);
       }
     } catch (const std::exception& e) {
       d.unfit_uncertainties.push_back(std::string("all (") + e.what() + ")");
@@ -509,8 +506,7 @@ bool ContactFamily::sample_contacts(std::size_t k, const cid::Kinematics& kin, c
     }
     w.done[b].assign(pairs_->index[b].size(), 0);
     w.posed[b].resize(pairs_->index[b].size());
-    for (std::size_t q = 0; q < pairs_->index[b].size(); ++q)
-      reach_m[b] = std::max(reach_m[b], moved(b, q));
+    for (std::size_t q = 0; q < pairs_->index[b].size(); ++q) reach_m[b] = std::max(reach_m[b], moved(b, q));
   }
   if (reach_m[0] + reach_m[1] >= 0.5 * kReach_m) {  // beyond the table: every pair
     cid::mindist(sc, kin, g.x, d_.v_tm, out, w.ws);
@@ -587,7 +583,7 @@ void ContactFamily::design(const Eigen::VectorXd& phi, Eigen::MatrixXd& A) const
       if (ch.deflect) {
         // The measured contact wrench on the held object, about the ee origin, in ee.
         const Vector6d w_ee = cid::plate_to_object1(d_.obs.y.row(static_cast<Eigen::Index>(k)).transpose(), d_.scene.T_world_fp,
-                                               kin.T_world_ee);
+                                                    kin.T_world_ee);
         kin.T_world_ee = deflect(kin.T_world_ee, C * w_ee);
       }
       const bool reuse = same_poses && !base_.full[k];
@@ -684,8 +680,7 @@ void draw_effect(const std::string& name, unsigned seed, const cid::Scene& scene
 }
 
 std::vector<cid::SimulatedSample> simulate_with_effects(const cid::Scene& s, const cid::ContactModel& m, const Effects& e,
-                                                        const std::vector<double>& t_s,
-                                                        const std::vector<cid::Kinematics>& truth,
+                                                        const std::vector<double>& t_s, const std::vector<cid::Kinematics>& truth,
                                                         const cid::SensorModel& sensor) {
   m.check();
   if (t_s.size() != truth.size()) throw std::invalid_argument("simulate_with_effects: times and kinematics differ in length");
@@ -708,8 +703,7 @@ std::vector<cid::SimulatedSample> simulate_with_effects(const cid::Scene& s, con
     cid::mindist(s, k, x, m.v_tm, cs, ws);
     Vector6d out = Vector6d::Zero();
     for (const auto& c : cs) {
-      const double de = e.stiffness_exponent == 1.0 ? c.delta
-                                                    : e.delta_ref_m * std::pow(c.delta / e.delta_ref_m, e.stiffness_exponent);
+      const double de = e.stiffness_exponent == 1.0 ? c.delta : e.delta_ref_m * std::pow(c.delta / e.delta_ref_m, e.stiffness_exponent);
       const double rate = -cid::relative_velocity(s, k, c.point).dot(c.normal);
       const double damping_n = e.damping_n_s_per_m * rate;
       const double friction_n = m.mu * (m.K * de + (e.damping_friction ? damping_n : 0.0));

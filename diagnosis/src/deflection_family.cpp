@@ -92,9 +92,7 @@ class Segments {
 std::vector<int> segment(const Segments& sg, double beta, int cap, int L, const std::vector<char>& allowed) {
   const int m = sg.size();
   std::vector<int> p;
-  auto bounds = [&](std::size_t i) {
-    return std::pair<int, int>{i == 0 ? 0 : p[i - 1], i + 1 < p.size() ? p[i + 1] : m};
-  };
+  auto bounds = [&](std::size_t i) { return std::pair<int, int>{i == 0 ? 0 : p[i - 1], i + 1 < p.size() ? p[i + 1] : m}; };
   auto refine = [&] {
     for (int pass = 0; pass < 20; ++pass) {
       bool moved = false;
@@ -192,8 +190,7 @@ std::vector<double> local_step_gain(const Eigen::MatrixXd& z, const std::vector<
 
 }  // namespace
 
-ChangePoints locate_changes(const Eigen::MatrixXd& residual, const std::vector<double>& t_s, int max_events, int min_segment,
-                            int window) {
+ChangePoints locate_changes(const Eigen::MatrixXd& residual, const std::vector<double>& t_s, int max_events, int min_segment, int window) {
   if (residual.cols() != 6)
     throw std::invalid_argument("locate_changes: the residual has " + std::to_string(residual.cols()) + " columns, expected 6");
   if (!residual.allFinite()) throw std::invalid_argument("locate_changes: the residual is not finite");
@@ -288,7 +285,8 @@ DeflectionFamily::DeflectionFamily(const DeflectionData& d, std::set<std::string
 std::vector<LocatedEvent> DeflectionFamily::located_events() const {
   std::vector<LocatedEvent> out;
   for (std::size_t e = 0; e < events_.size(); ++e)
-    out.push_back({"event_" + std::to_string(e + 1) + "_s", events_[e].t_s, events_[e].lower_s, events_[e].upper_s, events_[e].first_sample});
+    out.push_back({"event_" + std::to_string(e + 1) + "_s", events_[e].t_s, events_[e].lower_s, events_[e].upper_s,
+                   events_[e].first_sample});
   return out;
 }
 
@@ -310,8 +308,7 @@ void DeflectionFamily::locate(const std::vector<int>& train) {
     const Eigen::VectorXd y = A.leftCols(p) * f.theta.head(p);
     Eigen::MatrixXd r(static_cast<Eigen::Index>(train.size()), 6);
     for (std::size_t a = 0; a < train.size(); ++a)
-      for (int c = 0; c < 6; ++c)
-        r(static_cast<Eigen::Index>(a), c) = d_.obs.weight(c) * (d_.obs.y(train[a], c) - y(6 * train[a] + c));
+      for (int c = 0; c < 6; ++c) r(static_cast<Eigen::Index>(a), c) = d_.obs.weight(c) * (d_.obs.y(train[a], c) - y(6 * train[a] + c));
     std::vector<double> tt;
     for (int k : train) tt.push_back(t[static_cast<std::size_t>(k)]);
     const ChangePoints cp = locate_changes(r, tt);

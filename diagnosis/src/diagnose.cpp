@@ -16,8 +16,7 @@ namespace {
 
 Eigen::VectorXd per_sample_sq(const Observations& obs, const Eigen::MatrixXd& pred) {
   Eigen::VectorXd e(static_cast<Eigen::Index>(obs.size()));
-  for (Eigen::Index k = 0; k < e.size(); ++k)
-    e(k) = ((obs.y.row(k) - pred.row(k)).transpose().cwiseProduct(obs.weight)).squaredNorm();
+  for (Eigen::Index k = 0; k < e.size(); ++k) e(k) = ((obs.y.row(k) - pred.row(k)).transpose().cwiseProduct(obs.weight)).squaredNorm();
   return e;
 }
 
@@ -104,8 +103,7 @@ ResidualAnalysis analyse_residuals(const Observations& obs, const Eigen::MatrixX
       ++s.first;
       s.second += e(k);
     }
-    for (const auto& [label, v] : st)
-      a.states.push_back({label, v.first, std::sqrt(v.second / (6.0 * v.first)), v.second / total});
+    for (const auto& [label, v] : st) a.states.push_back({label, v.first, std::sqrt(v.second / (6.0 * v.first)), v.second / total});
     std::sort(a.states.begin(), a.states.end(), [](const auto& x, const auto& y) { return x.share > y.share; });
   }
   // Whiteness of the worst component (weighted residual).
@@ -232,14 +230,17 @@ void judge(CandidateResult& c, const Score& ref, double noise, const Observation
   c.noise_fraction = noise > 0 ? (ref.cv_error * ref.cv_error - c.score.cv_error * c.score.cv_error) / (noise * noise) : 1e300;
   c.z = paired_z(obs, ref, c.score);
   std::vector<std::string> why;
-  if (c.gain_percent < 100.0 * o.min_gain) why.push_back(fmt::format("held-out gain {:.2f} % < {:.0f} %", c.gain_percent, 100 * o.min_gain));
+  if (c.gain_percent < 100.0 * o.min_gain)
+    why.push_back(fmt::format("held-out gain {:.2f} % < {:.0f} %", c.gain_percent, 100 * o.min_gain));
   if (c.z < o.min_z) why.push_back(fmt::format("not consistent (z = {:.1f} < {:.0f})", c.z, o.min_z));
   const bool joint = !std::isnan(c.effect_fraction);
   const double size = joint ? std::max(c.noise_fraction, c.effect_fraction) : c.noise_fraction;
   if (size < o.min_noise_fraction)
-    why.push_back(joint ? fmt::format("below the noise (explains {:.2f} of the noise variance held out, its effect in the joint fit {:.2f}; < {:.2f})",
-                                      c.noise_fraction, c.effect_fraction, o.min_noise_fraction)
-                        : fmt::format("below the noise (explains {:.2f} of the noise variance < {:.2f})", c.noise_fraction, o.min_noise_fraction));
+    why.push_back(
+        joint
+            ? fmt::format("below the noise (explains {:.2f} of the noise variance held out, its effect in the joint fit {:.2f}; < {:.2f})",
+                          c.noise_fraction, c.effect_fraction, o.min_noise_fraction)
+            : fmt::format("below the noise (explains {:.2f} of the noise variance < {:.2f})", c.noise_fraction, o.min_noise_fraction));
   if (const auto rest = fails_without_held_out(c.score, ref, o); !rest.empty()) why.push_back(rest);
   c.supported = why.empty();
   c.verdict = c.supported ? fmt::format("supported: held-out gain {:.1f} %, z = {:.1f}, PNR {:.1f}, {:.2f} noise variances{}",
@@ -259,8 +260,8 @@ void rank(std::vector<CandidateResult>& v) {
 
 }  // namespace
 
-Diagnosis diagnose(const ModelFactory& make, const std::vector<std::string>& candidates, const Observations& obs,
-                   const Context& ctx, const DiagnoseOptions& o, const Progress& progress) {
+Diagnosis diagnose(const ModelFactory& make, const std::vector<std::string>& candidates, const Observations& obs, const Context& ctx,
+                   const DiagnoseOptions& o, const Progress& progress) {
   const auto t0 = std::chrono::steady_clock::now();
   Diagnosis d;
   const int total = 1 + static_cast<int>(candidates.size()) + o.second_candidates;

@@ -29,8 +29,8 @@ struct Registry {
 
   Registry() {
     for (auto& e : {make_geometric_offset(), make_robot_compliance(), make_time_offset(), make_sensor_bias(), make_sensor_gain(),
-                    make_viscous_friction(), make_contact_damping(), make_nonlinear_stiffness(), make_rest_change(),
-                    make_link_compliance(), make_load_offset()})
+                    make_viscous_friction(), make_contact_damping(), make_nonlinear_stiffness(), make_rest_change(), make_link_compliance(),
+                    make_load_offset()})
       add(e);
   }
 

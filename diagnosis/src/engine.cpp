@@ -17,9 +17,7 @@
 
 namespace hil::diagnose {
 
-std::vector<Eigen::VectorXd> ModelFamily::starts() const {
-  return {Eigen::VectorXd::Zero(static_cast<Eigen::Index>(nonlinear().size()))};
-}
+std::vector<Eigen::VectorXd> ModelFamily::starts() const { return {Eigen::VectorXd::Zero(static_cast<Eigen::Index>(nonlinear().size()))}; }
 
 std::vector<Reported> ModelFamily::report(const Fit& f) const {
   std::vector<Reported> out;
@@ -110,8 +108,7 @@ class DesignCache {
 
 class Evaluator {
  public:
-  Evaluator(DesignCache& cache, const Observations& obs, const std::vector<int>& train)
-      : cache_(cache), obs_(obs), train_(train) {
+  Evaluator(DesignCache& cache, const Observations& obs, const std::vector<int>& train) : cache_(cache), obs_(obs), train_(train) {
     b_.resize(static_cast<Eigen::Index>(6 * train.size()));
     for (std::size_t a = 0; a < train.size(); ++a)
       for (int c = 0; c < 6; ++c) b_(static_cast<Eigen::Index>(6 * a) + c) = obs.weight(c) * obs.y(train[a], c);
@@ -226,7 +223,8 @@ std::vector<Unidentifiable> unidentifiable_columns(const Eigen::MatrixXd& J, con
     const Eigen::VectorXd b = K.colPivHouseholderQr().solve(c);
     std::vector<std::pair<double, std::string>> w;
     for (Eigen::Index i = 0; i < b.size(); ++i)
-      if (std::abs(b(i)) > 0.1 * b.cwiseAbs().maxCoeff()) w.emplace_back(-std::abs(b(i)), params[static_cast<std::size_t>(kept[static_cast<std::size_t>(i)])].name);
+      if (std::abs(b(i)) > 0.1 * b.cwiseAbs().maxCoeff())
+        w.emplace_back(-std::abs(b(i)), params[static_cast<std::size_t>(kept[static_cast<std::size_t>(i)])].name);
     std::sort(w.begin(), w.end());
     for (std::size_t i = 0; i < w.size() && i < 3; ++i) names.push_back(w[i].second);
     return names;
@@ -290,8 +288,8 @@ Fit fit_with(const ModelFamily& m, const Observations& obs, const std::vector<in
   std::vector<Eigen::VectorXd> starts = m.starts();
   if (warm) {
     if (warm->size() != q)
-      throw std::logic_error(m.name() + ": a warm start of " + std::to_string(warm->size()) + " values for " +
-                             std::to_string(q) + " nonlinear parameters");
+      throw std::logic_error(m.name() + ": a warm start of " + std::to_string(warm->size()) + " values for " + std::to_string(q) +
+                             " nonlinear parameters");
     starts.push_back(*warm);
   }
   for (const auto& s0 : starts) {
@@ -484,8 +482,8 @@ std::vector<std::vector<int>> time_blocks(std::size_t samples, int folds) {
   folds = std::max(1, std::min<int>(folds, static_cast<int>(samples)));
   std::vector<std::vector<int>> out(static_cast<std::size_t>(folds));
   for (std::size_t k = 0; k < samples; ++k)
-    out[std::min<std::size_t>(k * static_cast<std::size_t>(folds) / samples, static_cast<std::size_t>(folds) - 1)].push_back(
-        static_cast<int>(k));
+    out[std::min<std::size_t>(k * static_cast<std::size_t>(folds) / samples, static_cast<std::size_t>(folds) - 1)]
+        .push_back(static_cast<int>(k));
   return out;
 }
 
@@ -664,8 +662,7 @@ Score score(const ModelFamily& m, const Observations& obs, const CvOptions& o, c
       DesignCache& fc = own ? *own_cache : cache;
       // The fold's model may differ from the full one in its parameters: warm start and fixed flags by name.
       std::optional<Eigen::VectorXd> warm;
-      if (extends && fold < extends->fold_phi.size())
-        warm = mapped(fm.nonlinear(), extends->fold_phi_names[fold], extends->fold_phi[fold]);
+      if (extends && fold < extends->fold_phi.size()) warm = mapped(fm.nonlinear(), extends->fold_phi_names[fold], extends->fold_phi[fold]);
       const std::vector<bool> fixed = fixed_by_name(m, s.full.fixed, fm);
       Fit f = fit_with(fm, obs, train, fold_fit, fc, warm ? &*warm : nullptr, false, &fixed);
       const Eigen::MatrixXd pr = predict_with(fc.get(f.phi), f, n);

@@ -10,7 +10,6 @@ namespace hil::diagnose {
 
 namespace {
 
-
 /// Link directions kept: singular value >= this fraction of the largest (columns at unit norm, then
 /// the joints' part projected out), at most kMaxLinkDirections of them. Weaker directions are
 /// beyond what a table of this size can tell from its noise; the PNR test judges the rest.
@@ -43,7 +42,9 @@ StiffnessData make_stiffness_data(const calibration::VjmModel& model, const std:
     const std::string where = "row " + std::to_string(k + 1) + " (config " + std::to_string(m.config) + ")";
     if (m.kind != calibration::MeasurementKind::pose6 || m.displacement.size() != 6)
       throw std::runtime_error(where + ": the diagnosis needs the 6-D tool displacement (dx dy dz rx ry rz)");
-    if (m.q_rad.size() != dof) throw std::runtime_error(where + ": " + std::to_string(m.q_rad.size()) + " joint values for a " + std::to_string(dof) + "-joint robot");
+    if (m.q_rad.size() != dof)
+      throw std::runtime_error(where + ": " + std::to_string(m.q_rad.size()) + " joint values for a " + std::to_string(dof) +
+                               "-joint robot");
     if (!m.displacement.allFinite() || !m.w_world.allFinite() || !m.q_rad.allFinite())
       throw std::runtime_error(where + ": non-finite value");
     d.obs.t_s.push_back(static_cast<double>(k));
@@ -82,7 +83,8 @@ StiffnessData make_stiffness_data(const calibration::VjmModel& model, const std:
     const auto r0 = static_cast<Eigen::Index>(6 * k);
     for (int j = 0; j < dof; ++j)
       Jc.block(r0, j, 6, 1) = (d.joint_ops[k][static_cast<std::size_t>(j)] * d.load[k]).cwiseProduct(d.obs.weight);
-    for (Eigen::Index p = 0; p < P; ++p) Lc.block(r0, p, 6, 1) = (raw[k][static_cast<std::size_t>(p)] * d.load[k]).cwiseProduct(d.obs.weight);
+    for (Eigen::Index p = 0; p < P; ++p)
+      Lc.block(r0, p, 6, 1) = (raw[k][static_cast<std::size_t>(p)] * d.load[k]).cwiseProduct(d.obs.weight);
   }
   // Unit columns before the projection: an entry the joints already explain keeps a (near) zero
   // column instead of having its rounding noise blown up.
@@ -114,7 +116,8 @@ StiffnessFamily::StiffnessFamily(const StiffnessData& d, std::set<std::string> e
   const auto& all = stiffness_extensions();
   for (const auto& e : ext_)
     if (std::find(all.begin(), all.end(), e) == all.end())
-      throw std::invalid_argument("'" + e + "' does not apply to a stiffness table (candidates: link_compliance, sensor_bias, "
+      throw std::invalid_argument("'" + e +
+                                  "' does not apply to a stiffness table (candidates: link_compliance, sensor_bias, "
                                   "sensor_gain, load_offset)");
   for (const auto& j : d.joint_names) linear_.push_back({j, "rad/(N m)", 1e-6, false});
   links_ = ext_.count("link_compliance") > 0;
@@ -124,7 +127,8 @@ StiffnessFamily::StiffnessFamily(const StiffnessData& d, std::set<std::string> e
   }
   if (ext_.count("sensor_bias")) {
     j_bias_ = static_cast<int>(linear_.size());
-    for (int c = 0; c < 6; ++c) linear_.push_back({"bias_" + d.obs.component[static_cast<std::size_t>(c)], d.obs.unit[static_cast<std::size_t>(c)], 1e-5, true});
+    for (int c = 0; c < 6; ++c)
+      linear_.push_back({"bias_" + d.obs.component[static_cast<std::size_t>(c)], d.obs.unit[static_cast<std::size_t>(c)], 1e-5, true});
   }
   static const char* wn[6] = {"fx", "fy", "fz", "mx", "my", "mz"};
   if (ext_.count("sensor_gain")) {
@@ -166,8 +170,7 @@ void StiffnessFamily::design(const Eigen::VectorXd& phi, Eigen::MatrixXd& A) con
     const Vector6d w = gain.cwiseProduct(d_.load[k]) + offset;  // the load the robot really carried
     for (Eigen::Index j = 0; j < nj; ++j) A.block(r0, j, 6, 1) = d_.joint_ops[k][static_cast<std::size_t>(j)] * w;
     if (links_)
-      for (std::size_t i = 0; i < d_.link_ops[k].size(); ++i)
-        A.block(r0, nj + static_cast<Eigen::Index>(i), 6, 1) = d_.link_ops[k][i] * w;
+      for (std::size_t i = 0; i < d_.link_ops[k].size(); ++i) A.block(r0, nj + static_cast<Eigen::Index>(i), 6, 1) = d_.link_ops[k][i] * w;
     if (j_bias_ >= 0)
       for (int c = 0; c < 6; ++c) A(r0 + c, j_bias_ + c) = 1.0;
   }

@@ -10,9 +10,7 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-std::chrono::nanoseconds seconds(double s) {
-  return std::chrono::nanoseconds(static_cast<std::int64_t>(s * 1e9));
-}
+std::chrono::nanoseconds seconds(double s) { return std::chrono::nanoseconds(static_cast<std::int64_t>(s * 1e9)); }
 
 const char* op_name(std::uint8_t op) {
   switch (op) {
@@ -29,8 +27,7 @@ bool is_plain(const CanFrame& f) noexcept { return !f.error && !f.extended && !f
 
 }  // namespace
 
-AtiFtCanDriver::AtiFtCanDriver(const ForcePlateConfig& cfg, std::unique_ptr<CanChannel> channel)
-    : ForcePlate(cfg, std::move(channel)) {
+AtiFtCanDriver::AtiFtCanDriver(const ForcePlateConfig& cfg, std::unique_ptr<CanChannel> channel) : ForcePlate(cfg, std::move(channel)) {
   if (cfg_.protocol != ForcePlateProtocol::ati_ft_can) throw ConfigError("protocol", "AtiFtCanDriver needs protocol ati_ft_can");
 }
 
@@ -118,8 +115,8 @@ ForcePlateInfo AtiFtCanDriver::start() {
 
   for (int row = 0; row < 6; ++row) {
     if (!transaction(ati::kOpReadMatrix, row, 3, r))
-      throw fail(ati::kOpReadMatrix, "row " + std::to_string(row) + ": no complete answer (3 frames) after " +
-                                         std::to_string(cfg_.startup_tries) + " tries");
+      throw fail(ati::kOpReadMatrix,
+                 "row " + std::to_string(row) + ": no complete answer (3 frames) after " + std::to_string(cfg_.startup_tries) + " tries");
     ati::MatrixRow m{};
     for (unsigned k = 0; k < 3; ++k)
       if (!ati::decode_matrix_part(r[k], k, m))
@@ -134,13 +131,13 @@ ForcePlateInfo AtiFtCanDriver::start() {
   if (info.calibration.cwiseAbs().maxCoeff() == 0.0) throw fail(ati::kOpReadMatrix, "the calibration matrix is all zeros");
 
   Vector6d k;
-  k << f_si / info.counts_per_force, f_si / info.counts_per_force, f_si / info.counts_per_force,
-      t_si / info.counts_per_torque, t_si / info.counts_per_torque, t_si / info.counts_per_torque;
+  k << f_si / info.counts_per_force, f_si / info.counts_per_force, f_si / info.counts_per_force, t_si / info.counts_per_torque,
+      t_si / info.counts_per_torque, t_si / info.counts_per_torque;
   G_ = k.asDiagonal() * info.calibration;
   started_ = true;
   counters_.connected = true;
-  spdlog::info("{}: serial {}, firmware {}, units {}, counts {}/{}", where, info.serial, info.firmware, info.units,
-               info.counts_per_force, info.counts_per_torque);
+  spdlog::info("{}: serial {}, firmware {}, units {}, counts {}/{}", where, info.serial, info.firmware, info.units, info.counts_per_force,
+               info.counts_per_torque);
   return info;
 }
 

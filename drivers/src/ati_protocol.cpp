@@ -10,9 +10,7 @@ inline void put16(std::uint8_t* p, std::uint16_t v) noexcept {
   p[0] = static_cast<std::uint8_t>(v >> 8);
   p[1] = static_cast<std::uint8_t>(v);
 }
-inline std::uint16_t get16(const std::uint8_t* p) noexcept {
-  return static_cast<std::uint16_t>((static_cast<unsigned>(p[0]) << 8) | p[1]);
-}
+inline std::uint16_t get16(const std::uint8_t* p) noexcept { return static_cast<std::uint16_t>((static_cast<unsigned>(p[0]) << 8) | p[1]); }
 inline void put32(std::uint8_t* p, std::uint32_t v) noexcept {
   p[0] = static_cast<std::uint8_t>(v >> 24);
   p[1] = static_cast<std::uint8_t>(v >> 16);
@@ -20,8 +18,8 @@ inline void put32(std::uint8_t* p, std::uint32_t v) noexcept {
   p[3] = static_cast<std::uint8_t>(v);
 }
 inline std::uint32_t get32(const std::uint8_t* p) noexcept {
-  return (static_cast<std::uint32_t>(p[0]) << 24) | (static_cast<std::uint32_t>(p[1]) << 16) |
-         (static_cast<std::uint32_t>(p[2]) << 8) | p[3];
+  return (static_cast<std::uint32_t>(p[0]) << 24) | (static_cast<std::uint32_t>(p[1]) << 16) | (static_cast<std::uint32_t>(p[2]) << 8) |
+         p[3];
 }
 
 CanFrame frame(std::uint32_t base, std::uint8_t op, std::uint8_t len) noexcept {

@@ -6,8 +6,8 @@
 namespace hil::drivers {
 
 bool same_frame(const CanFrame& a, const CanFrame& b) noexcept {
-  if (a.id != b.id || a.len != b.len || a.extended != b.extended || a.rtr != b.rtr || a.error != b.error ||
-      a.fd != b.fd || (a.fd && a.fd_flags != b.fd_flags))
+  if (a.id != b.id || a.len != b.len || a.extended != b.extended || a.rtr != b.rtr || a.error != b.error || a.fd != b.fd ||
+      (a.fd && a.fd_flags != b.fd_flags))
     return false;
   if (a.rtr) return true;
   return std::memcmp(a.data.data(), b.data.data(), a.len) == 0;
@@ -164,15 +164,12 @@ std::string describe(const CanErrorInfo& e) {
   if (e.back_to_active) add("back to error-active");
   if (e.rx_overflow) add("controller rx overflow");
   if (e.tx_overflow) add("controller tx overflow");
-  if (e.controller && !e.error_passive && !e.warning && !e.back_to_active && !e.rx_overflow && !e.tx_overflow)
-    add("controller problem");
+  if (e.controller && !e.error_passive && !e.warning && !e.back_to_active && !e.rx_overflow && !e.tx_overflow) add("controller problem");
   if (e.lost_arbitration)
-    add(e.lost_arbitration_bit >= 0 ? "lost arbitration at bit " + std::to_string(e.lost_arbitration_bit)
-                                    : "lost arbitration");
+    add(e.lost_arbitration_bit >= 0 ? "lost arbitration at bit " + std::to_string(e.lost_arbitration_bit) : "lost arbitration");
   if (e.protocol) {
     char buf[64];
-    std::snprintf(buf, sizeof buf, "protocol violation (type 0x%02X, location 0x%02X)", e.protocol_type,
-                  e.protocol_location);
+    std::snprintf(buf, sizeof buf, "protocol violation (type 0x%02X, location 0x%02X)", e.protocol_type, e.protocol_location);
     add(buf);
   }
   if (e.transceiver) add("transceiver error");
@@ -180,8 +177,7 @@ std::string describe(const CanErrorInfo& e) {
   if (e.bus_error) add("bus error");
   if (e.tx_timeout) add("tx timeout");
   if (e.restarted) add("controller restarted");
-  if (e.tx_error_count >= 0)
-    add("tx errors " + std::to_string(e.tx_error_count) + ", rx errors " + std::to_string(e.rx_error_count));
+  if (e.tx_error_count >= 0) add("tx errors " + std::to_string(e.tx_error_count) + ", rx errors " + std::to_string(e.rx_error_count));
   if (s.empty()) s = "error frame without class bits";
   return s;
 }

@@ -89,8 +89,7 @@ IoStatus CanLogChannel::receive(CanFrame& frame, std::chrono::nanoseconds /*time
           first_log_ns_ = frame.t_ns;
           first_wall_ = std::chrono::steady_clock::now();
         } else {
-          const auto dt = std::chrono::nanoseconds(
-              static_cast<std::int64_t>(static_cast<double>(frame.t_ns - first_log_ns_) / opt_.speed));
+          const auto dt = std::chrono::nanoseconds(static_cast<std::int64_t>(static_cast<double>(frame.t_ns - first_log_ns_) / opt_.speed));
           std::this_thread::sleep_until(first_wall_ + dt);
         }
       }
@@ -104,8 +103,7 @@ IoStatus CanLogChannel::receive(CanFrame& frame, std::chrono::nanoseconds /*time
   }
 }
 
-CanRecordingChannel::CanRecordingChannel(std::unique_ptr<CanChannel> inner, std::unique_ptr<CanLogChannel> log,
-                                         bool record_sent)
+CanRecordingChannel::CanRecordingChannel(std::unique_ptr<CanChannel> inner, std::unique_ptr<CanLogChannel> log, bool record_sent)
     : inner_(std::move(inner)), log_(std::move(log)), record_sent_(record_sent) {
   if (!inner_) throw ConfigError("channel", "no CAN channel to record");
   if (!log_) throw ConfigError("log", "no log to record into");

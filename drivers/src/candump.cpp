@@ -138,8 +138,8 @@ std::string parse_frame_text(std::string_view s, CanFrame& out) {
 std::string format_candump_line(const CanFrame& f, std::string_view interface) {
   char head[48];
   const std::int64_t t = f.t_ns < 0 ? 0 : f.t_ns;
-  const int n = std::snprintf(head, sizeof head, "(%010" PRIu64 ".%06" PRIu64 ") ",
-                              static_cast<std::uint64_t>(t / 1000000000), static_cast<std::uint64_t>((t / 1000) % 1000000));
+  const int n = std::snprintf(head, sizeof head, "(%010" PRIu64 ".%06" PRIu64 ") ", static_cast<std::uint64_t>(t / 1000000000),
+                              static_cast<std::uint64_t>((t / 1000) % 1000000));
   char frame[kMaxFrameText];
   const std::size_t fl = format_frame_text(f, frame);
   std::string line;

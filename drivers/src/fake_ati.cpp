@@ -34,8 +34,8 @@ AtiGaugeModel::AtiGaugeModel(const FakeAtiConfig& cfg) {
   X_sensor_fp.bottomLeftCorner<3, 3>() = -R.transpose() * P;
   X_sensor_fp.bottomRightCorner<3, 3>() = R.transpose();
   Vector6d to_counts;
-  to_counts << cfg.counts_per_force / f_si, cfg.counts_per_force / f_si, cfg.counts_per_force / f_si,
-      cfg.counts_per_torque / t_si, cfg.counts_per_torque / t_si, cfg.counts_per_torque / t_si;
+  to_counts << cfg.counts_per_force / f_si, cfg.counts_per_force / f_si, cfg.counts_per_force / f_si, cfg.counts_per_torque / t_si,
+      cfg.counts_per_torque / t_si, cfg.counts_per_torque / t_si;
   A_ = lu.inverse() * to_counts.asDiagonal() * X_sensor_fp;
 }
 
@@ -80,8 +80,7 @@ struct FakeAtiForcePlate::Impl {
       : cfg(std::move(c)), channel(std::move(ch)), scenario(std::move(s)), model(cfg), faults(cfg.faults), rng(cfg.seed) {}
 };
 
-FakeAtiForcePlate::FakeAtiForcePlate(FakeAtiConfig cfg, std::unique_ptr<CanChannel> channel,
-                                     std::shared_ptr<const Scenario> scenario) {
+FakeAtiForcePlate::FakeAtiForcePlate(FakeAtiConfig cfg, std::unique_ptr<CanChannel> channel, std::shared_ptr<const Scenario> scenario) {
   if (!channel) throw ConfigError("channel", "no CAN channel given");
   if (cfg.base_id > ati::kMaxBase) throw ConfigError("base_id", "ATI base id must be 0..0x7F");
   if (!(cfg.clock.speed > 0.0)) throw ConfigError("speed", "must be > 0");
@@ -270,10 +269,8 @@ void FakeAtiForcePlate::run() noexcept {
         }
       }
       const bool completes = intact && op == ati::kOpReadGauges && k + 1 == n;
-      if (f.extra_delay_s > 0.0)
-        I.pending.push_back({due, answer[k], completes});
-      else
-        intact = send_now(answer[k], completes) && intact;
+      if (f.extra_delay_s > 0.0) I.pending.push_back({due, answer[k], completes});
+      else intact = send_now(answer[k], completes) && intact;
     }
   }
 }

@@ -42,8 +42,7 @@ struct FakeRobotController::Impl {
   void mirror() { std::copy(mapping->tab_registers, mapping->tab_registers + nregs, mapping->tab_input_registers); }
 };
 
-FakeRobotController::FakeRobotController(FakeRobotConfig cfg, std::shared_ptr<const Scenario> scenario)
-    : impl_(std::make_unique<Impl>()) {
+FakeRobotController::FakeRobotController(FakeRobotConfig cfg, std::shared_ptr<const Scenario> scenario) : impl_(std::make_unique<Impl>()) {
   Impl& I = *impl_;
   I.cfg = std::move(cfg);
   I.scenario = std::move(scenario);
@@ -157,8 +156,8 @@ void FakeRobotController::run() noexcept {
         continue;
       }
       const std::uint8_t function = query[header];
-      const bool is_write = function == 0x05 || function == 0x06 || function == 0x0F || function == 0x10 ||
-                            function == 0x16 || function == 0x17;
+      const bool is_write = function == 0x05 || function == 0x06 || function == 0x0F || function == 0x10 || function == 0x16 ||
+                            function == 0x17;
       if (is_write) {
         modbus_reply_exception(I.ctx, query, MODBUS_EXCEPTION_ILLEGAL_FUNCTION);
         std::lock_guard lk(I.m);

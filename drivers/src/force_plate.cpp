@@ -69,10 +69,8 @@ void insert_raw(const CanSignal& s, std::int64_t raw, std::uint8_t* data) noexce
     const unsigned bit_index = s.big_endian ? len - 1 - i : i;
     const auto bit = static_cast<std::uint8_t>((v >> bit_index) & 1U);
     data[pos >> 3] = static_cast<std::uint8_t>((data[pos >> 3] & ~(1U << (pos & 7))) | (bit << (pos & 7)));
-    if (s.big_endian)
-      pos = (pos & 7) == 0 ? pos + 15 : pos - 1;
-    else
-      ++pos;
+    if (s.big_endian) pos = (pos & 7) == 0 ? pos + 15 : pos - 1;
+    else ++pos;
   }
 }
 
@@ -84,10 +82,8 @@ int last_byte(const CanSignal& s) noexcept {
   for (unsigned i = 0; i < s.length_bits; ++i) {
     if (pos < 0 || pos >= 512) return -1;
     maxb = std::max(maxb, static_cast<int>(pos >> 3));
-    if (s.big_endian)
-      pos = (pos & 7) == 0 ? pos + 15 : pos - 1;
-    else
-      ++pos;
+    if (s.big_endian) pos = (pos & 7) == 0 ? pos + 15 : pos - 1;
+    else ++pos;
   }
   return maxb;
 }
@@ -114,9 +110,9 @@ void validate_signals(const std::vector<CanSignal>& signals) {
     if (s.length_bits < 1 || s.length_bits > 64) throw ConfigError(f + "length_bits", "must be 1..64");
     if (s.start_bit > 511) throw ConfigError(f + "start_bit", "must be 0..511");
     if (last_byte(s) < 0)
-      throw ConfigError(f + "start_bit", "the signal runs outside the frame (" +
-                                            std::string(s.big_endian ? "big" : "little") + " endian, start " +
-                                            std::to_string(s.start_bit) + ", length " + std::to_string(s.length_bits) + ")");
+      throw ConfigError(f + "start_bit", "the signal runs outside the frame (" + std::string(s.big_endian ? "big" : "little") +
+                                             " endian, start " + std::to_string(s.start_bit) + ", length " + std::to_string(s.length_bits) +
+                                             ")");
     if (!std::isfinite(s.scale) || s.scale == 0.0) throw ConfigError(f + "scale", "must be finite and non-zero");
     if (!std::isfinite(s.offset)) throw ConfigError(f + "offset", "must be finite");
     if (s.component == WrenchComponent::status && s.length_bits > 16)
@@ -133,15 +129,14 @@ void ForcePlateConfig::validate() const {
   if (protocol == ForcePlateProtocol::ati_ft_can && base_id > ati::kMaxBase)
     throw ConfigError("base_id", "ATI base id must be 0..0x7F (11-bit id = base << 4 | opcode)");
   const Eigen::Matrix3d R = T_fp_sensor.linear();
-  if (!R.allFinite() || !T_fp_sensor.translation().allFinite() ||
-      (R.transpose() * R - Eigen::Matrix3d::Identity()).norm() > 1e-6 || R.determinant() < 0.0)
+  if (!R.allFinite() || !T_fp_sensor.translation().allFinite() || (R.transpose() * R - Eigen::Matrix3d::Identity()).norm() > 1e-6 ||
+      R.determinant() < 0.0)
     throw ConfigError("sensor_pose", "T_fp_sensor is not a rigid transform");
   if (!saturation_limits.empty()) {
     if (saturation_limits.size() != 6)
       throw ConfigError("saturation_limits", "needs 6 values (fx fy fz mx my mz), got " + std::to_string(saturation_limits.size()));
     for (std::size_t i = 0; i < 6; ++i)
-      if (!(saturation_limits[i] > 0.0))
-        throw ConfigError("saturation_limits[" + std::to_string(i) + "]", "must be > 0");
+      if (!(saturation_limits[i] > 0.0)) throw ConfigError("saturation_limits[" + std::to_string(i) + "]", "must be > 0");
   }
   if (!(response_timeout_s >= 0.0) || response_timeout_s > 10.0) throw ConfigError("response_timeout_s", "must be in [0, 10]");
   if (!(startup_timeout_s > 0.0) || startup_timeout_s > 10.0) throw ConfigError("startup_timeout_s", "must be in (0, 10]");
@@ -157,8 +152,7 @@ double ForcePlateConfig::response_timeout() const noexcept {
 
 // ---- common part -------------------------------------------------------------------------------
 
-ForcePlate::ForcePlate(const ForcePlateConfig& cfg, std::unique_ptr<CanChannel> channel)
-    : cfg_(cfg), channel_(std::move(channel)) {
+ForcePlate::ForcePlate(const ForcePlateConfig& cfg, std::unique_ptr<CanChannel> channel) : cfg_(cfg), channel_(std::move(channel)) {
   cfg_.validate();
   if (!channel_) throw ConfigError("channel", "no CAN channel given");
   const Eigen::Matrix3d R = cfg_.T_fp_sensor.linear();
@@ -260,8 +254,7 @@ void ForcePlate::problem(const char* what) noexcept {
 }
 
 std::unique_ptr<ForcePlate> make_force_plate(const ForcePlateConfig& cfg, std::unique_ptr<CanChannel> channel) {
-  if (cfg.protocol == ForcePlateProtocol::declarative)
-    return std::make_unique<DeclarativeForcePlate>(cfg, std::move(channel));
+  if (cfg.protocol == ForcePlateProtocol::declarative) return std::make_unique<DeclarativeForcePlate>(cfg, std::move(channel));
   return std::make_unique<AtiFtCanDriver>(cfg, std::move(channel));
 }
 

@@ -44,14 +44,12 @@ const char* to_string(RegisterType t) noexcept {
   return "?";
 }
 
-unsigned register_count(RegisterType t) noexcept {
-  return t == RegisterType::int16 || t == RegisterType::uint16 ? 1U : 2U;
-}
+unsigned register_count(RegisterType t) noexcept { return t == RegisterType::int16 || t == RegisterType::uint16 ? 1U : 2U; }
 
 Quantity parse_quantity(const std::string& s, const std::string& field) {
   static const std::map<std::string, Quantity::Kind> pose{{"px", Quantity::Kind::px}, {"py", Quantity::Kind::py},
-                                                         {"pz", Quantity::Kind::pz}, {"rx", Quantity::Kind::rx},
-                                                         {"ry", Quantity::Kind::ry}, {"rz", Quantity::Kind::rz}};
+                                                          {"pz", Quantity::Kind::pz}, {"rx", Quantity::Kind::rx},
+                                                          {"ry", Quantity::Kind::ry}, {"rz", Quantity::Kind::rz}};
   if (auto it = pose.find(s); it != pose.end()) return Quantity{it->second, 0};
   if (s.size() >= 2 && s.size() <= 3 && s[0] == 'j' && s[1] >= '1' && s[1] <= '9' &&
       std::all_of(s.begin() + 1, s.end(), [](char c) { return c >= '0' && c <= '9'; })) {
@@ -77,15 +75,15 @@ void RegisterMap::validate() const {
     for (unsigned k = 0; k < register_count(e.type); ++k) {
       auto [it, fresh] = used.insert({{e.table, e.address + k}, i});
       if (!fresh)
-        throw ConfigError(f + "address", "register " + std::to_string(e.address + k) + " overlaps registers[" +
-                                             std::to_string(it->second) + "] ('" + entries[it->second].quantity + "')");
+        throw ConfigError(f + "address", "register " + std::to_string(e.address + k) + " overlaps registers[" + std::to_string(it->second) +
+                                             "] ('" + entries[it->second].quantity + "')");
     }
   }
   const unsigned n = joint_count();
   for (unsigned j = 0; j < n; ++j)
     if (!seen.count("j" + std::to_string(j + 1)))
-      throw ConfigError("registers", "joints must be j1..j" + std::to_string(n) + " without gaps: j" +
-                                         std::to_string(j + 1) + " is missing");
+      throw ConfigError("registers",
+                        "joints must be j1..j" + std::to_string(n) + " without gaps: j" + std::to_string(j + 1) + " is missing");
   int pose_parts = 0;
   for (const char* q : {"px", "py", "pz", "rx", "ry", "rz"}) pose_parts += static_cast<int>(seen.count(q));
   if (pose_parts != 0 && pose_parts != 6) throw ConfigError("registers", "the tool pose needs all of px py pz rx ry rz");
@@ -156,8 +154,7 @@ RegisterMap builtin_register_map(const std::string& name) {
 }
 
 std::uint32_t get_u32(const std::uint16_t* r, WordOrder o) noexcept {
-  return o == WordOrder::big ? (static_cast<std::uint32_t>(r[0]) << 16) | r[1]
-                             : (static_cast<std::uint32_t>(r[1]) << 16) | r[0];
+  return o == WordOrder::big ? (static_cast<std::uint32_t>(r[0]) << 16) | r[1] : (static_cast<std::uint32_t>(r[1]) << 16) | r[0];
 }
 
 void set_u32(std::uint32_t v, std::uint16_t* r, WordOrder o) noexcept {
@@ -219,9 +216,7 @@ void encode_entry(const RegisterEntry& e, double value, std::uint16_t* regs, std
   switch (e.type) {
     case RegisterType::int16: regs[0] = static_cast<std::uint16_t>(saturate_round<std::int16_t>(raw)); break;
     case RegisterType::uint16: regs[0] = saturate_round<std::uint16_t>(raw); break;
-    case RegisterType::int32:
-      set_u32(static_cast<std::uint32_t>(saturate_round<std::int32_t>(raw)), regs, e.word_order);
-      break;
+    case RegisterType::int32: set_u32(static_cast<std::uint32_t>(saturate_round<std::int32_t>(raw)), regs, e.word_order); break;
     case RegisterType::uint32: set_u32(saturate_round<std::uint32_t>(raw), regs, e.word_order); break;
     case RegisterType::float32: set_float32(static_cast<float>(raw), regs, e.word_order); break;
   }

@@ -35,21 +35,18 @@ void ModbusConfig::validate() const {
     throw ConfigError("reconnect_min_s", "need 0 < reconnect_min_s <= reconnect_max_s");
   map.validate();
   if (kinematics) {
-    if (kinematics->joints == 0 || !kinematics->T_base_tool)
-      throw ConfigError("kinematics", "no joints or no forward kinematics given");
+    if (kinematics->joints == 0 || !kinematics->T_base_tool) throw ConfigError("kinematics", "no joints or no forward kinematics given");
     if (map.joint_count() < kinematics->joints)
-      throw ConfigError("kinematics", "the robot has " + std::to_string(kinematics->joints) +
-                                          " joints but the register map reads " + std::to_string(map.joint_count()));
+      throw ConfigError("kinematics", "the robot has " + std::to_string(kinematics->joints) + " joints but the register map reads " +
+                                          std::to_string(map.joint_count()));
   }
 }
 
 std::string ModbusConfig::describe() const {
   char buf[256];
-  if (transport == ModbusTransport::tcp)
-    std::snprintf(buf, sizeof buf, "Modbus TCP %s:%d unit %d", host.c_str(), port, unit_id);
+  if (transport == ModbusTransport::tcp) std::snprintf(buf, sizeof buf, "Modbus TCP %s:%d unit %d", host.c_str(), port, unit_id);
   else
-    std::snprintf(buf, sizeof buf, "Modbus RTU %s %d %d%c%d unit %d", serial_device.c_str(), baud, data_bits, parity,
-                  stop_bits, unit_id);
+    std::snprintf(buf, sizeof buf, "Modbus RTU %s %d %d%c%d unit %d", serial_device.c_str(), baud, data_bits, parity, stop_bits, unit_id);
   return buf;
 }
 
@@ -71,8 +68,8 @@ RobotControllerDriver::RobotControllerDriver(ModbusConfig cfg) : cfg_(std::move(
   cfg_.validate();
   plan_ = plan_reads(cfg_.map);
   unsigned max_h = 0, max_i = 0;
-  for (const auto& b : plan_) (b.table == RegisterTable::holding ? max_h : max_i) = std::max(
-      b.table == RegisterTable::holding ? max_h : max_i, b.address + b.count);
+  for (const auto& b : plan_)
+    (b.table == RegisterTable::holding ? max_h : max_i) = std::max(b.table == RegisterTable::holding ? max_h : max_i, b.address + b.count);
   holding_.assign(max_h, 0);
   input_.assign(max_i, 0);
   for (const auto& e : cfg_.map.entries) decoded_.push_back(Decoded{parse_quantity(e.quantity, "quantity"), &e});
@@ -93,18 +90,15 @@ void RobotControllerDriver::set_problem(const char* what, int err) noexcept {
 
 bool RobotControllerDriver::try_connect() noexcept {
   impl_->reset();
-  if (cfg_.transport == ModbusTransport::tcp)
-    impl_->ctx = modbus_new_tcp(cfg_.host.c_str(), cfg_.port);
-  else
-    impl_->ctx = modbus_new_rtu(cfg_.serial_device.c_str(), cfg_.baud, cfg_.parity, cfg_.data_bits, cfg_.stop_bits);
+  if (cfg_.transport == ModbusTransport::tcp) impl_->ctx = modbus_new_tcp(cfg_.host.c_str(), cfg_.port);
+  else impl_->ctx = modbus_new_rtu(cfg_.serial_device.c_str(), cfg_.baud, cfg_.parity, cfg_.data_bits, cfg_.stop_bits);
   if (impl_->ctx == nullptr) {
     set_problem("cannot create the libmodbus context", errno);
     return false;
   }
   modbus_set_slave(impl_->ctx, cfg_.unit_id);
   const double t = cfg_.timeout_s;
-  modbus_set_response_timeout(impl_->ctx, static_cast<std::uint32_t>(t),
-                              static_cast<std::uint32_t>((t - std::floor(t)) * 1e6));
+  modbus_set_response_timeout(impl_->ctx, static_cast<std::uint32_t>(t), static_cast<std::uint32_t>((t - std::floor(t)) * 1e6));
   modbus_set_error_recovery(impl_->ctx, MODBUS_ERROR_RECOVERY_NONE);
   if (modbus_connect(impl_->ctx) != 0) {
     set_problem("connect failed", errno);
@@ -191,8 +185,8 @@ PollStatus RobotControllerDriver::poll(RobotSample& out) noexcept {
         set_problem("exception response", err);
         return PollStatus::exception;
       }
-      const bool link_lost = err == ECONNRESET || err == EPIPE || err == ENOTCONN || err == EBADF ||
-                             err == ECONNREFUSED || err == ECONNABORTED || err == EIO;
+      const bool link_lost = err == ECONNRESET || err == EPIPE || err == ENOTCONN || err == EBADF || err == ECONNREFUSED ||
+                             err == ECONNABORTED || err == EIO;
       if (!link_lost && attempt < cfg_.retries) {
         ++counters_.retries;
         modbus_flush(impl_->ctx);
@@ -235,8 +229,7 @@ PollStatus RobotControllerDriver::poll(RobotSample& out) noexcept {
     out.p_base_tcp_m = Eigen::Vector3d(pose[0], pose[1], pose[2]);
     out.r_base_tcp = Eigen::Vector3d(pose[3], pose[4], pose[5]);
     const double angle = out.r_base_tcp.norm();
-    out.q_base_tcp = angle > 0.0 ? Eigen::Quaterniond(Eigen::AngleAxisd(angle, out.r_base_tcp / angle))
-                                 : Eigen::Quaterniond::Identity();
+    out.q_base_tcp = angle > 0.0 ? Eigen::Quaterniond(Eigen::AngleAxisd(angle, out.r_base_tcp / angle)) : Eigen::Quaterniond::Identity();
   }
   out.pose_from_kinematics = false;
   if (!out.has_pose && cfg_.kinematics) {

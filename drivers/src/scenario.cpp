@@ -16,8 +16,7 @@ Scenario::Scenario(std::vector<ScenarioPoint> points, bool loop) : points_(std::
       throw ConfigError(f + ".t_s", "times must be finite and strictly increasing");
     if (p.joints_rad.size() != points_[0].joints_rad.size())
       throw ConfigError(f + ".joints_rad", "joint count differs from the first point");
-    if (!p.w_fp.allFinite() || !p.p_base_tcp_m.allFinite() || !p.q_base_tcp.coeffs().allFinite())
-      throw ConfigError(f, "non-finite value");
+    if (!p.w_fp.allFinite() || !p.p_base_tcp_m.allFinite() || !p.q_base_tcp.coeffs().allFinite()) throw ConfigError(f, "non-finite value");
   }
   for (auto& p : points_) p.q_base_tcp.normalize();
 }
@@ -47,21 +46,19 @@ void Scenario::at(double t, ScenarioPoint& out) const {
     out.q_base_tcp = p.q_base_tcp;
     return;
   }
-  const auto it = std::upper_bound(points_.begin(), points_.end(), t,
-                                   [](double v, const ScenarioPoint& p) { return v < p.t_s; });
+  const auto it = std::upper_bound(points_.begin(), points_.end(), t, [](double v, const ScenarioPoint& p) { return v < p.t_s; });
   const ScenarioPoint& b = *it;
   const ScenarioPoint& a = *(it - 1);
   const double s = (t - a.t_s) / (b.t_s - a.t_s);
   out.t_s = t;
   out.w_fp = a.w_fp + s * (b.w_fp - a.w_fp);
-  for (std::size_t j = 0; j < out.joints_rad.size(); ++j)
-    out.joints_rad[j] = a.joints_rad[j] + s * (b.joints_rad[j] - a.joints_rad[j]);
+  for (std::size_t j = 0; j < out.joints_rad.size(); ++j) out.joints_rad[j] = a.joints_rad[j] + s * (b.joints_rad[j] - a.joints_rad[j]);
   out.p_base_tcp_m = a.p_base_tcp_m + s * (b.p_base_tcp_m - a.p_base_tcp_m);
   out.q_base_tcp = a.q_base_tcp.slerp(s, b.q_base_tcp);
 }
 
-void encode_state(const RegisterMap& map, std::span<const double> joints, const Eigen::Vector3d& p,
-                  const Eigen::Quaterniond& q, std::span<std::uint16_t> holding) {
+void encode_state(const RegisterMap& map, std::span<const double> joints, const Eigen::Vector3d& p, const Eigen::Quaterniond& q,
+                  std::span<std::uint16_t> holding) {
   const Eigen::Vector3d r = so3::log(q);
   for (const auto& e : map.entries) {
     const Quantity qu = parse_quantity(e.quantity, "quantity");

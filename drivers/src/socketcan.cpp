@@ -38,8 +38,8 @@ bool SocketCanChannel::kernel_supports_can() noexcept {
 
 std::unique_ptr<SocketCanChannel> SocketCanChannel::open(const SocketCanOptions& o) {
   if (o.interface.empty() || o.interface.size() >= IFNAMSIZ)
-    throw ConfigError("interface", "'" + o.interface + "' is not a valid interface name (1.." +
-                                       std::to_string(IFNAMSIZ - 1) + " characters)");
+    throw ConfigError("interface",
+                      "'" + o.interface + "' is not a valid interface name (1.." + std::to_string(IFNAMSIZ - 1) + " characters)");
   std::unique_ptr<SocketCanChannel> c(new SocketCanChannel());
   c->iface_ = o.interface;
   c->fd_ = ::socket(PF_CAN, SOCK_RAW, CAN_RAW);
@@ -90,8 +90,7 @@ std::unique_ptr<SocketCanChannel> SocketCanChannel::open(const SocketCanOptions&
   sockaddr_can addr{};
   addr.can_family = AF_CAN;
   addr.can_ifindex = static_cast<int>(ifindex);
-  if (::bind(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr) != 0)
-    throw DeviceError(sys_error(o.interface, "bind"));
+  if (::bind(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr) != 0) throw DeviceError(sys_error(o.interface, "bind"));
   return c;
 }
 
@@ -164,8 +163,8 @@ IoStatus SocketCanChannel::receive(CanFrame& frame, std::chrono::nanoseconds tim
     return IoStatus::error;
   }
   alignas(8) std::uint8_t buf[kCanFdMtu];
-  alignas(cmsghdr) char control[CMSG_SPACE(sizeof(scm_timestamping)) + CMSG_SPACE(sizeof(timespec)) +
-                                CMSG_SPACE(sizeof(std::uint32_t)) + 64];
+  alignas(cmsghdr) char
+      control[CMSG_SPACE(sizeof(scm_timestamping)) + CMSG_SPACE(sizeof(timespec)) + CMSG_SPACE(sizeof(std::uint32_t)) + 64];
   iovec iov{buf, sizeof buf};
   msghdr msg{};
   msg.msg_iov = &iov;

@@ -131,9 +131,9 @@ Participant::Participant(const ParticipantOptions& o) : domain_id_(o.domain_id) 
   participant_ = factory->create_participant(static_cast<DomainId_t>(o.domain_id), qos, o.listener, mask);
   if (!participant_ && secure_)
     throw std::runtime_error("DDS Security refused to create the participant in domain " + std::to_string(o.domain_id) +
-                             (o.security.enabled() ? " with certificate " + o.security.identity_certificate + " and permissions " +
-                                                         o.security.permissions
-                                                   : std::string(" (security properties of profile '") + o.profile_name + "')") +
+                             (o.security.enabled()
+                                  ? " with certificate " + o.security.identity_certificate + " and permissions " + o.security.permissions
+                                  : std::string(" (security properties of profile '") + o.profile_name + "')") +
                              " (Fast DDS logs why)");
   if (!participant_) throw std::runtime_error("DDS: cannot create a participant in domain " + std::to_string(o.domain_id));
   publisher_ = participant_->create_publisher(PUBLISHER_QOS_DEFAULT);

@@ -84,10 +84,11 @@ TEST(EndToEnd, ThirtySecondsAt1kHzNoneLost) {
   hil::dds::Participant participant({test_domain(60), "", "hil_localhost", "e2e"});
   std::mutex m;
   std::vector<hil_msgs::msg::PoseWrenchSample> received;
-  hil::dds::Reader<hil_msgs::msg::PoseWrenchSample> reader(participant, hil::dds::topics::kPoseWrenchSample, [&](const auto& msg, const auto&) {
-    std::lock_guard<std::mutex> lock(m);
-    received.push_back(msg);
-  });
+  hil::dds::Reader<hil_msgs::msg::PoseWrenchSample> reader(participant, hil::dds::topics::kPoseWrenchSample,
+                                                           [&](const auto& msg, const auto&) {
+                                                             std::lock_guard<std::mutex> lock(m);
+                                                             received.push_back(msg);
+                                                           });
 
   format::RunInfo info;
   info.rig = "press_bench";
@@ -163,8 +164,8 @@ TEST(EndToEnd, InjectedFaultsAreReportedAndRecoveredFrom) {
 
   hil::dds::Participant participant({test_domain(100), "", "hil_localhost", "e2e-faults"});
   StatusLog log;
-  hil::dds::Reader<hil_msgs::msg::DeviceStatus> reader(participant, hil::dds::topics::kDeviceStatus,
-                                                  [&](const auto& msg, const auto&) { log.add(msg); }, hil::dds::StreamQos{true, 0, 10});
+  hil::dds::Reader<hil_msgs::msg::DeviceStatus> reader(
+      participant, hil::dds::topics::kDeviceStatus, [&](const auto& msg, const auto&) { log.add(msg); }, hil::dds::StreamQos{true, 0, 10});
   format::RunInfo info;
   info.rig = "press_bench";
   info.output_rate_hz = 50;
@@ -253,9 +254,8 @@ TEST(EndToEnd, FaultSwitchesAreReportedWithinThreePeriods) {
   mc.timeout_s = 0.02;
   hil::dds::Participant participant({test_domain(140), "", "hil_localhost", "e2e-switches"});
   StatusLog log;
-  hil::dds::Reader<hil_msgs::msg::DeviceStatus> reader(participant, hil::dds::topics::kDeviceStatus,
-                                                       [&](const auto& msg, const auto&) { log.add(msg); },
-                                                       hil::dds::StreamQos{true, 0, 10});
+  hil::dds::Reader<hil_msgs::msg::DeviceStatus> reader(
+      participant, hil::dds::topics::kDeviceStatus, [&](const auto& msg, const auto&) { log.add(msg); }, hil::dds::StreamQos{true, 0, 10});
   acquisition::AcquirerOptions ao;
   acquisition::Acquirer acq(ao, drivers::make_force_plate({}, bus->open()), std::make_unique<drivers::RobotControllerDriver>(mc),
                             &participant, nullptr);
@@ -281,14 +281,20 @@ TEST(EndToEnd, FaultSwitchesAreReportedWithinThreePeriods) {
   slow.slow_fraction = 1.0;
   slow.slow_delay_s = 0.05;  // beyond the driver's 20 ms timeout
   const std::vector<Case> cases = {
-      {"corrupt frames", "force_plate", [&] { fake_plate.set_faults(corrupt); }, [&] { fake_plate.set_faults({}); }, 1e-3,
-       {"bad frame"}},
-      {"error frames", "force_plate", [&] { fake_plate.set_faults(errors); }, [&] { fake_plate.set_faults({}); }, 1e-3,
+      {"corrupt frames", "force_plate", [&] { fake_plate.set_faults(corrupt); }, [&] { fake_plate.set_faults({}); }, 1e-3, {"bad frame"}},
+      {"error frames",
+       "force_plate",
+       [&] { fake_plate.set_faults(errors); },
+       [&] { fake_plate.set_faults({}); },
+       1e-3,
        {"error frame", "0x4000"}},
-      {"dropped frames", "force_plate", [&] { fake_plate.set_faults(drops); }, [&] { fake_plate.set_faults({}); }, 1e-3,
+      {"dropped frames",
+       "force_plate",
+       [&] { fake_plate.set_faults(drops); },
+       [&] { fake_plate.set_faults({}); },
+       1e-3,
        {"lost", "silent"}},
-      {"slow responses", "robot", [&] { fake_robot.set_faults(slow); }, [&] { fake_robot.set_faults({}); }, 8e-3,
-       {"silent", "timeout"}},
+      {"slow responses", "robot", [&] { fake_robot.set_faults(slow); }, [&] { fake_robot.set_faults({}); }, 8e-3, {"silent", "timeout"}},
   };
   for (const auto& c : cases) {
     // Wait for a quiet state of the device first (drops keep it degraded for a second).

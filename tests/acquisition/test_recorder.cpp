@@ -51,7 +51,8 @@ TEST(Recorder, WritesAReadableRunWithQualityColumns) {
   EXPECT_EQ(run.samples.extra_columns[0], "quality");
   EXPECT_NE(run.info.notes.find("samples: 100"), std::string::npos);
   EXPECT_THAT([&] { RunRecorder(dir, info(), "", kT0, 2); },
-              ::testing::ThrowsMessage<std::runtime_error>(::testing::HasSubstr(dir + ": exists and is not empty; refusing to overwrite a run")));
+              ::testing::ThrowsMessage<std::runtime_error>(::testing::HasSubstr(dir +
+                                                                                ": exists and is not empty; refusing to overwrite a run")));
 }
 
 TEST(Recorder, KillMinus9LosesAtMostTheLastSecond) {

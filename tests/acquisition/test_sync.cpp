@@ -26,8 +26,11 @@ PoseReading pose_at(std::int64_t t_ns, std::uint64_t seq) {
 }  // namespace
 
 TEST(Sync, RatesMustDivide) {
-  EXPECT_THAT([] { Synchronizer({1000.0, 300.0}, [](const SyncedSample&) {}); },
-              ::testing::ThrowsMessage<std::invalid_argument>(::testing::HasSubstr("the output rate must divide the force-plate rate (1000")));
+  EXPECT_THAT(
+      [] {
+        Synchronizer({1000.0, 300.0}, [](const SyncedSample&) {});
+      },
+      ::testing::ThrowsMessage<std::invalid_argument>(::testing::HasSubstr("the output rate must divide the force-plate rate (1000")));
   EXPECT_NO_THROW(Synchronizer({1000.0, 50.0}, [](const SyncedSample&) {}));
 }
 

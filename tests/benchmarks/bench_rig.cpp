@@ -84,29 +84,83 @@ std::vector<FaultKind> fault_kinds(double fault_s) {
   using hil::drivers::CanFaults;
   using hil::drivers::ModbusFaults;
   std::vector<FaultKind> k;
-  k.push_back({"CAN frames dropped (20 %)", [](double) { CanFaults f; f.drop_fraction = 0.2; return f; }, nullptr});
-  k.push_back({"CAN answers corrupted (20 %)", [](double) { CanFaults f; f.corrupt_fraction = 0.2; return f; }, nullptr});
-  k.push_back({"CAN error frames (100/s, error passive)", [](double) { CanFaults f; f.error_frame_rate_hz = 100; return f; }, nullptr});
-  k.push_back({"CAN bus-off", [fault_s](double t) { CanFaults f; f.bus_off.push_back({t, fault_s}); return f; }, nullptr});
-  k.push_back({"plate silent", [](double) { CanFaults f; f.silent_now = true; return f; }, nullptr});
+  k.push_back({"CAN frames dropped (20 %)",
+               [](double) {
+                 CanFaults f;
+                 f.drop_fraction = 0.2;
+                 return f;
+               },
+               nullptr});
+  k.push_back({"CAN answers corrupted (20 %)",
+               [](double) {
+                 CanFaults f;
+                 f.corrupt_fraction = 0.2;
+                 return f;
+               },
+               nullptr});
+  k.push_back({"CAN error frames (100/s, error passive)",
+               [](double) {
+                 CanFaults f;
+                 f.error_frame_rate_hz = 100;
+                 return f;
+               },
+               nullptr});
+  k.push_back({"CAN bus-off",
+               [fault_s](double t) {
+                 CanFaults f;
+                 f.bus_off.push_back({t, fault_s});
+                 return f;
+               },
+               nullptr});
+  k.push_back({"plate silent",
+               [](double) {
+                 CanFaults f;
+                 f.silent_now = true;
+                 return f;
+               },
+               nullptr});
   // Late, but inside the driver's 0.9-period timeout: every answer must still be recorded.
-  k.push_back({"plate answers 0.3 ms late", [](double) { CanFaults f; f.extra_delay_s = 3e-4; return f; }, nullptr});
-  k.push_back({"Modbus exceptions (20 %)", nullptr, [](double) { ModbusFaults f; f.exception_fraction = 0.2; return f; }});
-  k.push_back({"Modbus exception burst", nullptr,
-               [fault_s](double t) { ModbusFaults f; f.exception_windows.push_back({t, fault_s}); return f; }});
-  k.push_back({"Modbus slow answers (50 %, +20 ms)", nullptr,
-               [](double) { ModbusFaults f; f.slow_fraction = 0.5; f.slow_delay_s = 0.02; return f; }});
-  k.push_back({"controller silent", nullptr, [](double) { ModbusFaults f; f.silent_now = true; return f; }});
-  k.push_back({"controller answers 5 ms late", nullptr, [](double) { ModbusFaults f; f.extra_delay_s = 0.005; return f; }});
+  k.push_back({"plate answers 0.3 ms late",
+               [](double) {
+                 CanFaults f;
+                 f.extra_delay_s = 3e-4;
+                 return f;
+               },
+               nullptr});
+  k.push_back({"Modbus exceptions (20 %)", nullptr, [](double) {
+                 ModbusFaults f;
+                 f.exception_fraction = 0.2;
+                 return f;
+               }});
+  k.push_back({"Modbus exception burst", nullptr, [fault_s](double t) {
+                 ModbusFaults f;
+                 f.exception_windows.push_back({t, fault_s});
+                 return f;
+               }});
+  k.push_back({"Modbus slow answers (50 %, +20 ms)", nullptr, [](double) {
+                 ModbusFaults f;
+                 f.slow_fraction = 0.5;
+                 f.slow_delay_s = 0.02;
+                 return f;
+               }});
+  k.push_back({"controller silent", nullptr, [](double) {
+                 ModbusFaults f;
+                 f.silent_now = true;
+                 return f;
+               }});
+  k.push_back({"controller answers 5 ms late", nullptr, [](double) {
+                 ModbusFaults f;
+                 f.extra_delay_s = 0.005;
+                 return f;
+               }});
   return k;
 }
 
 // Every reading delivered, followed from the device to the recording and the bus.
 struct Accounts {
-  std::uint64_t plate_delivered = 0, plate_readings = 0, plate_monitor = 0, plate_raw_rows = 0, plate_late_frames = 0,
-                plate_bad_frames = 0, plate_timeouts = 0, plate_error_frames = 0;
-  std::uint64_t robot_replies = 0, robot_readings = 0, robot_monitor = 0, robot_raw_rows = 0, robot_exceptions = 0,
-                robot_timeouts = 0;
+  std::uint64_t plate_delivered = 0, plate_readings = 0, plate_monitor = 0, plate_raw_rows = 0, plate_late_frames = 0, plate_bad_frames = 0,
+                plate_timeouts = 0, plate_error_frames = 0;
+  std::uint64_t robot_replies = 0, robot_readings = 0, robot_monitor = 0, robot_raw_rows = 0, robot_exceptions = 0, robot_timeouts = 0;
   std::uint64_t samples_rows = 0;
 
   // Prints the balance; false when something delivered is missing.
@@ -342,14 +396,14 @@ int main(int argc, char** argv) {
     return 1;
   }
   std::printf("seconds %.1f, output rate %.0f Hz, device threads %s\n", seconds, output_rate,
-              rt_priority == 0 ? "at normal priority"
+              rt_priority == 0  ? "at normal priority"
               : rt_threads == 2 ? ("at SCHED_FIFO " + std::to_string(rt_priority)).c_str()
                                 : "at normal priority (real-time not permitted)");
   std::printf("rt/hil/wrench receive->delivery (other process): n=%llu p50=%.1f us p99=%.1f us max=%.1f us\n",
               static_cast<unsigned long long>(r.wrench_messages), r.p50_us, r.p99_us, r.max_us);
-  std::printf("PoseWrenchSample: published %llu, received %llu, lost %lld, index breaks %llu\n",
-              static_cast<unsigned long long>(samples), static_cast<unsigned long long>(r.samples),
-              static_cast<long long>(samples) - static_cast<long long>(r.samples), static_cast<unsigned long long>(r.index_breaks));
+  std::printf("PoseWrenchSample: published %llu, received %llu, lost %lld, index breaks %llu\n", static_cast<unsigned long long>(samples),
+              static_cast<unsigned long long>(r.samples), static_cast<long long>(samples) - static_cast<long long>(r.samples),
+              static_cast<unsigned long long>(r.index_breaks));
   std::printf("CPU: device threads %.1f %% of one core, whole process (fakes included) %.1f %%\n", 100.0 * device_cpu_s / seconds,
               100.0 * process_cpu_s / seconds);
   bool lost = r.samples != samples || r.index_breaks != 0 || samples == 0;

@@ -85,8 +85,7 @@ TEST(Vjm, JointSpringJacobianIsTheToolJacobianColumn) {
   const Eigen::VectorXd q = random_q(m, rng);
   m.jacobians(q, ws);
   const Eigen::MatrixXd J = hc::tool_jacobian(m.robot(), q);
-  for (int j = 1; j <= 6; ++j)
-    EXPECT_TRUE(hil::test::near(ws.J[static_cast<std::size_t>(m.joint_spring(j))].col(0), J.col(j - 1), 1e-12));
+  for (int j = 1; j <= 6; ++j) EXPECT_TRUE(hil::test::near(ws.J[static_cast<std::size_t>(m.joint_spring(j))].col(0), J.col(j - 1), 1e-12));
 }
 
 TEST(Vjm, ObservationTimesParametersEqualsForwardDeflectionForEveryParameterSet) {

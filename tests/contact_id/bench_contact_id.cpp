@@ -111,7 +111,14 @@ void BM_Geometric9(benchmark::State& st) {
   st.counters["jacobians"] = g.jacobian_evaluations;
   st.counters["fitted"] = five ? 5 : 9;
 }
-BENCHMARK(BM_Geometric9)->Args({0, 9})->Args({1, 9})->Args({2, 9})->Args({0, 5})->Args({1, 5})->Unit(benchmark::kMillisecond)->Iterations(1);
+BENCHMARK(BM_Geometric9)
+    ->Args({0, 9})
+    ->Args({1, 9})
+    ->Args({2, 9})
+    ->Args({0, 5})
+    ->Args({1, 5})
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(1);
 
 void BM_LCurve30(benchmark::State& st) {
   const auto& r = acu2000();

@@ -9,8 +9,7 @@ namespace hil::contact_id::test {
 
 inline std::vector<Vec3> box(const Vec3& lo, const Vec3& hi) {
   std::vector<Vec3> v;
-  for (int i = 0; i < 8; ++i)
-    v.emplace_back(i & 1 ? hi.x() : lo.x(), i & 2 ? hi.y() : lo.y(), i & 4 ? hi.z() : lo.z());
+  for (int i = 0; i < 8; ++i) v.emplace_back(i & 1 ? hi.x() : lo.x(), i & 2 ? hi.y() : lo.y(), i & 4 ? hi.z() : lo.z());
   return v;
 }
 

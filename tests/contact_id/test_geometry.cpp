@@ -14,8 +14,8 @@ using ::testing::ThrowsMessage;
 
 ::testing::AssertionResult near_vec(const Vec3& a, const Vec3& b, double tol) {
   if ((a - b).norm() <= tol) return ::testing::AssertionSuccess();
-  return ::testing::AssertionFailure() << "[" << a.transpose() << "] vs [" << b.transpose() << "], |diff| = " << (a - b).norm()
-                                       << " > " << tol;
+  return ::testing::AssertionFailure() << "[" << a.transpose() << "] vs [" << b.transpose() << "], |diff| = " << (a - b).norm() << " > "
+                                       << tol;
 }
 
 TEST(Polyhedron, CubeTopology) {
@@ -35,10 +35,16 @@ TEST(Polyhedron, DropsInteriorPointsAndRejectsFlat) {
   auto v = box({0, 0, 0}, {1, 1, 1});
   v.emplace_back(0.5, 0.5, 0.5);
   EXPECT_EQ(Polyhedron::from_vertices(v).vertices().size(), 8u);
-  EXPECT_THAT([] { Polyhedron::from_vertices({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 1, 0}}); },
-              ThrowsMessage<std::invalid_argument>(HasSubstr("coplanar (no volume)")));
-  EXPECT_THAT([] { Polyhedron::from_vertices({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}); },
-              ThrowsMessage<std::invalid_argument>(HasSubstr("at least 4 vertices")));
+  EXPECT_THAT(
+      [] {
+        Polyhedron::from_vertices({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 1, 0}});
+      },
+      ThrowsMessage<std::invalid_argument>(HasSubstr("coplanar (no volume)")));
+  EXPECT_THAT(
+      [] {
+        Polyhedron::from_vertices({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}});
+      },
+      ThrowsMessage<std::invalid_argument>(HasSubstr("at least 4 vertices")));
 }
 
 TEST(Mindist, FaceFace) {
@@ -62,7 +68,8 @@ TEST(Mindist, FaceFace) {
 
 TEST(Mindist, VertexFace) {
   // A square pyramid, apex down at the origin of its frame.
-  const auto pyr = Polyhedron::from_vertices({{0, 0, 0}, {-0.02, -0.02, 0.02}, {0.02, -0.02, 0.02}, {0.02, 0.02, 0.02}, {-0.02, 0.02, 0.02}});
+  const auto pyr =
+      Polyhedron::from_vertices({{0, 0, 0}, {-0.02, -0.02, 0.02}, {0.02, -0.02, 0.02}, {0.02, 0.02, 0.02}, {-0.02, 0.02, 0.02}});
   EXPECT_EQ(pyr.faces().size(), 5u);
   const auto block = Polyhedron::from_vertices(box({-0.1, -0.1, -0.05}, {0.1, 0.1, 0.0}));
   Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
@@ -125,7 +132,7 @@ TEST(Mindist, TiltedFaceIsContinuousInPose) {
 // result must be the full pass's, bit for bit, for translations and turns, in contact or apart.
 TEST(Mindist, ReplayAfterSmallMotionEqualsTheFullPass) {
   // A chamfered guide (many faces, nearly parallel edges after a turn) against a V-groove wall.
-  std::vector<Vec3> guide = {{-0.01, -0.005, 0}, {0.01, -0.005, 0}, {0.01, 0.005, 0}, {-0.01, 0.005, 0},
+  std::vector<Vec3> guide = {{-0.01, -0.005, 0},       {0.01, -0.005, 0},       {0.01, 0.005, 0},       {-0.01, 0.005, 0},
                              {-0.008, -0.003, -0.004}, {0.008, -0.003, -0.004}, {0.008, 0.003, -0.004}, {-0.008, 0.003, -0.004}};
   const auto a = Polyhedron::from_vertices(guide);
   const auto b = Polyhedron::from_vertices(box({-0.05, -0.05, -0.02}, {0.05, 0.05, -0.003}));

@@ -44,9 +44,13 @@ TEST(Model, WrenchTransformsAreInverse) {
 }
 
 TEST(Model, RejectsNonPhysicalParameters) {
-  EXPECT_THAT(([] { ContactModel{0.0, 0.2, 1e-3}.check(); }),
+  EXPECT_THAT(([] {
+                ContactModel{0.0, 0.2, 1e-3}.check();
+              }),
               ThrowsMessage<std::invalid_argument>(HasSubstr("contact stiffness K must be > 0, got 0")));
-  EXPECT_THAT(([] { ContactModel{1e5, -0.1, 1e-3}.check(); }),
+  EXPECT_THAT(([] {
+                ContactModel{1e5, -0.1, 1e-3}.check();
+              }),
               ThrowsMessage<std::invalid_argument>(HasSubstr("friction coefficient mu must be >= 0, got -0.1")));
   EXPECT_NO_THROW((ContactModel{1e5, 0.0, 1e-3}.check()));
 }
@@ -285,10 +289,10 @@ TEST(Geometric, RecoversHiddenShiftAndBothSolversAgree) {
   auto s = cube_on_block_with_uncertainties();
   ContactModel m{1.8e5, 0.2, 1e-3};
   Eigen::VectorXd truth = s.design();
-  truth[0] = 6e-5;   // block top 60 µm higher than designed
-  truth[1] = 6e-3;   // and tilted more than the cube ever tilts: the deepest corner never switches
-                     // (where it does, the max-depth model has kinks and the linearised intervals
-                     // understate the spread, see docs/contact_id.md)
+  truth[0] = 6e-5;  // block top 60 µm higher than designed
+  truth[1] = 6e-3;  // and tilted more than the cube ever tilts: the deepest corner never switches
+                    // (where it does, the max-depth model has kinks and the linearised intervals
+                    // understate the spread, see docs/contact_id.md)
   SensorModel sensor;
   sensor.force_noise_n = 0.05;
   sensor.moment_noise_nm = 5e-4;

@@ -74,12 +74,15 @@ const Resolution kFine{"fine", 2e-5};
 
 // Effects with fixed magnitudes, each well above the sensor's 0.1 N / 0.005 N m noise on this run.
 const Effect kNone{"none", [](ct::Scenario&, TripodRigOptions&) {}, {}};
-const Effect kBias{"sensor_bias", [](ct::Scenario& s, TripodRigOptions&) { s.sensor.bias << 0.8, -0.5, 1.5, 0.03, -0.02, 0.01; },
+const Effect kBias{"sensor_bias",
+                   [](ct::Scenario& s, TripodRigOptions&) { s.sensor.bias << 0.8, -0.5, 1.5, 0.03, -0.02, 0.01; },
                    {"sensor_bias"}};
-const Effect kGain{"sensor_gain", [](ct::Scenario& s, TripodRigOptions&) { s.sensor.gain << 0.04, -0.03, 0.0, 0.03, -0.04, 0.02; },
+const Effect kGain{"sensor_gain",
+                   [](ct::Scenario& s, TripodRigOptions&) { s.sensor.gain << 0.04, -0.03, 0.0, 0.03, -0.04, 0.02; },
                    {"sensor_gain"}};
 const Effect kDelay{"time_offset", [](ct::Scenario& s, TripodRigOptions&) { s.sensor.delay_s = 0.02; }, {"time_offset"}};
-const Effect kViscous{"viscous_friction", [](ct::Scenario& s, TripodRigOptions&) { s.law.viscous_n_s_per_m = 200.0; },
+const Effect kViscous{"viscous_friction",
+                      [](ct::Scenario& s, TripodRigOptions&) { s.law.viscous_n_s_per_m = 200.0; },
                       {"viscous_friction"}};
 // The truth bounds friction by the total normal force (Kelvin-Voigt): μ D δ̇ more than hil's
 // contact_damping, whose friction stays μ K δ.
@@ -96,10 +99,10 @@ const Effect kDampingElastic{"contact_damping_elastic_friction",
                                s.law.friction_on_total_normal = false;
                              },
                              {"contact_damping"}};
-const Effect kExponent{"nonlinear_stiffness", [](ct::Scenario& s, TripodRigOptions&) { s.law.exponent = 1.4; },
-                       {"nonlinear_stiffness"}};
+const Effect kExponent{"nonlinear_stiffness", [](ct::Scenario& s, TripodRigOptions&) { s.law.exponent = 1.4; }, {"nonlinear_stiffness"}};
 // The rig declares the plate's surface 20 µm below where it is (the truth's o_P).
-const Effect kGeometric{"geometric_offset", [](ct::Scenario&, TripodRigOptions& o) { o.declared_plate_height_m = -2e-5; },
+const Effect kGeometric{"geometric_offset",
+                        [](ct::Scenario&, TripodRigOptions& o) { o.declared_plate_height_m = -2e-5; },
                         {"geometric_offset"}};
 const Effect kBiasDelay{"sensor_bias_and_time_offset",
                         [](ct::Scenario& s, TripodRigOptions&) {
@@ -133,7 +136,9 @@ const Effect kDrift{"drifting_offset",
                     {},
                     true};
 const Effect kSlip{"slip_event",
-                   [](ct::Scenario& s, TripodRigOptions&) { s.slips.push_back({kDuration_s / 2, 1.5e-3, -1e-3, 0.02}); },
+                   [](ct::Scenario& s, TripodRigOptions&) {
+                     s.slips.push_back({kDuration_s / 2, 1.5e-3, -1e-3, 0.02});
+                   },
                    {},
                    true};
 
@@ -215,7 +220,10 @@ TEST_P(Blind, TheRightCauseWithItsMagnitude) {
     table << "  " << k.name << ": " << 100 * k.score.cv_error << " % (noise fraction " << k.noise_fraction << ") " << k.verdict << "\n";
   for (const auto& k : d.second_step) {
     table << "  + " << k.name << ": " << k.verdict << " nf " << k.noise_fraction << " ef " << k.effect_fraction << " |";
-    for (const auto& q : k.score.full.reported) if (q.extension) table << " " << q.name << "=" << q.value << "±" << q.std << " [a " << q.std_asymptotic << " f " << q.std_folds << " m " << q.std_model_form << "]";
+    for (const auto& q : k.score.full.reported)
+      if (q.extension)
+        table << " " << q.name << "=" << q.value << "±" << q.std << " [a " << q.std_asymptotic << " f " << q.std_folds << " m "
+              << q.std_model_form << "]";
     table << "\n";
   }
   if (std::getenv("HIL_DEBUG_TABLE")) std::cout << table.str();
@@ -223,9 +231,8 @@ TEST_P(Blind, TheRightCauseWithItsMagnitude) {
                " %, candidates:\n" + table.str());
   // One line per case for the report: the named causes, the gain, each checked parameter.
   std::ostringstream line;
-  line << std::setprecision(4) << "BLIND " << label(c) << ": cause " << d.cause
-       << (d.second_cause.empty() ? "" : " + " + d.second_cause) << ", gain " << d.gain_percent << " % (nominal "
-       << 100 * d.nominal.cv_error << " %, noise " << 100 * d.noise_relative << " %)";
+  line << std::setprecision(4) << "BLIND " << label(c) << ": cause " << d.cause << (d.second_cause.empty() ? "" : " + " + d.second_cause)
+       << ", gain " << d.gain_percent << " % (nominal " << 100 * d.nominal.cv_error << " %, noise " << 100 * d.noise_relative << " %)";
 
   // The parameters of a named cause the scenario did not hide (the expected ones are listed below).
   if (d.extended)
@@ -253,10 +260,8 @@ TEST_P(Blind, TheRightCauseWithItsMagnitude) {
     EXPECT_EQ(d.gain_percent, 0.0);
     return;
   }
-  if (want.size() == 2)
-    EXPECT_EQ((std::set<std::string>{d.cause, d.second_cause}), std::set<std::string>(want.begin(), want.end()));
-  else
-    EXPECT_EQ(d.cause, want.front());
+  if (want.size() == 2) EXPECT_EQ((std::set<std::string>{d.cause, d.second_cause}), std::set<std::string>(want.begin(), want.end()));
+  else EXPECT_EQ(d.cause, want.front());
   EXPECT_GT(d.gain_percent, 0.0);
   ASSERT_TRUE(d.extended.has_value());
   // Each expected cause's parameters that the diagnosis calls practically identifiable: the truth
@@ -334,8 +339,8 @@ std::string known_failure(const std::string& effect) {
 
 std::vector<Case> cases(const Resolution& r) {
   std::vector<Case> out;
-  for (const Effect* e : {&kNone, &kBias, &kGain, &kDelay, &kViscous, &kDamping, &kDampingElastic, &kExponent, &kGeometric,
-                          &kBiasDelay, &kDampingDelay, &kDelayDamping, &kDrift, &kSlip})
+  for (const Effect* e : {&kNone, &kBias, &kGain, &kDelay, &kViscous, &kDamping, &kDampingElastic, &kExponent, &kGeometric, &kBiasDelay,
+                          &kDampingDelay, &kDelayDamping, &kDrift, &kSlip})
     out.push_back({*e, r, known_failure(e->name)});
   return out;
 }

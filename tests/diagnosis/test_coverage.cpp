@@ -53,8 +53,9 @@ TEST_P(IntervalCoverage, AtLeast85PercentOver20Seeds) {
     ++runs;
     const bool in = std::abs(q->value - c.truth) <= 1.96 * q->std;
     covered += in;
-    if (!in) misses << "\n  seed " << seed << ": " << q->value << " ± " << 1.96 * q->std << " (std_asymptotic " << q->std_asymptotic
-                    << ", std_folds " << q->std_folds << ")";
+    if (!in)
+      misses << "\n  seed " << seed << ": " << q->value << " ± " << 1.96 * q->std << " (std_asymptotic " << q->std_asymptotic
+             << ", std_folds " << q->std_folds << ")";
   }
   std::cout << c.candidate << " " << c.parameter << ": " << covered << " of " << runs << " intervals cover " << c.truth << "\n";
   EXPECT_GE(covered, static_cast<int>(std::ceil(0.85 * runs))) << covered << " of " << runs << misses.str();
@@ -64,28 +65,29 @@ std::string name_of(const ::testing::TestParamInfo<Coverage>& i) { return i.para
 
 INSTANTIATE_TEST_SUITE_P(
     Truth, IntervalCoverage,
-    ::testing::Values(
-        Coverage{"sensor_bias", "bias_fz", [](ct::Scenario& s, TripodRigOptions&) { s.sensor.bias << 0.8, -0.5, 1.5, 0.03, -0.02, 0.01; },
-                 1.5},
-        Coverage{"contact_damping", "damping_n_s_per_m",
-                 [](ct::Scenario& s, TripodRigOptions&) {
-                   s.law.damping_n_s_per_m = 5000.0;
-                   s.law.friction_on_total_normal = true;
-                 },
-                 5000.0},
-        Coverage{"viscous_friction", "viscous_n_s_per_m", [](ct::Scenario& s, TripodRigOptions&) { s.law.viscous_n_s_per_m = 200.0; },
-                 200.0},
-        // The rig declares the plate 20 µm low: the fitted height is the truth's, 0.
-        Coverage{"geometric_offset", kPlateHeight, [](ct::Scenario&, TripodRigOptions& o) { o.declared_plate_height_m = -2e-5; }, 0.0},
-        // 20 of 20; 17 of 20 (52 of 60 seeds) without the friction's model forms, 0 of 20 before
-        // the windowed-sinc pose interpolation (docs/diagnosis.md).
-        Coverage{"time_offset", "time_offset_s", [](ct::Scenario& s, TripodRigOptions&) { s.sensor.delay_s = 0.02; }, 0.02},
-        // A tilting moment's gain: 20 of 20; 13 of 20 (30 of 60) without the friction's model forms
-        // (its lever: hil's contact point 3δ/4 above the truth's foot tip).
-        Coverage{"sensor_gain", "gain_my", [](ct::Scenario& s, TripodRigOptions&) { s.sensor.gain << 0.0, 0.0, 0.0, 0.03, -0.04, 0.0; },
-                 -0.04},
-        Coverage{"sensor_gain", "gain_mz", [](ct::Scenario& s, TripodRigOptions&) { s.sensor.gain << 0.04, -0.03, 0.0, 0.03, -0.04, 0.02; },
-                 1.02 / 0.97 - 1}),
+    ::testing::Values(Coverage{"sensor_bias", "bias_fz",
+                               [](ct::Scenario& s, TripodRigOptions&) { s.sensor.bias << 0.8, -0.5, 1.5, 0.03, -0.02, 0.01; }, 1.5},
+                      Coverage{"contact_damping", "damping_n_s_per_m",
+                               [](ct::Scenario& s, TripodRigOptions&) {
+                                 s.law.damping_n_s_per_m = 5000.0;
+                                 s.law.friction_on_total_normal = true;
+                               },
+                               5000.0},
+                      Coverage{"viscous_friction", "viscous_n_s_per_m",
+                               [](ct::Scenario& s, TripodRigOptions&) { s.law.viscous_n_s_per_m = 200.0; }, 200.0},
+                      // The rig declares the plate 20 µm low: the fitted height is the truth's, 0.
+                      Coverage{"geometric_offset", kPlateHeight,
+                               [](ct::Scenario&, TripodRigOptions& o) { o.declared_plate_height_m = -2e-5; }, 0.0},
+                      // 20 of 20; 17 of 20 (52 of 60 seeds) without the friction's model forms, 0 of 20 before
+                      // the windowed-sinc pose interpolation (docs/diagnosis.md).
+                      Coverage{"time_offset", "time_offset_s", [](ct::Scenario& s, TripodRigOptions&) { s.sensor.delay_s = 0.02; }, 0.02},
+                      // A tilting moment's gain: 20 of 20; 13 of 20 (30 of 60) without the friction's model forms
+                      // (its lever: hil's contact point 3δ/4 above the truth's foot tip).
+                      Coverage{"sensor_gain", "gain_my",
+                               [](ct::Scenario& s, TripodRigOptions&) { s.sensor.gain << 0.0, 0.0, 0.0, 0.03, -0.04, 0.0; }, -0.04},
+                      Coverage{"sensor_gain", "gain_mz",
+                               [](ct::Scenario& s, TripodRigOptions&) { s.sensor.gain << 0.04, -0.03, 0.0, 0.03, -0.04, 0.02; },
+                               1.02 / 0.97 - 1}),
     name_of);
 
 }  // namespace

@@ -128,9 +128,7 @@ class CollinearFamily : public ModelFamily {
  public:
   CollinearFamily(const Observations& o, bool twin, bool flat) : o_(o), twin_(twin), flat_(flat) {}
   std::string name() const override { return "collinear"; }
-  std::vector<Param> linear() const override {
-    return {{"amplitude", "", 1, false}, {"offset", "", 1, false}, {"twin", "", 1, true}};
-  }
+  std::vector<Param> linear() const override { return {{"amplitude", "", 1, false}, {"offset", "", 1, false}, {"twin", "", 1, true}}; }
   std::vector<Param> nonlinear() const override {
     return {{"frequency", "Hz", 0.1, false, 0.1, 5}, {"ghost_gain", "", 0.01, true, -0.5, 0.5}};
   }
@@ -409,7 +407,8 @@ Observations noiseless(int n, F f) {
 }
 
 TEST(Engine, SecantUpdatesReachTheSameOptimumWithFewerDesigns) {
-  const Observations o = noiseless(400, [](int, double t, int c) { return 2.0 * std::exp(-0.5 * t) * std::sin(2 * M_PI * 1.23 * t + c) + 0.3; });
+  const Observations o = noiseless(400,
+                                   [](int, double t, int c) { return 2.0 * std::exp(-0.5 * t) * std::sin(2 * M_PI * 1.23 * t + c) + 0.3; });
   DecayFamily m(o);
   FitOptions fd, secant;
   fd.secant_updates = 0;
@@ -753,8 +752,7 @@ INSTANTIATE_TEST_SUITE_P(Effects, ExactRecovery,
                                            Exact{"contact_damping", "damping_n_s_per_m", 4000.0, 1e-6},
                                            // press_slide never slides while the penetration changes
                                            Exact{"contact_damping", "damping_friction_n_s_per_m", 4000.0, 1e-6, "acu_2a"},
-                                           Exact{"sensor_bias", "bias_fx", 3.0, 1e-6},
-                                           Exact{"sensor_gain", "gain_fx", 0.1, 1e-6},
+                                           Exact{"sensor_bias", "bias_fx", 3.0, 1e-6}, Exact{"sensor_gain", "gain_fx", 0.1, 1e-6},
                                            Exact{"nonlinear_stiffness", "stiffness_exponent", 1.4, 1e-6},
                                            Exact{"geometric_offset", "block_top_z", 1.5e-4, 1e-4},
                                            // the generator delays the 50 Hz wrench by interpolation,
@@ -1180,7 +1178,7 @@ TEST(DeflectionFamily, NamesACompliantBaseAndNoneForARigidOne) {
   std::vector<Eigen::Matrix<double, 6, 1>> w;
   Matrix6d C = Matrix6d::Zero();
   C(3, 4) = C(4, 3) = 0;
-  C(3, 3) = 4e-5;   // rad/(N m): tilt about x under a moment about x
+  C(3, 3) = 4e-5;  // rad/(N m): tilt about x under a moment about x
   C(4, 4) = 2.5e-5;
   for (int k = 0; k < n; ++k) {
     const double tk = 0.01 * k;
@@ -1195,8 +1193,8 @@ TEST(DeflectionFamily, NamesACompliantBaseAndNoneForARigidOne) {
     Eigen::Matrix<double, 6, 1> noise;
     for (int i = 0; i < 6; ++i) noise(i) = (i < 3 ? 1e-5 : 1e-5) * g(rng);
     ks.T_world_ee.translation() = dflt.head<3>() + noise.head<3>();
-    ks.T_world_ee.linear() = Eigen::AngleAxisd((dflt.tail<3>() + noise.tail<3>()).norm(),
-                                               (dflt.tail<3>() + noise.tail<3>()).normalized()).toRotationMatrix();
+    ks.T_world_ee.linear() =
+        Eigen::AngleAxisd((dflt.tail<3>() + noise.tail<3>()).norm(), (dflt.tail<3>() + noise.tail<3>()).normalized()).toRotationMatrix();
     kr.T_world_ee.translation() = noise.head<3>();
     kr.T_world_ee.linear() = Eigen::AngleAxisd(noise.tail<3>().norm(), noise.tail<3>().normalized()).toRotationMatrix();
     kin_soft.push_back(ks);

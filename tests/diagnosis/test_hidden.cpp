@@ -63,7 +63,8 @@ TEST_P(HiddenEffect, IsNamedWithItsMagnitudeAndAGain) {
   const Diagnosis d = diagnose(make, contact_extensions(), data.obs, {});
   std::string table;
   for (const auto& k : d.candidates)
-    table += "  " + k.name + ": " + std::to_string(100 * k.score.cv_error) + " % (" + std::to_string(k.noise_fraction) + ") " + k.verdict + "\n";
+    table += "  " + k.name + ": " + std::to_string(100 * k.score.cv_error) + " % (" + std::to_string(k.noise_fraction) + ") " + k.verdict +
+             "\n";
   for (const auto& k : d.second_step) table += "  + " + k.name + ": " + k.verdict + "\n";
   SCOPED_TRACE("nominal " + std::to_string(100 * d.nominal.cv_error) + " %, noise " + std::to_string(100 * d.noise_relative) +
                " %, candidates:\n" + table);
@@ -100,24 +101,22 @@ TEST_P(HiddenEffect, IsNamedWithItsMagnitudeAndAGain) {
   EXPECT_GE(checked, 1);
 }
 
-INSTANTIATE_TEST_SUITE_P(
-    Acu, HiddenEffect,
-    ::testing::Values(Case{"acu_2a", {}, 11}, Case{"acu_2a", {"sensor_bias"}, 12}, Case{"acu_2a", {"sensor_gain"}, 13},
-                      Case{"acu_2a", {"time_offset"}, 14}, Case{"acu_2a", {"viscous_friction"}, 15},
-                      Case{"acu_2a", {"contact_damping"}, 16}, Case{"acu_2a", {"nonlinear_stiffness"}, 17},
-                      // robot_compliance: see RobotComplianceOnAcu2a below
-                      Case{"acu_2a", {"geometric_offset"}, 19},
-                      Case{"acu_1a", {}, 21}, Case{"acu_1a", {"viscous_friction"}, 22},
-                      Case{"acu_2a", {"sensor_bias", "viscous_friction"}, 23}),
-    case_name);
+INSTANTIATE_TEST_SUITE_P(Acu, HiddenEffect,
+                         ::testing::Values(Case{"acu_2a", {}, 11}, Case{"acu_2a", {"sensor_bias"}, 12}, Case{"acu_2a", {"sensor_gain"}, 13},
+                                           Case{"acu_2a", {"time_offset"}, 14}, Case{"acu_2a", {"viscous_friction"}, 15},
+                                           Case{"acu_2a", {"contact_damping"}, 16}, Case{"acu_2a", {"nonlinear_stiffness"}, 17},
+                                           // robot_compliance: see RobotComplianceOnAcu2a below
+                                           Case{"acu_2a", {"geometric_offset"}, 19}, Case{"acu_1a", {}, 21},
+                                           Case{"acu_1a", {"viscous_friction"}, 22},
+                                           Case{"acu_2a", {"sensor_bias", "viscous_friction"}, 23}),
+                         case_name);
 
-INSTANTIATE_TEST_SUITE_P(
-    Press, HiddenEffect,
-    ::testing::Values(Case{"press_slide", {}, 31}, Case{"press_slide", {"sensor_bias"}, 32},
-                      Case{"press_slide", {"sensor_gain"}, 33}, Case{"press_slide", {"time_offset"}, 34},
-                      Case{"press_slide", {"viscous_friction"}, 35}, Case{"press_slide", {"nonlinear_stiffness"}, 36},
-                      Case{"press_slide", {"geometric_offset"}, 37}),
-    case_name);
+INSTANTIATE_TEST_SUITE_P(Press, HiddenEffect,
+                         ::testing::Values(Case{"press_slide", {}, 31}, Case{"press_slide", {"sensor_bias"}, 32},
+                                           Case{"press_slide", {"sensor_gain"}, 33}, Case{"press_slide", {"time_offset"}, 34},
+                                           Case{"press_slide", {"viscous_friction"}, 35}, Case{"press_slide", {"nonlinear_stiffness"}, 36},
+                                           Case{"press_slide", {"geometric_offset"}, 37}),
+                         case_name);
 
 // A lateral wrist compliance on ACU 2a: in series with the V-guides' contact stiffness it softens
 // the contact under load, which a Hertz-like exponent also describes. Scored leak-free (each fold

@@ -54,8 +54,8 @@ DeflectionData make_base(const std::vector<Step>& steps, unsigned seed, double n
     // a constant fz, C's fz columns are nearly those of the rest pose, and the engine's least squares
     // (its COD threshold is set after the decomposition) returned a wrong θ on this design.
     Vector6d wk;
-    wk << 2 * std::sin(tk), 1.5 * std::cos(0.7 * tk), -700 + 20 * std::sin(0.3 * tk + 1), 40 * std::sin(0.9 * tk),
-        30 * std::cos(0.4 * tk), 3 * std::sin(1.3 * tk);
+    wk << 2 * std::sin(tk), 1.5 * std::cos(0.7 * tk), -700 + 20 * std::sin(0.3 * tk + 1), 40 * std::sin(0.9 * tk), 30 * std::cos(0.4 * tk),
+        3 * std::sin(1.3 * tk);
     w.push_back(wk);
     Vector6d v = C * wk;
     for (const auto& s : steps)
@@ -63,9 +63,9 @@ DeflectionData make_base(const std::vector<Step>& steps, unsigned seed, double n
     for (int i = 0; i < 6; ++i) v(i) += noise * g(rng);
     cid::Kinematics kk;
     kk.T_world_ee.translation() = p0 + v.head<3>();
-    kk.T_world_ee.linear() =
-        (v.tail<3>().norm() > 0 ? Eigen::AngleAxisd(v.tail<3>().norm(), v.tail<3>().normalized()).toRotationMatrix()
-                                : Eigen::Matrix3d::Identity()) * R0;
+    kk.T_world_ee.linear() = (v.tail<3>().norm() > 0 ? Eigen::AngleAxisd(v.tail<3>().norm(), v.tail<3>().normalized()).toRotationMatrix()
+                                                     : Eigen::Matrix3d::Identity()) *
+                             R0;
     kin.push_back(kk);
   }
   return make_deflection_data(t, kin, w, Eigen::Isometry3d::Identity());
@@ -222,9 +222,12 @@ TEST(RestChange, SearchEdgeCases) {
               ThrowsMessage<std::invalid_argument>(HasSubstr("locate_changes: min_segment must be at least 2")));
   EXPECT_THAT([] { locate_changes(Eigen::MatrixXd::Zero(100, 6), std::vector<double>(99, 0.0)); },
               ThrowsMessage<std::invalid_argument>(HasSubstr("locate_changes: 99 times for 100")));
-  EXPECT_THAT([] { locate_changes(Eigen::MatrixXd::Zero(3, 6), {0.0, 0.2, 0.1}); },
-              ThrowsMessage<std::invalid_argument>(HasSubstr("the times do not increase at row 2")));
-  EXPECT_TRUE(locate_changes(Eigen::MatrixXd::Zero(5, 6)).position.empty());   // too few samples
+  EXPECT_THAT(
+      [] {
+        locate_changes(Eigen::MatrixXd::Zero(3, 6), {0.0, 0.2, 0.1});
+      },
+      ThrowsMessage<std::invalid_argument>(HasSubstr("the times do not increase at row 2")));
+  EXPECT_TRUE(locate_changes(Eigen::MatrixXd::Zero(5, 6)).position.empty());    // too few samples
   EXPECT_TRUE(locate_changes(Eigen::MatrixXd::Zero(100, 6)).position.empty());  // nothing varies
   EXPECT_TRUE(locate_changes(Eigen::MatrixXd::Ones(100, 6), {}, 0).position.empty());
 

@@ -46,8 +46,8 @@ std::vector<hc::Measurement> table(const hc::ComplianceSet& truth, std::uint64_t
 
 Diagnosis run(const std::vector<hc::Measurement>& rows) {
   const auto d = make_stiffness_data(robot(), rows);
-  return diagnose([&d](const std::set<std::string>& e) { return std::make_unique<StiffnessFamily>(d, e); },
-                  stiffness_extensions(), d.obs, {});
+  return diagnose([&d](const std::set<std::string>& e) { return std::make_unique<StiffnessFamily>(d, e); }, stiffness_extensions(), d.obs,
+                  {});
 }
 
 /// What the diagnosis reports for `name` in the extended model (NaN if absent).
@@ -131,7 +131,8 @@ TEST(StiffnessTable, BadInputNamesTheRow) {
   // Joint values of another robot.
   auto q = table(joints_only(), 18);
   q[0].q_rad.conservativeResize(5);
-  EXPECT_THAT([&] { make_stiffness_data(robot(), q); }, ThrowsMessage<std::runtime_error>(HasSubstr(": 5 joint values for a 6-joint robot")));
+  EXPECT_THAT([&] { make_stiffness_data(robot(), q); },
+              ThrowsMessage<std::runtime_error>(HasSubstr(": 5 joint values for a 6-joint robot")));
   rows.resize(5);
   EXPECT_THAT([&] { make_stiffness_data(robot(), rows); },
               ThrowsMessage<std::runtime_error>(HasSubstr("too few rows to diagnose a stiffness table (5 < 10)")));

@@ -100,8 +100,11 @@ TEST(TripodScene, TheConverterQuantisesTheReportedPositionAndVelocityOnly) {
     }
   }
   EXPECT_TRUE(moved);
-  EXPECT_THAT([&] { to_measurements(samples, {-1.0, 0.0}); },
-              ThrowsMessage<std::invalid_argument>(HasSubstr("to_measurements: resolutions must be finite and >= 0")));
+  EXPECT_THAT(
+      [&] {
+        to_measurements(samples, {-1.0, 0.0});
+      },
+      ThrowsMessage<std::invalid_argument>(HasSubstr("to_measurements: resolutions must be finite and >= 0")));
 }
 
 TEST(TripodScene, ACleanRunsNominalFitReturnsTheTruthsStiffnessAndFriction) {

@@ -53,9 +53,7 @@ cid::Scene tripod_scene(const ct::Plate& plate, const ct::Tripod& tripod, const 
     const Vec3& tip = tripod.feet_body_m[i];
     // The truth's body z is the plate normal at every instant (PlateTrajectory): the apex points down.
     const double r = o.foot_base_radius_m, h = o.foot_height_m;
-    std::vector<Vec3> v{tip,
-                        tip + Vec3(r, 0.0, h),
-                        tip + Vec3(-0.5 * r, 0.8660254037844386 * r, h),
+    std::vector<Vec3> v{tip, tip + Vec3(r, 0.0, h), tip + Vec3(-0.5 * r, 0.8660254037844386 * r, h),
                         tip + Vec3(-0.5 * r, -0.8660254037844386 * r, h)};
     feet.features.push_back({"foot" + std::to_string(i), {cid::Polyhedron::from_vertices(v)}});
   }
@@ -65,8 +63,7 @@ cid::Scene tripod_scene(const ct::Plate& plate, const ct::Tripod& tripod, const 
   p.T_attach = plate.T_world_plate();  // body frame = the truth's P
   const double a = o.plate_half_size_m;
   std::vector<Vec3> box;
-  for (int i = 0; i < 8; ++i)
-    box.emplace_back(i & 1 ? a : -a, i & 2 ? a : -a, i & 4 ? 0.0 : -o.plate_thickness_m);
+  for (int i = 0; i < 8; ++i) box.emplace_back(i & 1 ? a : -a, i & 2 ? a : -a, i & 4 ? 0.0 : -o.plate_thickness_m);
   p.features.push_back({"top", {cid::Polyhedron::from_vertices(box)}});
 
   using K = cid::Uncertainty::Kind;

@@ -123,7 +123,8 @@ static void BM_DecodeUrRegisters(benchmark::State& state) {
   for (auto _ : state) {
     double sum = 0;
     for (const auto& e : m.entries)
-      sum += decode_entry(e, &img[e.address], e.turns_address >= 0 ? static_cast<std::int16_t>(img[static_cast<std::size_t>(e.turns_address)]) : 0);
+      sum += decode_entry(e, &img[e.address],
+                          e.turns_address >= 0 ? static_cast<std::int16_t>(img[static_cast<std::size_t>(e.turns_address)]) : 0);
     benchmark::DoNotOptimize(sum);
   }
   state.SetItemsProcessed(static_cast<std::int64_t>(state.iterations()));

@@ -135,8 +135,7 @@ TEST(AtiDriver, ConvertsGaugesToTheWrenchWithinQuantisation) {
   b.start_fake();
   b.start_driver();
   const Vector6d tol = b.tolerance();
-  for (const Vector6d& w : {wrench(0, 0, 0, 0, 0, 0), wrench(10, -20, 500, 1.5, -2.5, 0.25),
-                            wrench(-300, 250, -1200, -30, 20, 10)}) {
+  for (const Vector6d& w : {wrench(0, 0, 0, 0, 0, 0), wrench(10, -20, 500, 1.5, -2.5, 0.25), wrench(-300, 250, -1200, -30, 20, 10)}) {
     b.fake->set_wrench(w);
     WrenchSample s;
     ASSERT_EQ(b.plate->poll(s), PollStatus::ok) << b.plate->last_problem();

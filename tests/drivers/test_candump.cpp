@@ -78,8 +78,7 @@ TEST(CanFrameText, ErrorsNameWhatAndWhere) {
   EXPECT_EQ(parse_error("123#112233445566778899"), "column 21: more than 8 data bytes");
   EXPECT_EQ(parse_error("800#"), "column 1: standard identifier exceeds 0x7FF");
   EXPECT_EQ(parse_error("123##"), "column 6: CAN FD flags nibble missing after '##'");
-  EXPECT_EQ(parse_error("123##0112233445566778899"),
-            "data: 9 bytes is not a CAN FD length (0..8, 12, 16, 20, 24, 32, 48, 64)");
+  EXPECT_EQ(parse_error("123##0112233445566778899"), "data: 9 bytes is not a CAN FD length (0..8, 12, 16, 20, 24, 32, 48, 64)");
   EXPECT_EQ(parse_error("123#R9"), "column 6: RTR length must be one digit 0..8");
   EXPECT_EQ(parse_error("20000040#R"), "column 10: error frames cannot be RTR");
 }

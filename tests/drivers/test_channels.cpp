@@ -168,8 +168,9 @@ TEST(CandumpLogChannel, BadLineIsReportedWithFileAndLineThenSkipped) {
 }
 
 TEST(CandumpLogChannel, MissingFileThrows) {
-  EXPECT_THAT([] { CanLogChannel::open_read("/nonexistent/x.log"); },
-              ::testing::ThrowsMessage<DeviceError>(::testing::HasSubstr("candump log /nonexistent/x.log: cannot open for reading: No such file")));
+  EXPECT_THAT(
+      [] { CanLogChannel::open_read("/nonexistent/x.log"); },
+      ::testing::ThrowsMessage<DeviceError>(::testing::HasSubstr("candump log /nonexistent/x.log: cannot open for reading: No such file")));
 }
 
 TEST(RecordingChannel, RecordsBothDirectionsInCandumpFormat) {

@@ -26,8 +26,8 @@ TEST(SignalBits, IntelAndMotorolaLayouts) {
   const std::uint8_t d[8] = {0x12, 0x34, 0x56, 0x78, 0x9A, 0xBC, 0xDE, 0xF0};
   EXPECT_EQ(extract_raw(sig(0, 16, false), d), 0x3412);
   EXPECT_EQ(extract_raw(sig(7, 16, true), d), 0x1234);
-  EXPECT_EQ(extract_raw(sig(4, 12, false), d), 0x341);   // bits 4..15
-  EXPECT_EQ(extract_raw(sig(3, 12, true), d), 0x234);    // MSB at byte 0 bit 3, then byte 1
+  EXPECT_EQ(extract_raw(sig(4, 12, false), d), 0x341);  // bits 4..15
+  EXPECT_EQ(extract_raw(sig(3, 12, true), d), 0x234);   // MSB at byte 0 bit 3, then byte 1
   EXPECT_EQ(extract_raw(sig(8, 4, false), d), 0x4);
   EXPECT_EQ(extract_raw(sig(56, 8, false, true), d), -16);  // 0xF0
   EXPECT_EQ(extract_raw(sig(0, 64, false), d), static_cast<std::int64_t>(0xF0DEBC9A78563412ULL));
@@ -81,8 +81,7 @@ TEST(SignalConfig, ErrorsNameTheSignalAndField) {
   s[1].scale = 0.0;
   EXPECT_TRUE(config_error([&] { validate_signals(s); }, "signals[1].scale", "non-zero"));
   EXPECT_TRUE(config_error([] { validate_signals({}); }, "signals", "at least one signal"));
-  EXPECT_TRUE(config_error([] { parse_wrench_component("fq", "signals[3].component"); }, "signals[3].component",
-                           "not a wrench component"));
+  EXPECT_TRUE(config_error([] { parse_wrench_component("fq", "signals[3].component"); }, "signals[3].component", "not a wrench component"));
 }
 
 namespace {

@@ -78,8 +78,8 @@ TEST(RobotDriver, ReadsTheFloat32Map) {
 TEST(RobotDriver, JointsOnlyAndInputRegisters) {
   RegisterMap m;
   for (unsigned j = 0; j < 6; ++j)
-    m.entries.push_back({"j" + std::to_string(j + 1), 10 + 2 * j, RegisterTable::input, RegisterType::int32,
-                         WordOrder::little, 1e-6, 0.0, -1});
+    m.entries.push_back({"j" + std::to_string(j + 1), 10 + 2 * j, RegisterTable::input, RegisterType::int32, WordOrder::little, 1e-6, 0.0,
+                         -1});
   Rig rig(m);
   RobotSample s;
   ASSERT_EQ(rig.drv->poll(s), PollStatus::ok) << rig.drv->last_problem();

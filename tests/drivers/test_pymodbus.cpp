@@ -73,9 +73,8 @@ TEST(Pymodbus, PymodbusClientReadsTheFakeController) {
     std::vector<std::uint16_t> expected(410, 0);
     encode_state(map, kJoints, kP, kQ, expected);
     const bool ur = map.name == "ur";
-    const std::vector<std::pair<unsigned, unsigned>> ranges =
-        ur ? std::vector<std::pair<unsigned, unsigned>>{{270, 6}, {320, 6}, {400, 6}}
-           : std::vector<std::pair<unsigned, unsigned>>{{0, 24}};
+    const std::vector<std::pair<unsigned, unsigned>> ranges = ur ? std::vector<std::pair<unsigned, unsigned>>{{270, 6}, {320, 6}, {400, 6}}
+                                                                 : std::vector<std::pair<unsigned, unsigned>>{{0, 24}};
     std::vector<std::string> argv{HIL_PYTHON3, script("pymodbus_client.py"), std::to_string(fake.port())};
     for (const auto& [a, n] : ranges) argv.push_back(std::to_string(a) + ":" + std::to_string(n));
     hil::test::Child client(argv);

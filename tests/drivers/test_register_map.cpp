@@ -57,7 +57,7 @@ TEST(RegisterCodec, UrJointsUseTheRevolutionCounter) {
   ASSERT_EQ(j1.turns_address, 320);
   std::uint16_t raw = 0, turns = 0;
   encode_entry(j1, -0.5, &raw, &turns);
-  EXPECT_EQ(raw, 5783);   // within the turn: 2π - 0.5 rad in mrad
+  EXPECT_EQ(raw, 5783);     // within the turn: 2π - 0.5 rad in mrad
   EXPECT_EQ(turns, 65535);  // -1: a negative angle
   EXPECT_NEAR(decode_entry(j1, &raw, static_cast<std::int16_t>(turns)), -0.5, 1e-3);
   encode_entry(j1, 1.25, &raw, &turns);
@@ -106,8 +106,7 @@ TEST(RegisterMapTest, ReadPlansNeverSplitAValue) {
     const auto plan = plan_reads(m, 1000, max_count);
     for (const auto& e : m.entries) {
       bool whole = false;
-      for (const auto& b : plan)
-        whole = whole || (b.table == e.table && b.address <= e.address && e.address + 2 <= b.address + b.count);
+      for (const auto& b : plan) whole = whole || (b.table == e.table && b.address <= e.address && e.address + 2 <= b.address + b.count);
       EXPECT_TRUE(whole || e.type == RegisterType::int16) << e.quantity << " split with max_count " << max_count;
     }
     for (const auto& b : plan) EXPECT_LE(b.count, max_count);

@@ -83,7 +83,9 @@ CanFrame text(const std::string& t) {
 TEST_F(SocketCan, ClassicAndFdFramesWithKernelTimestamps) {
   auto a = open();
   auto b = open();
-  for (const char* t : {"123#DEADBEEF", "1F334455#0102", "321#R4", "456##3" "00112233445566778899AABB"}) {
+  for (const char* t : {"123#DEADBEEF", "1F334455#0102", "321#R4",
+                        "456##3"
+                        "00112233445566778899AABB"}) {
     const CanFrame f = text(t);
     ASSERT_EQ(a->send(f, 100ms), IoStatus::ok) << a->last_error();
     CanFrame got;
@@ -210,8 +212,14 @@ TEST_F(SocketCan, CandumpCapturesTrafficThatOurReaderParsesBitExact) {
   line = dump.read_line();
   t.join();
   ASSERT_FALSE(line.empty());
-  const std::vector<std::string> frames{"123#DEADBEEF", "1F334455#1122334455667788", "123#R", "123#R3",
-                                        "00000123#R8", "7FF#", "456##1112233", "456##F" + std::string(128, 'A'),
+  const std::vector<std::string> frames{"123#DEADBEEF",
+                                        "1F334455#1122334455667788",
+                                        "123#R",
+                                        "123#R3",
+                                        "00000123#R8",
+                                        "7FF#",
+                                        "456##1112233",
+                                        "456##F" + std::string(128, 'A'),
                                         "1ABCDEF0##50011223344556677"};
   auto sender = open();
   for (const auto& f : frames) ASSERT_EQ(sender->send(text(f), 100ms), IoStatus::ok) << f;
@@ -261,8 +269,13 @@ TEST(SocketCanOpen, ClearErrorWithoutCan) {
       EXPECT_NE(std::string(e.what()).find("this kernel has no CAN support"), std::string::npos) << e.what();
     }
   }
-  EXPECT_TRUE(hil::test::config_error([] { SocketCanOptions o; o.interface = std::string(40, 'x'); SocketCanChannel::open(o); },
-                                      "interface", "not a valid interface name"));
+  EXPECT_TRUE(hil::test::config_error(
+      [] {
+        SocketCanOptions o;
+        o.interface = std::string(40, 'x');
+        SocketCanChannel::open(o);
+      },
+      "interface", "not a valid interface name"));
 }
 
 // `hil fake-rig` answering on the bus, the driver reading it, and candump -L capturing the
@@ -317,4 +330,3 @@ TEST_F(SocketCan, HilFakeRigPlateCapturedByCandump) {
     if (!f.error && f.id == ati::frame_id(0x33, ati::kOpReadGauges) && f.len == 8) ++gauge_answers;
   }
 }
-

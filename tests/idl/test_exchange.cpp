@@ -47,8 +47,10 @@ struct LocatorAudit : eprosima::fastdds::dds::DomainParticipantListener {
     };
     check(info.info.metatraffic_locators.unicast);
     check(info.info.default_locators.unicast);
-    for (const auto& l : info.info.metatraffic_locators.multicast) bad.push_back("multicast " + eprosima::fastrtps::rtps::IPLocator::toIPv4string(l));
-    for (const auto& l : info.info.default_locators.multicast) bad.push_back("multicast " + eprosima::fastrtps::rtps::IPLocator::toIPv4string(l));
+    for (const auto& l : info.info.metatraffic_locators.multicast)
+      bad.push_back("multicast " + eprosima::fastrtps::rtps::IPLocator::toIPv4string(l));
+    for (const auto& l : info.info.default_locators.multicast)
+      bad.push_back("multicast " + eprosima::fastrtps::rtps::IPLocator::toIPv4string(l));
   }
 };
 
@@ -78,11 +80,10 @@ TEST(DdsExchange, ThousandSamplesBetweenProcessesNoneLost) {
   {
     hil::dds::ParticipantOptions o{domain, "", "hil_localhost", "test-subscriber", &audit};
     hil::dds::Participant p(o);
-    hil::dds::Reader<hil_msgs::msg::PoseWrenchSample> r(p, hil::dds::topics::kPoseWrenchSample,
-                                                          [&](const auto& msg, const auto&) {
-                                                            std::lock_guard<std::mutex> lock(m);
-                                                            got.push_back(msg);
-                                                          });
+    hil::dds::Reader<hil_msgs::msg::PoseWrenchSample> r(p, hil::dds::topics::kPoseWrenchSample, [&](const auto& msg, const auto&) {
+      std::lock_guard<std::mutex> lock(m);
+      got.push_back(msg);
+    });
     const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(40);
     for (;;) {
       {

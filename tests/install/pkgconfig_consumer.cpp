@@ -14,8 +14,8 @@ int main(int argc, char** argv) try {
   const auto rig = hil::format::load_rig(argv[1]);
   const auto& first = rig.objects.at(0).features.at(0).polyhedra.at(0);
   const auto poly = hil::contact_id::Polyhedron::from_vertices(first.vertices_m);
-  std::printf("rig %s polyhedra %zu first volume %.6g faces %zu\n", rig.name.c_str(),
-              hil::format::total_polyhedra(rig), poly.volume(), poly.faces().size());
+  std::printf("rig %s polyhedra %zu first volume %.6g faces %zu\n", rig.name.c_str(), hil::format::total_polyhedra(rig), poly.volume(),
+              poly.faces().size());
   return 0;
 } catch (const std::exception& e) {
   std::fprintf(stderr, "pkgconfig_consumer: %s\n", e.what());

@@ -77,14 +77,16 @@ TEST(RosTopics, TfStaticForLateJoinersDiagnosticsAndNamedJoints) {
   const int domain = 10 + static_cast<int>(getpid() % 40);
   hil::dds::Participant participant({domain, "", "hil_localhost", "ros-topics"});
   Collected got;
-  hil::dds::Reader<hil_msgs::msg::DeviceStatus> status_reader(participant, hil::dds::topics::kDeviceStatus, [&](const auto& m, const auto&) {
-    std::lock_guard<std::mutex> lock(got.m);
-    got.status.push_back(m);
-  });
-  hil::dds::Reader<diagnostic_msgs::msg::DiagnosticArray> diag_reader(participant, hil::dds::topics::kDiagnostics, [&](const auto& m, const auto&) {
-    std::lock_guard<std::mutex> lock(got.m);
-    got.diagnostics.push_back(m);
-  });
+  hil::dds::Reader<hil_msgs::msg::DeviceStatus> status_reader(participant, hil::dds::topics::kDeviceStatus,
+                                                              [&](const auto& m, const auto&) {
+                                                                std::lock_guard<std::mutex> lock(got.m);
+                                                                got.status.push_back(m);
+                                                              });
+  hil::dds::Reader<diagnostic_msgs::msg::DiagnosticArray> diag_reader(participant, hil::dds::topics::kDiagnostics,
+                                                                      [&](const auto& m, const auto&) {
+                                                                        std::lock_guard<std::mutex> lock(got.m);
+                                                                        got.diagnostics.push_back(m);
+                                                                      });
   hil::dds::Reader<sensor_msgs::msg::JointState> joint_reader(participant, hil::dds::topics::kJointStates, [&](const auto& m, const auto&) {
     std::lock_guard<std::mutex> lock(got.m);
     got.joints.push_back(m);
@@ -116,10 +118,13 @@ TEST(RosTopics, TfStaticForLateJoinersDiagnosticsAndNamedJoints) {
     // process would be), with tf2's static listener QoS.
     {
       hil::dds::Participant late({domain, "", "hil_localhost", "ros-late-listener"});
-      hil::dds::Reader<tf2_msgs::msg::TFMessage> tf_reader(late, hil::dds::topics::kTfStatic, [&](const auto& m, const auto&) {
-        std::lock_guard<std::mutex> lock(tf_m);
-        tf_late.push_back(m);
-      }, hil::dds::StreamQos{true, 1, 1});
+      hil::dds::Reader<tf2_msgs::msg::TFMessage> tf_reader(
+          late, hil::dds::topics::kTfStatic,
+          [&](const auto& m, const auto&) {
+            std::lock_guard<std::mutex> lock(tf_m);
+            tf_late.push_back(m);
+          },
+          hil::dds::StreamQos{true, 1, 1});
       for (int i = 0; i < 100; ++i) {
         {
           std::lock_guard<std::mutex> lock(tf_m);

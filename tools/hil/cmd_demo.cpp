@@ -54,15 +54,15 @@ struct DemoOptions {
 // The effects the demo hides. Not robot_compliance (taken for a nonlinear stiffness on this scene)
 // nor contact_damping (through the acquisition chain, a damping of the drawn size is taken for a
 // delay of the wrench: docs/diagnosis.md).
-const std::vector<std::string> kDemoEffects{"sensor_bias", "geometric_offset", "viscous_friction", "sensor_gain",
-                                            "nonlinear_stiffness", "time_offset"};
+const std::vector<std::string> kDemoEffects{"sensor_bias", "geometric_offset",    "viscous_friction",
+                                            "sensor_gain", "nonlinear_stiffness", "time_offset"};
 }  // namespace
 
 int demo(const DemoOptions& o) {
   namespace fs = std::filesystem;
-  const std::string out = o.out.empty() ? (fs::temp_directory_path() / "hil-demo" /
-                                           fmt::format("run-{}", acquisition::realtime_ns() / 1'000'000)).string()
-                                        : o.out;
+  const std::string out =
+      o.out.empty() ? (fs::temp_directory_path() / "hil-demo" / fmt::format("run-{}", acquisition::realtime_ns() / 1'000'000)).string()
+                    : o.out;
   const std::string effect = o.effect.empty() ? kDemoEffects[o.seed % kDemoEffects.size()] : o.effect;
   std::cout << "hil demo: the re-created ACU experiment (contact paper, test 2a) with a hidden effect goes through the\n"
                "  fake rig, acquisition and DDS; the contact worker estimates online, the recording is identified,\n"
@@ -95,8 +95,8 @@ int demo(const DemoOptions& o) {
   std::atomic<std::uint64_t> bus_samples{0}, bus_status{0}, bus_estimates{0};
   dds::Reader<hil_msgs::msg::PoseWrenchSample> samples(participant, dds::topics::kPoseWrenchSample,
                                                        [&](const auto&, const auto&) { ++bus_samples; });
-  dds::Reader<hil_msgs::msg::DeviceStatus> status(participant, dds::topics::kDeviceStatus,
-                                                  [&](const auto&, const auto&) { ++bus_status; }, dds::StreamQos{true, 0, 10});
+  dds::Reader<hil_msgs::msg::DeviceStatus> status(
+      participant, dds::topics::kDeviceStatus, [&](const auto&, const auto&) { ++bus_status; }, dds::StreamQos{true, 0, 10});
   dds::Reader<hil_msgs::msg::ContactEstimate> estimates(participant, dds::topics::kContactEstimate,
                                                         [&](const auto&, const auto&) { ++bus_estimates; });
   ContactWorker worker(participant, *played.rig);
@@ -110,8 +110,8 @@ int demo(const DemoOptions& o) {
   ao.output_rate_hz = played.info.output_rate_hz;
   ao.progress = false;
   ao.participant = participant_options("hil-acquire");  // the monitor's domain, profile and security
-  ao.wait_subscribers = 1;  // our own monitor sees the run from its first sample
-  ao.mcap = true;            // run.mcap beside the CSV: open it in Foxglove or PlotJuggler (docs/mcap.md)
+  ao.wait_subscribers = 1;                              // our own monitor sees the run from its first sample
+  ao.mcap = true;                                       // run.mcap beside the CSV: open it in Foxglove or PlotJuggler (docs/mcap.md)
   std::atomic<std::uint64_t> n{0};
   const double total_s = played.samples.samples.back().t_s / o.speed;
   const auto t0 = std::chrono::steady_clock::now();
@@ -127,10 +127,11 @@ int demo(const DemoOptions& o) {
   std::this_thread::sleep_for(std::chrono::milliseconds(300));
   worker.flush();
   const auto online = worker.global();
-  std::cout << "\n" << fmt::format("      {}\n      bus: {} PoseWrenchSample, {} DeviceStatus, {} ContactEstimate messages received\n"
-                                   "      online worker: {} samples, running K = {:.4g} N/m, mu = {:.3f}\n",
-                                   result.summary, bus_samples.load(), bus_status.load(), bus_estimates.load(), worker.processed(),
-                                   online.K, online.mu);
+  std::cout << "\n"
+            << fmt::format("      {}\n      bus: {} PoseWrenchSample, {} DeviceStatus, {} ContactEstimate messages received\n"
+                           "      online worker: {} samples, running K = {:.4g} N/m, mu = {:.3f}\n",
+                           result.summary, bus_samples.load(), bus_status.load(), bus_estimates.load(), worker.processed(), online.K,
+                           online.mu);
 
   std::cout << fmt::format("[3/6] checking the recorded run {}\n", out);
   const auto rec = format::load_run(out);
@@ -147,9 +148,10 @@ int demo(const DemoOptions& o) {
   const auto base = (fs::path(out).parent_path() / fs::path(out).filename()).string();
   contact::write_report(base + "-contact-report", fs::path(out).filename().string(), problem, ident);
   const auto& rig_contact = *rec.rig->model.contact;
-  std::cout << fmt::format("      K = {:.4g} +- {:.2g} N/m (rig: {:.4g}), mu = {:.3f} +- {:.2g} (rig: {:.3f}), mean relative force error {:.1f} %\n",
-                           ident.nominal.K, ident.nominal.K_std, rig_contact.stiffness_n_per_m, ident.nominal.mu, ident.nominal.mu_std,
-                           rig_contact.friction_coefficient, 100.0 * ident.nominal.relative_force_error);
+  std::cout << fmt::format(
+      "      K = {:.4g} +- {:.2g} N/m (rig: {:.4g}), mu = {:.3f} +- {:.2g} (rig: {:.3f}), mean relative force error {:.1f} %\n",
+      ident.nominal.K, ident.nominal.K_std, rig_contact.stiffness_n_per_m, ident.nominal.mu, ident.nominal.mu_std,
+      rig_contact.friction_coefficient, 100.0 * ident.nominal.relative_force_error);
   std::cout << "      report: " << (fs::path(base + "-contact-report") / "index.html").string() << "\n";
 
   std::cout << "[5/6] diagnosis of the recorded run (blind: it does not read the hidden truth)\n";

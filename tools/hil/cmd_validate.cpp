@@ -62,8 +62,12 @@ nlohmann::json error_json(const std::string& path, const std::exception& e) {
   auto null_if = [](auto v, bool unknown) { return unknown ? nlohmann::json() : nlohmann::json(v); };
   if (const auto* f = dynamic_cast<const error::FormatError*>(&e)) {
     const auto& w = f->where();
-    return {{"file", w.file.empty() ? path : w.file}, {"line", null_if(w.line, w.line == 0)}, {"column", null_if(w.column, w.column == 0)},
-            {"field", null_if(w.field, w.field.empty())}, {"message", f->message()}, {"text", e.what()}};
+    return {{"file", w.file.empty() ? path : w.file},
+            {"line", null_if(w.line, w.line == 0)},
+            {"column", null_if(w.column, w.column == 0)},
+            {"field", null_if(w.field, w.field.empty())},
+            {"message", f->message()},
+            {"text", e.what()}};
   }
   return {{"file", path}, {"line", nullptr}, {"column", nullptr}, {"field", nullptr}, {"message", e.what()}, {"text", e.what()}};
 }

@@ -24,7 +24,8 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--dds-profile", g.dds_profile, "Fast DDS XML profile file (default: hil's host-only profile)");
   app.add_option("--dds-profile-name", g.dds_profile_name, "participant profile in that file")->capture_default_str();
-  app.add_option("--dds-domain", g.dds_domain, "DDS domain id (default: $HIL_DDS_DOMAIN, else $ROS_DOMAIN_ID, else 0)")->check(CLI::Range(0, 232));
+  app.add_option("--dds-domain", g.dds_domain, "DDS domain id (default: $HIL_DDS_DOMAIN, else $ROS_DOMAIN_ID, else 0)")
+      ->check(CLI::Range(0, 232));
   app.add_option("--secure", g.secure, "DDS Security: keystore directory[:participant] (hil keystore; docs/security.md)");
   app.add_option("--secure-name", g.secure_name, "keystore participant for --secure (default: the command's role, e.g. replay)");
 

@@ -6,8 +6,8 @@ namespace hil::cli {
 
 void print_samples_summary(std::ostream& os, const format::SampleTable& t) {
   const auto s = format::summarize(t);
-  os << fmt::format("  samples: {}, duration {:.3f} s, rate {:.2f} Hz (median step {:.3f} ms)\n", s.count, s.duration_s,
-                    s.rate_hz, s.median_dt_s * 1e3);
+  os << fmt::format("  samples: {}, duration {:.3f} s, rate {:.2f} Hz (median step {:.3f} ms)\n", s.count, s.duration_s, s.rate_hz,
+                    s.median_dt_s * 1e3);
   if (s.gaps.empty()) {
     os << "  gaps: none\n";
   } else {
@@ -39,9 +39,11 @@ void print_rig_summary(std::ostream& os, const format::RigSpec& rig) {
   if (rig.devices.robot) {
     const auto& d = *rig.devices.robot;
     if (d.transport == "tcp")
-      os << fmt::format("  robot controller: Modbus TCP {}:{} unit {}, map {}, {} Hz\n", d.host, d.port, d.unit_id, d.register_map, d.rate_hz);
+      os << fmt::format("  robot controller: Modbus TCP {}:{} unit {}, map {}, {} Hz\n", d.host, d.port, d.unit_id, d.register_map,
+                        d.rate_hz);
     else
-      os << fmt::format("  robot controller: Modbus RTU {} {} baud unit {}, map {}, {} Hz\n", d.serial_device, d.baud, d.unit_id, d.register_map, d.rate_hz);
+      os << fmt::format("  robot controller: Modbus RTU {} {} baud unit {}, map {}, {} Hz\n", d.serial_device, d.baud, d.unit_id,
+                        d.register_map, d.rate_hz);
   }
   if (rig.model.contact)
     os << fmt::format("  contact model: K = {:.4g} N/m, mu = {:.3g}, v_t,m = {:.3g} m/s\n", rig.model.contact->stiffness_n_per_m,
@@ -52,7 +54,7 @@ void print_rig_summary(std::ostream& os, const format::RigSpec& rig) {
 nlohmann::json samples_summary_json(const format::SampleTable& t) {
   using nlohmann::json;
   const auto s = format::summarize(t);
-  json j = {{"count", s.count}, {"duration_s", s.duration_s}, {"rate_hz", s.rate_hz}, {"median_step_s", s.median_dt_s},
+  json j = {{"count", s.count},          {"duration_s", s.duration_s},       {"rate_hz", s.rate_hz},  {"median_step_s", s.median_dt_s},
             {"joints", t.joint_count()}, {"extra_columns", t.extra_columns}, {"gaps", json::array()}, {"ranges", json::object()}};
   for (const auto& g : s.gaps) j["gaps"].push_back({{"t_s", g.t_s}, {"dt_s", g.dt_s}, {"line", g.line}});
   for (const auto& r : s.ranges) j["ranges"][r.column] = {{"min", r.min}, {"max", r.max}};
@@ -61,11 +63,19 @@ nlohmann::json samples_summary_json(const format::SampleTable& t) {
 
 nlohmann::json rig_summary_json(const format::RigSpec& rig) {
   using nlohmann::json;
-  json j = {{"name", rig.name}, {"frames", rig.frames.size()}, {"robot", nullptr}, {"objects", json::array()},
-            {"features", format::total_features(rig)}, {"polyhedra", format::total_polyhedra(rig)}, {"force_plate", nullptr},
-            {"robot_controller", nullptr}, {"contact_model", nullptr}, {"geometric_uncertainties", rig.model.uncertainties.size()}};
+  json j = {{"name", rig.name},
+            {"frames", rig.frames.size()},
+            {"robot", nullptr},
+            {"objects", json::array()},
+            {"features", format::total_features(rig)},
+            {"polyhedra", format::total_polyhedra(rig)},
+            {"force_plate", nullptr},
+            {"robot_controller", nullptr},
+            {"contact_model", nullptr},
+            {"geometric_uncertainties", rig.model.uncertainties.size()}};
   if (rig.robot)
-    j["robot"] = {{"name", rig.robot->name}, {"joints", rig.robot->joints.size()},
+    j["robot"] = {{"name", rig.robot->name},
+                  {"joints", rig.robot->joints.size()},
                   {"convention", rig.robot->convention == format::DhConvention::standard ? "standard" : "modified"}};
   for (const auto& o : rig.objects)
     j["objects"].push_back({{"name", o.name}, {"frame", o.frame}, {"features", o.features.size()}, {"polyhedra", o.polyhedron_count()}});
@@ -88,14 +98,17 @@ nlohmann::json rig_summary_json(const format::RigSpec& rig) {
 }
 
 nlohmann::json run_info_json(const format::RunInfo& info) {
-  nlohmann::json j = {{"rig", info.rig}, {"start_time_utc", info.start_time_utc}, {"output_rate_hz", info.output_rate_hz},
+  nlohmann::json j = {{"rig", info.rig},
+                      {"start_time_utc", info.start_time_utc},
+                      {"output_rate_hz", info.output_rate_hz},
                       {"sources", nlohmann::json::array()}};
   for (const auto& s : info.sources) j["sources"].push_back({{"name", s.name}, {"kind", s.kind}, {"rate_hz", s.rate_hz}, {"raw", s.raw}});
   return j;
 }
 
 nlohmann::json run_summary_json(const format::Run& run) {
-  return {{"run_info", run_info_json(run.info)}, {"samples", samples_summary_json(run.samples)},
+  return {{"run_info", run_info_json(run.info)},
+          {"samples", samples_summary_json(run.samples)},
           {"rig", run.rig ? rig_summary_json(*run.rig) : nlohmann::json()}};
 }
 

@@ -64,7 +64,9 @@ std::string first_word(const std::vector<std::string>& rest, bool option) {
 
 std::vector<std::string> close_names(const std::string& word, const std::vector<std::string>& known) {
   std::vector<std::pair<std::size_t, std::string>> scored;
-  const auto bare = [](const std::string& s) { return s.substr(s.find_first_not_of('-') == std::string::npos ? 0 : s.find_first_not_of('-')); };
+  const auto bare = [](const std::string& s) {
+    return s.substr(s.find_first_not_of('-') == std::string::npos ? 0 : s.find_first_not_of('-'));
+  };
   const std::string w = bare(word);
   for (const auto& k : known) {
     const std::string kb = bare(k);
@@ -82,7 +84,7 @@ std::vector<std::string> close_names(const std::string& word, const std::vector<
 }
 
 int report_parse_error(const CLI::App& app, const CLI::ParseError& e, std::ostream& err) {
-  if (e.get_exit_code() == 0) return app.exit(e);  // --help, --help-all, --version
+  if (e.get_exit_code() == 0) return app.exit(e);                                 // --help, --help-all, --version
   if (dynamic_cast<const CLI::RuntimeError*>(&e) != nullptr) return app.exit(e);  // a callback's chosen exit status
   std::string path;
   const CLI::App* at = culprit(app, path);
@@ -106,7 +108,8 @@ int report_parse_error(const CLI::App& app, const CLI::ParseError& e, std::ostre
     // ("--folds: Value 1 not in range 2 to 1000"): CLI11's message names the option.
     msg = path + ": " + e.what();
   }
-  err << "error: " << msg << "\n" << "run '" << path << " --help' for the usage\n";
+  err << "error: " << msg << "\n"
+      << "run '" << path << " --help' for the usage\n";
   return kExitUsage;
 }
 

@@ -139,8 +139,7 @@ AcquireResult run_acquisition(const AcquireOptions& o, const std::function<void(
   if (with_robot) robot = std::make_unique<drivers::RobotControllerDriver>(mcfg);
 
   std::unique_ptr<dds::Participant> bus;
-  if (!o.no_bus)
-    bus = std::make_unique<dds::Participant>(o.participant);
+  if (!o.no_bus) bus = std::make_unique<dds::Participant>(o.participant);
   acquisition::AcquirerOptions ao;
   ao.sync.wrench_rate_hz = pcfg.rate_hz;
   ao.sync.output_rate_hz = o.output_rate_hz;
@@ -154,8 +153,8 @@ AcquireResult run_acquisition(const AcquireOptions& o, const std::function<void(
   // acquirer so that it outlives it: the acquirer's last samples reach a sink still there.
   std::unique_ptr<acquisition::McapSink> mcap_sink;
   if (o.mcap)
-    mcap_sink = std::make_unique<acquisition::McapSink>(recorder.dir() + "/run.mcap", rig, with_robot ? mcfg.map.joint_count() : 0, start_ns,
-                                           mcap::parse_compression(o.mcap_compression));
+    mcap_sink = std::make_unique<acquisition::McapSink>(recorder.dir() + "/run.mcap", rig, with_robot ? mcfg.map.joint_count() : 0,
+                                                        start_ns, mcap::parse_compression(o.mcap_compression));
   acquisition::Acquirer acq(ao, std::move(plate), std::move(robot), bus.get(), &recorder);
   if (observer) acq.on_sample(observer);
   if (mcap_sink) acq.on_sample([&mcap_sink](const acquisition::SyncedSample& s) { mcap_sink->sample(s); });
@@ -228,8 +227,8 @@ int run_check(const AcquireOptions& o, std::ostream& out) {
   };
 
   out << fmt::format("force plate ({} on {}, base id 0x{:02X}):\n",
-                     d.plate_cfg.protocol == drivers::ForcePlateProtocol::ati_ft_can ? "ATI F/T CAN" : "declarative",
-                     d.channel->name(), d.plate_cfg.base_id);
+                     d.plate_cfg.protocol == drivers::ForcePlateProtocol::ati_ft_can ? "ATI F/T CAN" : "declarative", d.channel->name(),
+                     d.plate_cfg.base_id);
   auto plate = drivers::make_force_plate(d.plate_cfg, std::move(d.channel));
   try {
     print_identity(acquisition::plate_identity(plate->start()));
@@ -242,8 +241,8 @@ int run_check(const AcquireOptions& o, std::ostream& out) {
                          w.gauges[3], w.gauges[4], w.gauges[5], w.status_word);
     } else {
       ok = false;
-      out << fmt::format("  FAILED: no wrench within 1 s ({}{}{})\n", drivers::to_string(st),
-                         plate->last_problem().empty() ? "" : ": ", plate->last_problem());
+      out << fmt::format("  FAILED: no wrench within 1 s ({}{}{})\n", drivers::to_string(st), plate->last_problem().empty() ? "" : ": ",
+                         plate->last_problem());
     }
   } catch (const std::exception& e) {
     ok = false;
@@ -266,8 +265,8 @@ int run_check(const AcquireOptions& o, std::ostream& out) {
           const Eigen::Isometry3d T_world_tcp = d.T_world_base * T_base_tcp;
           const Eigen::Quaterniond q(T_world_tcp.linear());
           const Eigen::Vector3d p = T_world_tcp.translation();
-          out << fmt::format("  {:<18} p [{:.4f}, {:.4f}, {:.4f}] m, q [{:.4f}, {:.4f}, {:.4f}, {:.4f}] (wxyz, world{})\n", "pose",
-                             p.x(), p.y(), p.z(), q.w(), q.x(), q.y(), q.z(), r.pose_from_kinematics ? ", from the joints" : "");
+          out << fmt::format("  {:<18} p [{:.4f}, {:.4f}, {:.4f}] m, q [{:.4f}, {:.4f}, {:.4f}, {:.4f}] (wxyz, world{})\n", "pose", p.x(),
+                             p.y(), p.z(), q.w(), q.x(), q.y(), q.z(), r.pose_from_kinematics ? ", from the joints" : "");
         }
         std::string joints;
         for (unsigned j = 0; j < r.joint_count; ++j) joints += fmt::format("{}{:.4f}", j ? ", " : "", r.joints[j]);
@@ -275,8 +274,8 @@ int run_check(const AcquireOptions& o, std::ostream& out) {
         out << fmt::format("  {:<18} {:.2f} ms\n", "round trip", static_cast<double>(r.rtt_ns) * 1e-6);
       } else {
         ok = false;
-        out << fmt::format("  FAILED: no reading within 2 s ({}{}{})\n", drivers::to_string(st),
-                           robot.last_problem().empty() ? "" : ": ", robot.last_problem());
+        out << fmt::format("  FAILED: no reading within 2 s ({}{}{})\n", drivers::to_string(st), robot.last_problem().empty() ? "" : ": ",
+                           robot.last_problem());
       }
     } catch (const std::exception& e) {
       ok = false;

@@ -34,12 +34,9 @@ drivers::ForcePlateConfig force_plate_config(const format::RigSpec& rig) {
   const auto& d = *rig.devices.force_plate;
   return rethrow_as_format(rig.source, "devices.force_plate", [&] {
     drivers::ForcePlateConfig c;
-    if (d.protocol == "ati_ft_can")
-      c.protocol = drivers::ForcePlateProtocol::ati_ft_can;
-    else if (d.protocol == "declarative")
-      c.protocol = drivers::ForcePlateProtocol::declarative;
-    else
-      throw drivers::ConfigError("protocol", "'" + d.protocol + "' is not a protocol (ati_ft_can, declarative)");
+    if (d.protocol == "ati_ft_can") c.protocol = drivers::ForcePlateProtocol::ati_ft_can;
+    else if (d.protocol == "declarative") c.protocol = drivers::ForcePlateProtocol::declarative;
+    else throw drivers::ConfigError("protocol", "'" + d.protocol + "' is not a protocol (ati_ft_can, declarative)");
     c.interface = d.interface;
     c.base_id = d.base_id;
     c.rate_hz = d.rate_hz;
@@ -98,12 +95,9 @@ drivers::ModbusConfig robot_controller_config(const format::RigSpec& rig) {
   drivers::ModbusConfig c;
   c.map = register_map(r, rig.source);
   return rethrow_as_format(rig.source, "devices.robot", [&] {
-    if (r.transport == "tcp")
-      c.transport = drivers::ModbusTransport::tcp;
-    else if (r.transport == "rtu")
-      c.transport = drivers::ModbusTransport::rtu;
-    else
-      throw drivers::ConfigError("transport", "'" + r.transport + "' is not a transport (tcp, rtu)");
+    if (r.transport == "tcp") c.transport = drivers::ModbusTransport::tcp;
+    else if (r.transport == "rtu") c.transport = drivers::ModbusTransport::rtu;
+    else throw drivers::ConfigError("transport", "'" + r.transport + "' is not a transport (tcp, rtu)");
     c.host = r.host;
     c.port = r.port;
     c.unit_id = r.unit_id;

@@ -22,8 +22,7 @@ const char* to_string(StopReason reason) noexcept {
   return "unknown stop reason";
 }
 
-Result levenberg_marquardt(const Problem& pb, const Eigen::VectorXd& x0, const Options& o, double cost0,
-                           const Eigen::VectorXd* r0) {
+Result levenberg_marquardt(const Problem& pb, const Eigen::VectorXd& x0, const Options& o, double cost0, const Eigen::VectorXd* r0) {
   if (!pb.residual || !pb.jacobian) throw std::invalid_argument("levenberg_marquardt: residual and jacobian are required");
   const Eigen::Index n = x0.size();
   const bool scaled = pb.scale.size() == n;
@@ -53,8 +52,8 @@ Result levenberg_marquardt(const Problem& pb, const Eigen::VectorXd& x0, const O
   Eigen::MatrixXd J;
   Eigen::VectorXd D = Eigen::VectorXd::Ones(n), grad;
   double mu = -1.0, mu0 = 1.0, nu = 2.0;
-  int secant = 0;         // secant updates since J was last computed
-  bool need_jac = true;   // compute J before the next iteration
+  int secant = 0;        // secant updates since J was last computed
+  bool need_jac = true;  // compute J before the next iteration
   std::vector<double> history{f};
   int insignificant = 0;
   Eigen::VectorXd rn;

@@ -18,9 +18,7 @@ class Term : public ContactTerm {
     for (Eigen::Index k = 0; k < n; ++k)
       for (int c = 0; c < 6; ++c) A(6 * k + c, s.linear + c) = 1.0;
   }
-  double added_variance(bool linear, Eigen::Index j) const override {
-    return linear ? d_.resolution(j) * d_.resolution(j) / 12.0 : 0.0;
-  }
+  double added_variance(bool linear, Eigen::Index j) const override { return linear ? d_.resolution(j) * d_.resolution(j) / 12.0 : 0.0; }
 
  private:
   const ContactData& d_;

@@ -103,8 +103,7 @@ Vector6d wrench_unchecked(const Eigen::Isometry3d& T_wp, const Tripod& tripod, c
       const double bound = law.friction_on_total_normal ? c.normal_n : (c.in_contact ? elastic : 0.0);
       const Vector3d u = v - n.dot(v) * n;
       const double eps = law.slip_regularisation_m_per_s;
-      if (c.in_contact)
-        c.friction_world_n = -law.mu * bound * u / std::sqrt(u.squaredNorm() + eps * eps) - law.viscous_n_s_per_m * u;
+      if (c.in_contact) c.friction_world_n = -law.mu * bound * u / std::sqrt(u.squaredNorm() + eps * eps) - law.viscous_n_s_per_m * u;
       // Newton's third law: the plate feels the opposite of what the foot feels.
       const Vector3d on_plate = -(c.normal_n * n + c.friction_world_n);
       force_w += on_plate;
@@ -120,8 +119,7 @@ Vector6d wrench_unchecked(const Eigen::Isometry3d& T_wp, const Tripod& tripod, c
 
 }  // namespace
 
-Vector6d plate_wrench(const Plate& plate, const Tripod& tripod, const ContactLaw& law, const BodyState& s,
-                      std::vector<FootContact>* feet) {
+Vector6d plate_wrench(const Plate& plate, const Tripod& tripod, const ContactLaw& law, const BodyState& s, std::vector<FootContact>* feet) {
   throw_if(law_problems(law));
   return wrench_unchecked(plate.T_world_plate(), tripod, law, s, feet);
 }

@@ -147,9 +147,8 @@ CsvTable parse_csv(const std::string& text, const CsvOptions& options) {
     }
     throw error::FormatError({file, header_line, 0, req}, "required column is missing from the header" + hint);
   }
-  const std::string expected =
-      header_line ? "header has " + std::to_string(ncol)
-                  : "expected " + std::to_string(ncol) + " (one per given column name)";
+  const std::string expected = header_line ? "header has " + std::to_string(ncol)
+                                           : "expected " + std::to_string(ncol) + " (one per given column name)";
 
   std::vector<bool> numeric(ncol);
   std::vector<std::vector<double>*> num_col(ncol, nullptr);
@@ -165,8 +164,7 @@ CsvTable parse_csv(const std::string& text, const CsvOptions& options) {
   for (; i < lines.size(); ++i) {
     const std::size_t line_no = i + 1;
     if (blank_or_comment(lines[i])) {
-      if (!options.skip_blank_lines && trim(lines[i]).empty() && i + 1 < lines.size() &&
-          !blank_or_comment(lines[i + 1]))
+      if (!options.skip_blank_lines && trim(lines[i]).empty() && i + 1 < lines.size() && !blank_or_comment(lines[i + 1]))
         throw error::FormatError({file, line_no, 0, ""}, "empty line inside the data");
       continue;
     }
@@ -175,10 +173,10 @@ CsvTable parse_csv(const std::string& text, const CsvOptions& options) {
     if (cells.size() < ncol) {
       if (is_last && !last_terminated)
         throw error::FormatError({file, line_no, cells.size(), table.header[cells.size() - 1]},
-                          "truncated last line: " + std::to_string(cells.size()) + " of " +
-                              std::to_string(ncol) + " cells and no line end (file cut while writing?)");
+                                 "truncated last line: " + std::to_string(cells.size()) + " of " + std::to_string(ncol) +
+                                     " cells and no line end (file cut while writing?)");
       throw error::FormatError({file, line_no, cells.size() + 1, table.header[cells.size()]},
-                        "row has " + std::to_string(cells.size()) + " cells, " + expected);
+                               "row has " + std::to_string(cells.size()) + " cells, " + expected);
     }
     if (cells.size() > ncol)
       throw error::FormatError({file, line_no, ncol + 1, ""}, "row has " + std::to_string(cells.size()) + " cells, " + expected);

@@ -64,21 +64,20 @@ Eigen::Isometry3d chain(const RigSpec& rig, const std::string& frame, const std:
 Pose read_pose_fields(const YNode& n) {
   Pose p;
   if (n.has("translation_m")) p.translation_m = n.child("translation_m").vec3();
-  if (n.has("quaternion_wxyz") && n.has("rpy_rad"))
-    n.fail("give the rotation either as quaternion_wxyz or as rpy_rad, not both");
+  if (n.has("quaternion_wxyz") && n.has("rpy_rad")) n.fail("give the rotation either as quaternion_wxyz or as rpy_rad, not both");
   if (n.has("quaternion_wxyz")) {
     const YNode qn = n.child("quaternion_wxyz");
     const auto q = qn.nums();
     if (q.size() != 4) qn.fail("expected 4 numbers w x y z");
     const auto r = checked_unit_quaternion(q[0], q[1], q[2], q[3]);
-    if (!r) qn.fail("not a unit quaternion (norm " + std::to_string(std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3])) + ")");
+    if (!r)
+      qn.fail("not a unit quaternion (norm " + std::to_string(std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3])) + ")");
     p.rotation = *r;
   }
   if (n.has("rpy_rad")) {
     const auto rpy = n.child("rpy_rad").vec3();
     // Fixed-axis roll (x), pitch (y), yaw (z): R = Rz(yaw) Ry(pitch) Rx(roll).
-    p.rotation = Eigen::AngleAxisd(rpy.z(), Eigen::Vector3d::UnitZ()) *
-                 Eigen::AngleAxisd(rpy.y(), Eigen::Vector3d::UnitY()) *
+    p.rotation = Eigen::AngleAxisd(rpy.z(), Eigen::Vector3d::UnitZ()) * Eigen::AngleAxisd(rpy.y(), Eigen::Vector3d::UnitY()) *
                  Eigen::AngleAxisd(rpy.x(), Eigen::Vector3d::UnitX());
   }
   return p;
@@ -278,8 +277,8 @@ ForcePlateDeviceSpec read_force_plate(const YNode& n) {
 }
 
 RobotControllerSpec read_controller(const YNode& n) {
-  n.only({"transport", "host", "port", "unit_id", "serial_device", "baud", "parity", "data_bits", "stop_bits",
-          "rate_hz", "timeout_s", "register_map", "registers"});
+  n.only({"transport", "host", "port", "unit_id", "serial_device", "baud", "parity", "data_bits", "stop_bits", "rate_hz", "timeout_s",
+          "register_map", "registers"});
   RobotControllerSpec c;
   c.transport = n.str("transport", c.transport);
   if (c.transport != "tcp" && c.transport != "rtu") n.child("transport").fail("expected 'tcp' or 'rtu', found '" + c.transport + "'");
@@ -369,7 +368,8 @@ RigSpec parse_rig(const std::string& text, const std::string& display_name) {
   const YNode root(doc, "", &rig.source);
   root.only({"format_version", "name", "frames", "robot", "objects", "devices", "model"});
   rig.format_version = static_cast<int>(root.req("format_version").integer());
-  if (rig.format_version != 1) root.child("format_version").fail("this hil reads rig format version 1, found " + std::to_string(rig.format_version));
+  if (rig.format_version != 1)
+    root.child("format_version").fail("this hil reads rig format version 1, found " + std::to_string(rig.format_version));
   rig.name = read_name(root, "name");
 
   std::set<std::string> frame_names{"world", "ee"};
@@ -387,7 +387,8 @@ RigSpec parse_rig(const std::string& text, const std::string& display_name) {
       std::string cur = f.name;
       std::size_t hops = 0;
       while (cur != "world" && cur != "ee") {
-        if (++hops > rig.frames.size()) throw error::FormatError({display_name, 0, 0, "frames"}, "frame tree has a cycle through '" + f.name + "'");
+        if (++hops > rig.frames.size())
+          throw error::FormatError({display_name, 0, 0, "frames"}, "frame tree has a cycle through '" + f.name + "'");
         cur = rig.frame(cur)->parent;
       }
     }

@@ -26,7 +26,8 @@ RunInfo parse_run_info(const std::string& text, const std::string& display_name)
   root.only({"format_version", "rig", "start_time", "output_rate_hz", "sources", "notes"});
   RunInfo r;
   r.format_version = static_cast<int>(root.req("format_version").integer());
-  if (r.format_version != 1) root.child("format_version").fail("this hil reads run format version 1, found " + std::to_string(r.format_version));
+  if (r.format_version != 1)
+    root.child("format_version").fail("this hil reads run format version 1, found " + std::to_string(r.format_version));
   r.rig = root.req("rig").str();
   r.start_time_utc = root.req("start_time").str();
   if (!is_iso8601_utc(r.start_time_utc))
@@ -109,7 +110,8 @@ void write_run_info(const std::string& path, const RunInfo& info) {
 
 Run load_run(const std::string& dir, const std::string& rig_path) {
   namespace fs = std::filesystem;
-  if (!fs::is_directory(dir)) throw error::FormatError({dir, 0, 0, ""}, "not a run folder (expected a directory with run.yaml and samples.csv)");
+  if (!fs::is_directory(dir))
+    throw error::FormatError({dir, 0, 0, ""}, "not a run folder (expected a directory with run.yaml and samples.csv)");
   Run run;
   run.dir = dir;
   const auto info_path = (fs::path(dir) / "run.yaml").string();
@@ -123,7 +125,7 @@ Run load_run(const std::string& dir, const std::string& rig_path) {
   else if (fs::exists(own_rig)) run.rig = load_rig(own_rig);
   if (run.rig && run.rig->name != run.info.rig)
     throw error::FormatError({info_path, 0, 0, "rig"}, "run was recorded on rig '" + run.info.rig + "' but the rig file '" +
-                                                   run.rig->source + "' describes '" + run.rig->name + "'");
+                                                           run.rig->source + "' describes '" + run.rig->name + "'");
   return run;
 }
 

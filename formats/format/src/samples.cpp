@@ -16,16 +16,15 @@
 namespace hil::format {
 
 const std::vector<std::string>& sample_columns() {
-  static const std::vector<std::string> cols{"t",  "px", "py", "pz", "qw", "qx", "qy", "qz", "vx", "vy", "vz",
-                                             "wx", "wy", "wz", "fx", "fy", "fz", "mx", "my", "mz"};
+  static const std::vector<std::string> cols{"t",  "px", "py", "pz", "qw", "qx", "qy", "qz", "vx", "vy",
+                                             "vz", "wx", "wy", "wz", "fx", "fy", "fz", "mx", "my", "mz"};
   return cols;
 }
 
 namespace {
 
 bool is_joint_column(const std::string& name) {
-  return name.size() >= 2 && name[0] == 'j' && name[1] != '0' &&
-         name.find_first_not_of("0123456789", 1) == std::string::npos;
+  return name.size() >= 2 && name[0] == 'j' && name[1] != '0' && name.find_first_not_of("0123456789", 1) == std::string::npos;
 }
 
 SampleTable from_csv(const CsvTable& csv) {
@@ -42,14 +41,13 @@ SampleTable from_csv(const CsvTable& csv) {
   for (std::size_t j = 1; j <= nj; ++j)
     if (!csv.is_numeric("j" + std::to_string(j)))
       throw error::FormatError({csv.file, csv.row_line.front() - 1, 0, "j" + std::to_string(j)},
-                        "joint columns must run j1..j" + std::to_string(nj) + " without gaps");
+                               "joint columns must run j1..j" + std::to_string(nj) + " without gaps");
   t.extra_columns = csv.text_columns();
 
   auto col = [&](const char* c) { return csv.numeric(c).data(); };
-  const double *T = col("t"), *px = col("px"), *py = col("py"), *pz = col("pz"), *qw = col("qw"), *qx = col("qx"),
-               *qy = col("qy"), *qz = col("qz"), *vx = col("vx"), *vy = col("vy"), *vz = col("vz"), *wx = col("wx"),
-               *wy = col("wy"), *wz = col("wz"), *fx = col("fx"), *fy = col("fy"), *fz = col("fz"), *mx = col("mx"),
-               *my = col("my"), *mz = col("mz");
+  const double *T = col("t"), *px = col("px"), *py = col("py"), *pz = col("pz"), *qw = col("qw"), *qx = col("qx"), *qy = col("qy"),
+               *qz = col("qz"), *vx = col("vx"), *vy = col("vy"), *vz = col("vz"), *wx = col("wx"), *wy = col("wy"), *wz = col("wz"),
+               *fx = col("fx"), *fy = col("fy"), *fz = col("fz"), *mx = col("mx"), *my = col("my"), *mz = col("mz");
   std::size_t qw_col = 0;
   for (std::size_t c = 0; c < csv.header.size(); ++c)
     if (csv.header[c] == "qw") qw_col = c + 1;
@@ -61,17 +59,17 @@ SampleTable from_csv(const CsvTable& csv) {
     if (i > 0) {
       if (T[i] < T[i - 1])
         throw error::FormatError({csv.file, csv.row_line[i], 0, "t"},
-                          fmt::format("time goes backwards: {} after {} (line {})", T[i], T[i - 1], csv.row_line[i - 1]));
+                                 fmt::format("time goes backwards: {} after {} (line {})", T[i], T[i - 1], csv.row_line[i - 1]));
       if (T[i] == T[i - 1])
         throw error::FormatError({csv.file, csv.row_line[i], 0, "t"},
-                          fmt::format("duplicated timestamp {} (also on line {})", T[i], csv.row_line[i - 1]));
+                                 fmt::format("duplicated timestamp {} (also on line {})", T[i], csv.row_line[i - 1]));
     }
     const auto q = checked_unit_quaternion(qw[i], qx[i], qy[i], qz[i]);
     if (!q)
       throw error::FormatError({csv.file, csv.row_line[i], qw_col, "qw qx qy qz"},
-                        fmt::format("not a unit quaternion: norm {:.6g} (expected 1 within {})",
-                                    std::sqrt(qw[i] * qw[i] + qx[i] * qx[i] + qy[i] * qy[i] + qz[i] * qz[i]),
-                                    kQuaternionNormTolerance));
+                               fmt::format("not a unit quaternion: norm {:.6g} (expected 1 within {})",
+                                           std::sqrt(qw[i] * qw[i] + qx[i] * qx[i] + qy[i] * qy[i] + qz[i] * qz[i]),
+                                           kQuaternionNormTolerance));
     s.q_world_ee = *q;
     s.p_world_ee_m = {px[i], py[i], pz[i]};
     s.v_world_ee_m_per_s = {vx[i], vy[i], vz[i]};
@@ -126,11 +124,10 @@ SamplesWriter::~SamplesWriter() {
 void SamplesWriter::append(const Sample& s, const double* joints_rad, const double* extras) {
   // {} prints the shortest text that reads back to the same double: the file is lossless.
   auto out = std::back_inserter(buf_);
-  fmt::format_to(out, "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}", s.t_s, s.p_world_ee_m.x(),
-                 s.p_world_ee_m.y(), s.p_world_ee_m.z(), s.q_world_ee.w(), s.q_world_ee.x(), s.q_world_ee.y(),
-                 s.q_world_ee.z(), s.v_world_ee_m_per_s.x(), s.v_world_ee_m_per_s.y(), s.v_world_ee_m_per_s.z(),
-                 s.w_world_ee_rad_per_s.x(), s.w_world_ee_rad_per_s.y(), s.w_world_ee_rad_per_s.z(), s.f_fp_n.x(),
-                 s.f_fp_n.y(), s.f_fp_n.z(), s.m_fp_nm.x(), s.m_fp_nm.y(), s.m_fp_nm.z());
+  fmt::format_to(out, "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}", s.t_s, s.p_world_ee_m.x(), s.p_world_ee_m.y(),
+                 s.p_world_ee_m.z(), s.q_world_ee.w(), s.q_world_ee.x(), s.q_world_ee.y(), s.q_world_ee.z(), s.v_world_ee_m_per_s.x(),
+                 s.v_world_ee_m_per_s.y(), s.v_world_ee_m_per_s.z(), s.w_world_ee_rad_per_s.x(), s.w_world_ee_rad_per_s.y(),
+                 s.w_world_ee_rad_per_s.z(), s.f_fp_n.x(), s.f_fp_n.y(), s.f_fp_n.z(), s.m_fp_nm.x(), s.m_fp_nm.y(), s.m_fp_nm.z());
   for (std::size_t j = 0; j < joints_; ++j) fmt::format_to(out, ",{}", joints_rad[j]);
   for (std::size_t e = 0; e < extras_; ++e) fmt::format_to(out, ",{}", extras[e]);
   buf_ += '\n';

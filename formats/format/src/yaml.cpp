@@ -17,7 +17,7 @@ std::string key_text(const YAML::Node& key, const std::string& file, const std::
   if (key.IsScalar()) return key.Scalar();
   const auto m = key.Mark();
   throw error::FormatError(error::Location{file, static_cast<std::size_t>(m.line + 1), static_cast<std::size_t>(m.column + 1), path},
-                    "a field name must be plain text");
+                           "a field name must be plain text");
 }
 
 }  // namespace
@@ -25,16 +25,14 @@ std::string key_text(const YAML::Node& key, const std::string& file, const std::
 error::Location YamlNode::where(const std::string& sub) const {
   const auto m = n_.Mark();
   error::Location loc{*file_, m.line >= 0 ? static_cast<std::size_t>(m.line + 1) : 0,
-               m.column >= 0 ? static_cast<std::size_t>(m.column + 1) : 0, path_};
+                      m.column >= 0 ? static_cast<std::size_t>(m.column + 1) : 0, path_};
   if (!sub.empty()) loc.field = path_.empty() ? sub : path_ + "." + sub;
   return loc;
 }
 
 void YamlNode::fail(const std::string& message, const std::string& sub) const { throw error::FormatError(where(sub), message); }
 
-YamlNode YamlNode::child(const std::string& key) const {
-  return YamlNode(n_[key], path_.empty() ? key : path_ + "." + key, file_);
-}
+YamlNode YamlNode::child(const std::string& key) const { return YamlNode(n_[key], path_.empty() ? key : path_ + "." + key, file_); }
 
 YamlNode YamlNode::req(const std::string& key) const {
   expect_map();
@@ -61,11 +59,10 @@ void YamlNode::only(std::initializer_list<const char*> allowed) const {
     if (!ok) {
       const auto m = kv.first.Mark();
       error::Location loc{*file_, static_cast<std::size_t>(m.line + 1), static_cast<std::size_t>(m.column + 1),
-                   path_.empty() ? key : path_ + "." + key};
+                          path_.empty() ? key : path_ + "." + key};
       std::string known;
       for (const char* a : allowed) known += std::string(known.empty() ? "" : ", ") + a;
-      throw error::FormatError(loc, "unknown field" + (best.empty() ? "" : " (did you mean '" + best + "'?)") +
-                                 "; known here: " + known);
+      throw error::FormatError(loc, "unknown field" + (best.empty() ? "" : " (did you mean '" + best + "'?)") + "; known here: " + known);
     }
   }
 }
@@ -95,8 +92,7 @@ double YamlNode::num() const {
     // YAML's own spellings of NaN and infinity.
     std::string lower;
     for (char c : s) lower += static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-    if (lower == ".nan" || lower == ".inf" || lower == "-.inf" || lower == "+.inf")
-      fail("expected a finite number, found '" + s + "'");
+    if (lower == ".nan" || lower == ".inf" || lower == "-.inf" || lower == "+.inf") fail("expected a finite number, found '" + s + "'");
     // Accept hexadecimal integers (CAN ids are written that way).
     if (s.size() > 2 && s[0] == '0' && (s[1] == 'x' || s[1] == 'X')) {
       unsigned long long u = 0;
@@ -158,7 +154,7 @@ YAML::Node load_yaml(const std::string& text, const std::string& file) {
     return YAML::Load(text);
   } catch (const YAML::Exception& e) {
     throw error::FormatError({file, static_cast<std::size_t>(e.mark.line + 1), static_cast<std::size_t>(e.mark.column + 1), ""},
-                      "YAML syntax error: " + e.msg);
+                             "YAML syntax error: " + e.msg);
   }
 }
 

@@ -74,8 +74,7 @@ TimeSpec parse_time(const Node& n) {
   if (t.format == TimeFormat::seconds) {
     for (const char* k : {"pattern", "utc_offset_h"})
       if (n.has(k)) n.child(k).fail("only for format: datetime");
-    if (n.has("unit"))
-      t.s_per_unit = n.child("unit").choice<double>({{"s", 1.0}, {"ms", 1e-3}, {"us", 1e-6}, {"ns", 1e-9}});
+    if (n.has("unit")) t.s_per_unit = n.child("unit").choice<double>({{"s", 1.0}, {"ms", 1e-3}, {"us", 1e-6}, {"ns", 1e-9}});
     if (n.has("start_time")) {
       t.start_time_utc = n.child("start_time").str();
       if (!parse_iso8601_utc_us(t.start_time_utc))
@@ -98,8 +97,8 @@ TimeSpec parse_time(const Node& n) {
     }
   }
   if (n.has("non_increasing"))
-    t.non_increasing = n.child("non_increasing")
-                           .choice<NonIncreasingTime>({{"drop", NonIncreasingTime::drop}, {"error", NonIncreasingTime::error}});
+    t.non_increasing =
+        n.child("non_increasing").choice<NonIncreasingTime>({{"drop", NonIncreasingTime::drop}, {"error", NonIncreasingTime::error}});
   if (n.has("gap_factor")) {
     t.gap_factor = n.child("gap_factor").num();
     if (!(t.gap_factor > 1.0)) n.child("gap_factor").fail("expected a number > 1");
@@ -126,8 +125,7 @@ BodySpec parse_body(const Node& n) {
     b.markers.push_back(ms);
   }
   if (b.markers.size() < 3)
-    n.child("markers").fail("a rigid body needs at least 3 markers to fix its pose, found " +
-                            std::to_string(b.markers.size()));
+    n.child("markers").fail("a rigid body needs at least 3 markers to fix its pose, found " + std::to_string(b.markers.size()));
   if (n.has("reference_m") && (n.has("reference_rows") || n.has("origin")))
     n.child("reference_m").fail("give either reference_m or reference_rows (with origin), not both");
   if (n.has("reference_m")) {
@@ -145,8 +143,7 @@ BodySpec parse_body(const Node& n) {
   } else {
     if (n.has("reference_rows")) b.reference_rows = n.child("reference_rows").count(1);
     if (n.has("origin"))
-      b.origin = n.child("origin").choice<BodyOrigin>(
-          {{"marker_centroid", BodyOrigin::marker_centroid}, {"world", BodyOrigin::world}});
+      b.origin = n.child("origin").choice<BodyOrigin>({{"marker_centroid", BodyOrigin::marker_centroid}, {"world", BodyOrigin::world}});
   }
   if (n.has("min_markers")) {
     b.min_markers = n.child("min_markers").count(3);
@@ -163,10 +160,8 @@ WrenchSpec parse_wrench(const Node& n) {
   w.force_columns = names3(n.req("force"));
   w.moment_columns = names3(n.req("moment"));
   if (n.has("force_unit")) w.n_per_unit = n.child("force_unit").choice<double>({{"N", 1.0}, {"kN", 1e3}});
-  if (n.has("moment_unit"))
-    w.nm_per_unit = n.child("moment_unit").choice<double>({{"N*m", 1.0}, {"N*mm", 1e-3}, {"kN*m", 1e3}});
-  if (n.has("measured"))
-    w.measured_on_body = n.child("measured").choice<bool>({{"on_plate", false}, {"on_body", true}});
+  if (n.has("moment_unit")) w.nm_per_unit = n.child("moment_unit").choice<double>({{"N*m", 1.0}, {"N*mm", 1e-3}, {"kN*m", 1e3}});
+  if (n.has("measured")) w.measured_on_body = n.child("measured").choice<bool>({{"on_plate", false}, {"on_body", true}});
   if (n.has("plate_axes")) w.R_fp_data = parse_plate_axes(n.child("plate_axes"));
   if (n.has("moment_point_m")) w.moment_point_fp_m = n.child("moment_point_m").vec3();
   return w;
@@ -193,10 +188,9 @@ ImportConfig parse_import_config(const std::string& text, const std::string& dis
   const YAML::Node doc = format::load_yaml(text, display_name);
   if (!doc.IsDefined() || doc.IsNull()) throw FormatError({display_name, 0, 0, ""}, "empty import config");
   const Node root(doc, "", &c.file);
-  root.only({"format_version", "rig", "source", "notes", "csv", "time", "markers", "bodies", "ee", "wrench", "joints",
-             "extra_columns", "twist"});
-  if (root.req("format_version").count(1) != 1)
-    root.child("format_version").fail("this hil reads import config version 1");
+  root.only({"format_version", "rig", "source", "notes", "csv", "time", "markers", "bodies", "ee", "wrench", "joints", "extra_columns",
+             "twist"});
+  if (root.req("format_version").count(1) != 1) root.child("format_version").fail("this hil reads import config version 1");
   if (root.has("rig")) c.rig = checked_name(root.child("rig"));
   if (root.has("source")) c.source_name = checked_name(root.child("source"));
   c.notes = root.has("notes") ? root.child("notes").str() : "";
@@ -207,8 +201,7 @@ ImportConfig parse_import_config(const std::string& text, const std::string& dis
     if (n.has("delimiter")) {
       const auto d = n.child("delimiter").str();
       if (d == "tab" || d == "\t") c.delimiter = '\t';
-      else if (d.size() == 1 && d != "\"" && d != "#" && d != "." && !std::isalnum(static_cast<unsigned char>(d[0])))
-        c.delimiter = d[0];
+      else if (d.size() == 1 && d != "\"" && d != "#" && d != "." && !std::isalnum(static_cast<unsigned char>(d[0]))) c.delimiter = d[0];
       else n.child("delimiter").fail("expected one character such as ',' ';' or tab, found '" + d + "'");
     }
     if (n.has("header")) c.header = n.child("header").boolean();
@@ -268,9 +261,8 @@ ImportConfig parse_import_config(const std::string& text, const std::string& dis
       }
       if (!valid_name(x.name)) e.fail("output name '" + x.name + "' must be letters, digits, '_' and '-'");
       static const std::vector<std::string> req{"t",  "px", "py", "pz", "qw", "qx", "qy", "qz", "vx", "vy",
-                                                 "vz", "wx", "wy", "wz", "fx", "fy", "fz", "mx", "my", "mz"};
-      const bool joint_like = x.name.size() >= 2 && x.name[0] == 'j' &&
-                              x.name.find_first_not_of("0123456789", 1) == std::string::npos;
+                                                "vz", "wx", "wy", "wz", "fx", "fy", "fz", "mx", "my", "mz"};
+      const bool joint_like = x.name.size() >= 2 && x.name[0] == 'j' && x.name.find_first_not_of("0123456789", 1) == std::string::npos;
       if (std::find(req.begin(), req.end(), x.name) != req.end() || joint_like)
         e.fail("output name '" + x.name + "' is a samples.csv column of its own; give it another name");
       if (!out_names.insert(x.name).second) e.fail("output name '" + x.name + "' used twice");

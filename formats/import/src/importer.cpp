@@ -63,8 +63,8 @@ struct Columns {
       if (dist < best) best = dist, hint = fmt::format(" (column {} is '{}': misspelt?)", i + 1, data.header[i]);
     }
     throw FormatError({data.file, data.header_line, 0, name},
-                      fmt::format("column named in {} as {} is not in the data{}; the data has {} columns", cfg.file,
-                                  role, hint, data.header.size()));
+                      fmt::format("column named in {} as {} is not in the data{}; the data has {} columns", cfg.file, role, hint,
+                                  data.header.size()));
   }
 };
 
@@ -80,8 +80,7 @@ struct ParsedRow {
 
 }  // namespace
 
-format::CsvOptions data_options(char delimiter, bool header, const std::vector<std::string>& names,
-                                const std::string& display_name) {
+format::CsvOptions data_options(char delimiter, bool header, const std::vector<std::string>& names, const std::string& display_name) {
   format::CsvOptions o;
   o.display_name = display_name;
   o.delimiter = delimiter;
@@ -118,8 +117,7 @@ ColumnIndex resolve_columns(const format::CsvTable& data, const ImportConfig& cf
     c.markers.emplace_back();
     for (const auto& mk : body.markers) {
       std::array<std::size_t, 3> xyz{};
-      for (std::size_t k = 0; k < 3; ++k)
-        xyz[k] = col(mk.columns[k], fmt::format("marker '{}' of body '{}'", mk.name, body.name));
+      for (std::size_t k = 0; k < 3; ++k) xyz[k] = col(mk.columns[k], fmt::format("marker '{}' of body '{}'", mk.name, body.name));
       c.markers.back().push_back(xyz);
     }
   }
@@ -148,8 +146,7 @@ std::vector<std::string> output_extra_names(const ImportConfig& cfg, std::size_t
 }
 
 /// Reads one row: text that is not a number is an error; empty and NaN cells are marked missing.
-ParsedRow parse_row(const format::CsvTable& data, const Cells& cells, std::size_t r, const ImportConfig& cfg,
-                    const ColumnIndex& col) {
+ParsedRow parse_row(const format::CsvTable& data, const Cells& cells, std::size_t r, const ImportConfig& cfg, const ColumnIndex& col) {
   auto number = [&](std::size_t c, double& v) {
     v = format::read_number(cells(r, c), {data.file, data.row_line[r], c + 1, data.header[c]}, format::MissingCells::nan);
     return !std::isnan(v);
@@ -240,8 +237,7 @@ std::vector<std::size_t> usable_rows(const format::CsvTable& data, const Cells& 
 
 /// The body-frame marker positions: given, or the mean of the first rows that see every marker.
 Eigen::Matrix3Xd reference_markers(const BodySpec& body, std::size_t b, const std::vector<ParsedRow>& rows,
-                                   const std::vector<std::size_t>& keep, const std::string& config_file,
-                                   std::size_t& rows_used) {
+                                   const std::vector<std::size_t>& keep, const std::string& config_file, std::size_t& rows_used) {
   const auto nm = static_cast<Eigen::Index>(body.markers.size());
   Eigen::Matrix3Xd ref(3, nm);
   rows_used = 0;
@@ -270,8 +266,7 @@ Eigen::Matrix3Xd reference_markers(const BodySpec& body, std::size_t b, const st
 }
 
 /// The pose of one body in one row, or why there is none.
-std::optional<RigidFit> fit_body(const BodySpec& body, const Eigen::Matrix3Xd& ref, const ParsedRow& p, std::size_t b,
-                                 std::string& why) {
+std::optional<RigidFit> fit_body(const BodySpec& body, const Eigen::Matrix3Xd& ref, const ParsedRow& p, std::size_t b, std::string& why) {
   FitFailure failure;
   auto fit = fit_rigid_body(ref, p.markers_world_m[b], p.seen[b], body.min_markers, &failure);
   if (fit && body.max_residual_m > 0 && fit->residual_rms_m > body.max_residual_m) {
@@ -336,19 +331,18 @@ std::string run_notes(const ImportReport& rep, const ImportConfig& cfg, std::siz
   if (datetime && rep.clock_taken_as_utc)
     notes += "Time: the data's clock carries no time zone; it is taken as UTC, so start_time is the clock's own "
              "reading with a Z appended (set time.utc_offset_h to convert).\n";
-  else if (datetime)
-    notes += fmt::format("Time: the data's clock is UTC{:+g} h, converted to UTC.\n", *cfg.time.utc_offset_h);
-  else if (!start_known)
-    notes += "Time: the data's absolute start time is unknown; start_time is a placeholder (1970-01-01).\n";
+  else if (datetime) notes += fmt::format("Time: the data's clock is UTC{:+g} h, converted to UTC.\n", *cfg.time.utc_offset_h);
+  else if (!start_known) notes += "Time: the data's absolute start time is unknown; start_time is a placeholder (1970-01-01).\n";
   notes += fmt::format("Steps: median {:.2f} ms, {} gaps longer than {} x the median (longest {:.1f} ms), kept as they are.\n",
                        rep.median_dt_s * 1e3, rep.gaps.size(), cfg.time.gap_factor, rep.max_dt_s * 1e3);
   const auto& eb = cfg.bodies[ee];
   notes += fmt::format("ee: the pose of body '{}' fitted to {} markers (Kabsch/SVD); frame {}; twist from a {:.0f} ms "
                        "local-line fit.\n",
                        eb.name, eb.markers.size(),
-                       !eb.reference_body_m.empty()               ? "as given by reference_m"
-                       : eb.origin == BodyOrigin::marker_centroid ? "at the markers' mean centroid, axes along the world's, over the first rows"
-                                                                   : "equal to the world frame over the first rows",
+                       !eb.reference_body_m.empty() ? "as given by reference_m"
+                       : eb.origin == BodyOrigin::marker_centroid
+                           ? "at the markers' mean centroid, axes along the world's, over the first rows"
+                           : "equal to the world frame over the first rows",
                        cfg.twist_window_s * 1e3);
   notes += "Extra columns: ";
   for (std::size_t i = 0; i < extra_names.size(); ++i) notes += (i ? ", " : "") + extra_names[i];
@@ -414,8 +408,7 @@ ImportedRun import_table(const format::CsvTable& data, const ImportConfig& cfg, 
   rep.dropped = drops.list();
   if (out.size() < 2)
     throw FormatError({data.file, 0, 0, ""},
-                      fmt::format("only {} usable rows of {} (see the dropped rows): a run needs at least 2", out.size(),
-                                  rows.size()));
+                      fmt::format("only {} usable rows of {} (see the dropped rows): a run needs at least 2", out.size(), rows.size()));
 
   // Samples: time since the first written row, ee pose, wrench in the plate frame, joints, extras.
   const std::size_t n = out.size();
@@ -524,8 +517,7 @@ void write_imported_run(const std::string& dir, const ImportedRun& run) {
   format::write_run_info((fs::path(dir) / "run.yaml").string(), run.info);
   // The run format's own writer: shortest round-trip numbers, extras after the joints (a NaN
   // extra is written as nan, which readers keep as text).
-  format::SamplesWriter w((fs::path(dir) / "samples.csv").string(), static_cast<std::size_t>(run.table.joints_rad.cols()),
-                          run.extra_names);
+  format::SamplesWriter w((fs::path(dir) / "samples.csv").string(), static_cast<std::size_t>(run.table.joints_rad.cols()), run.extra_names);
   std::vector<double> joints(static_cast<std::size_t>(run.table.joints_rad.cols()));
   std::vector<double> extras(static_cast<std::size_t>(run.extra_values.cols()));
   for (std::size_t i = 0; i < run.table.size(); ++i) {
@@ -540,27 +532,26 @@ void write_imported_run(const std::string& dir, const ImportedRun& run) {
 std::string report_text(const ImportReport& r) {
   std::string s = fmt::format("rows: {} read, {} written\n", r.rows_read, r.rows_written);
   for (const auto& d : r.dropped) s += fmt::format("  dropped {}: {} (first on line {})\n", d.count, d.reason, d.first_line);
-  s += fmt::format("time: start {}{}, duration {:.3f} s, step median {:.2f} ms (min {:.2f}, max {:.2f})\n",
-                   r.start_time_utc, r.clock_taken_as_utc ? " (local clock taken as UTC)" : "", r.duration_s,
-                   r.median_dt_s * 1e3, r.min_dt_s * 1e3, r.max_dt_s * 1e3);
+  s += fmt::format("time: start {}{}, duration {:.3f} s, step median {:.2f} ms (min {:.2f}, max {:.2f})\n", r.start_time_utc,
+                   r.clock_taken_as_utc ? " (local clock taken as UTC)" : "", r.duration_s, r.median_dt_s * 1e3, r.min_dt_s * 1e3,
+                   r.max_dt_s * 1e3);
   s += fmt::format("gaps: {} (kept)", r.gaps.size());
   for (std::size_t i = 0; i < r.gaps.size() && i < 5; ++i)
     s += fmt::format("{} {:.1f} ms before t={:.3f} s (line {})", i ? "," : ":", r.gaps[i].dt_s * 1e3, r.gaps[i].t_s, r.gaps[i].line);
   if (r.gaps.size() > 5) s += ", ...";
   s += '\n';
   for (const auto& b : r.bodies) {
-    s += fmt::format("body {}{}: {} markers, {} rows fitted ({} with markers missing), {} without pose\n", b.name,
-                     b.is_ee ? " (ee)" : "", b.markers, b.fitted, b.reduced, b.no_pose);
-    s += fmt::format("  fit residual RMS: mean {:.3f} mm, median {:.3f} mm, max {:.3f} mm\n", b.rms_mean_m * 1e3,
-                     b.rms_median_m * 1e3, b.rms_max_m * 1e3);
+    s += fmt::format("body {}{}: {} markers, {} rows fitted ({} with markers missing), {} without pose\n", b.name, b.is_ee ? " (ee)" : "",
+                     b.markers, b.fitted, b.reduced, b.no_pose);
+    s += fmt::format("  fit residual RMS: mean {:.3f} mm, median {:.3f} mm, max {:.3f} mm\n", b.rms_mean_m * 1e3, b.rms_median_m * 1e3,
+                     b.rms_max_m * 1e3);
     s += fmt::format("  motion: position range x {:.2f} y {:.2f} z {:.2f} mm (max {:.2f} mm from the first row); "
                      "rotation range x {:.2f} y {:.2f} z {:.2f} mrad (max {:.2f} mrad)\n",
                      b.p_range_m.x() * 1e3, b.p_range_m.y() * 1e3, b.p_range_m.z() * 1e3, b.max_displacement_m * 1e3,
-                     b.rot_range_rad.x() * 1e3, b.rot_range_rad.y() * 1e3, b.rot_range_rad.z() * 1e3,
-                     b.max_rotation_rad * 1e3);
+                     b.rot_range_rad.x() * 1e3, b.rot_range_rad.y() * 1e3, b.rot_range_rad.z() * 1e3, b.max_rotation_rad * 1e3);
   }
-  s += fmt::format("force on plate: fx {:.1f}..{:.1f}, fy {:.1f}..{:.1f}, fz {:.1f}..{:.1f} N\n", r.f_min_n.x(),
-                   r.f_max_n.x(), r.f_min_n.y(), r.f_max_n.y(), r.f_min_n.z(), r.f_max_n.z());
+  s += fmt::format("force on plate: fx {:.1f}..{:.1f}, fy {:.1f}..{:.1f}, fz {:.1f}..{:.1f} N\n", r.f_min_n.x(), r.f_max_n.x(),
+                   r.f_min_n.y(), r.f_max_n.y(), r.f_min_n.z(), r.f_max_n.z());
   if (r.extra_missing) s += fmt::format("extra cells empty or NaN (written as nan): {}\n", r.extra_missing);
   return s;
 }

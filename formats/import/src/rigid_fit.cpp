@@ -19,8 +19,8 @@ double planarity_ratio(const Eigen::Matrix3Xd& points) {
   return s(0) > 0.0 ? s(1) / s(0) : 0.0;
 }
 
-std::optional<RigidFit> fit_rigid_body(const Eigen::Matrix3Xd& body_m, const Eigen::Matrix3Xd& world_m,
-                                       const std::vector<bool>& seen, std::size_t min_markers, FitFailure* failure) {
+std::optional<RigidFit> fit_rigid_body(const Eigen::Matrix3Xd& body_m, const Eigen::Matrix3Xd& world_m, const std::vector<bool>& seen,
+                                       std::size_t min_markers, FitFailure* failure) {
   const auto n_all = static_cast<std::size_t>(body_m.cols());
   std::size_t n = 0;
   for (std::size_t i = 0; i < n_all; ++i) n += seen[i] ? 1 : 0;

@@ -112,8 +112,7 @@ std::optional<std::int64_t> parse_datetime_us(std::string_view s, const std::str
         frac_us = (ns + 500) / 1000;
         break;
       }
-      default:
-        return fail(at, "a valid pattern");
+      default: return fail(at, "a valid pattern");
     }
   }
   if (k != s.size()) return fail(k, "the end of the time text");
@@ -136,8 +135,7 @@ std::string format_iso8601_utc_us(std::int64_t us) {
   unsigned m = 0, d = 0;
   civil_from_days(days, y, m, d);
   const auto secs = rem / 1000000;
-  return fmt::format("{:04}-{:02}-{:02}T{:02}:{:02}:{:02}.{:06}Z", y, m, d, secs / 3600, (secs / 60) % 60, secs % 60,
-                     rem % 1000000);
+  return fmt::format("{:04}-{:02}-{:02}T{:02}:{:02}:{:02}.{:06}Z", y, m, d, secs / 3600, (secs / 60) % 60, secs % 60, rem % 1000000);
 }
 
 }  // namespace hil::import

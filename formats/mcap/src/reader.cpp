@@ -200,9 +200,9 @@ File read_bytes(const std::string& b, const std::string& name) {
 
   bool seen_header = false, seen_data_end = false, seen_footer = false;
   std::uint64_t data_end_offset = 0, footer_offset = 0;
-  std::map<std::uint64_t, std::size_t> chunk_at;          // file offset -> index in f.chunks
-  std::map<std::uint64_t, std::size_t> message_index_at;  // file offset -> index in f.message_indexes
-  std::map<std::uint64_t, std::uint8_t> opcode_at;        // every record's opcode by offset
+  std::map<std::uint64_t, std::size_t> chunk_at;               // file offset -> index in f.chunks
+  std::map<std::uint64_t, std::size_t> message_index_at;       // file offset -> index in f.message_indexes
+  std::map<std::uint64_t, std::uint8_t> opcode_at;             // every record's opcode by offset
   std::map<std::uint64_t, std::uint16_t> last_chunk_messages;  // offsets in the last chunk -> channel
   std::set<std::uint16_t> schema_ids, channel_ids;
   std::vector<std::uint64_t> summary_record_offsets;
@@ -213,15 +213,17 @@ File read_bytes(const std::string& b, const std::string& name) {
     if (b.size() - pos < 9) fail(pos, fmt::format("truncated record header ({} bytes left, a record needs 9)", b.size() - pos));
     const auto op = static_cast<std::uint8_t>(b[pos]);
     std::uint64_t len = 0;
-    for (int k = 0; k < 8; ++k) len |= static_cast<std::uint64_t>(static_cast<unsigned char>(b[pos + 1 + static_cast<std::size_t>(k)])) << (8 * k);
+    for (int k = 0; k < 8; ++k)
+      len |= static_cast<std::uint64_t>(static_cast<unsigned char>(b[pos + 1 + static_cast<std::size_t>(k)])) << (8 * k);
     if (len > b.size() - pos - 9)
-      fail(pos, fmt::format("{} record of {} bytes runs past the end of the file ({} bytes): truncated or corrupt length",
-                            opcode_name(op), len, b.size()));
+      fail(pos, fmt::format("{} record of {} bytes runs past the end of the file ({} bytes): truncated or corrupt length", opcode_name(op),
+                            len, b.size()));
     const std::uint64_t off = pos;
     Cursor c(name, b.data() + pos + 9, static_cast<std::size_t>(len), off, opcode_name(op));
     pos += 9 + static_cast<std::size_t>(len);
     opcode_at[off] = op;
-    if (!seen_header && op != static_cast<std::uint8_t>(Opcode::header)) fail(off, fmt::format("the first record is a {}, not a Header", opcode_name(op)));
+    if (!seen_header && op != static_cast<std::uint8_t>(Opcode::header))
+      fail(off, fmt::format("the first record is a {}, not a Header", opcode_name(op)));
     const bool in_summary = seen_data_end;
     if (in_summary) summary_record_offsets.push_back(off);
 
@@ -287,12 +289,15 @@ File read_bytes(const std::string& b, const std::string& name) {
           if (plain.size() - q < 9) fail(off, fmt::format("{}: truncated record header", where));
           const auto iop = static_cast<std::uint8_t>(plain[q]);
           std::uint64_t ilen = 0;
-          for (int k = 0; k < 8; ++k) ilen |= static_cast<std::uint64_t>(static_cast<unsigned char>(plain[q + 1 + static_cast<std::size_t>(k)])) << (8 * k);
-          if (ilen > plain.size() - q - 9) fail(off, fmt::format("{}: {} of {} bytes runs past the chunk's end", where, opcode_name(iop), ilen));
+          for (int k = 0; k < 8; ++k)
+            ilen |= static_cast<std::uint64_t>(static_cast<unsigned char>(plain[q + 1 + static_cast<std::size_t>(k)])) << (8 * k);
+          if (ilen > plain.size() - q - 9)
+            fail(off, fmt::format("{}: {} of {} bytes runs past the chunk's end", where, opcode_name(iop), ilen));
           Cursor ic(name, plain.data() + q + 9, static_cast<std::size_t>(ilen), off, where + " (" + opcode_name(iop) + ")");
           if (iop == static_cast<std::uint8_t>(Opcode::message)) {
             auto m = parse_message(ic);
-            if (!channel_ids.count(m.channel_id)) fail(off, fmt::format("{}: Message on channel {}, not defined before it", where, m.channel_id));
+            if (!channel_ids.count(m.channel_id))
+              fail(off, fmt::format("{}: Message on channel {}, not defined before it", where, m.channel_id));
             if (m.log_time_ns < ci.message_start_time_ns || m.log_time_ns > ci.message_end_time_ns)
               fail(off, fmt::format("{}: Message log time {} outside the chunk's [{}, {}]", where, m.log_time_ns, ci.message_start_time_ns,
                                     ci.message_end_time_ns));
@@ -398,7 +403,8 @@ File read_bytes(const std::string& b, const std::string& name) {
         if (f.data_section_crc != 0) {
           const auto crc = crc32(b.data(), static_cast<std::size_t>(off));
           if (crc != f.data_section_crc)
-            fail(off, fmt::format("DataEnd: CRC mismatch of the data section: stored {:#010x}, computed {:#010x}", f.data_section_crc, crc));
+            fail(off,
+                 fmt::format("DataEnd: CRC mismatch of the data section: stored {:#010x}, computed {:#010x}", f.data_section_crc, crc));
         }
         seen_data_end = true;
         data_end_offset = off;
@@ -413,12 +419,12 @@ File read_bytes(const std::string& b, const std::string& name) {
         if (!summary_record_offsets.empty()) summary_record_offsets.pop_back();  // the footer itself
         break;
       }
-      default:
-        break;  // attachments, metadata and unknown opcodes: skipped
+      default: break;  // attachments, metadata and unknown opcodes: skipped
     }
   }
   if (b.size() - pos != kM || std::memcmp(b.data() + pos, kMagic, kM) != 0)
-    fail(pos, b.size() - pos < kM ? std::string("truncated: the closing magic is missing") : std::string("bad closing magic after the Footer"));
+    fail(pos,
+         b.size() - pos < kM ? std::string("truncated: the closing magic is missing") : std::string("bad closing magic after the Footer"));
   if (!seen_data_end) fail(footer_offset, "Footer without a DataEnd record before it");
 
   // The footer's pointers and the summary CRC.
@@ -427,8 +433,8 @@ File read_bytes(const std::string& b, const std::string& name) {
     if (ft.summary_start <= data_end_offset || ft.summary_start > footer_offset || !opcode_at.count(ft.summary_start))
       fail(footer_offset, fmt::format("Footer: summary_start {} is not a record after DataEnd", ft.summary_start));
     if (!summary_record_offsets.empty() && summary_record_offsets.front() != ft.summary_start)
-      fail(footer_offset, fmt::format("Footer: summary_start {} is not where the summary begins ({})", ft.summary_start,
-                                      summary_record_offsets.front()));
+      fail(footer_offset,
+           fmt::format("Footer: summary_start {} is not where the summary begins ({})", ft.summary_start, summary_record_offsets.front()));
     if (ft.summary_crc != 0) {
       const auto n = static_cast<std::size_t>(footer_offset + 1 + 8 + 8 + 8 - ft.summary_start);
       const auto crc = crc32(b.data() + ft.summary_start, n);
@@ -444,8 +450,8 @@ File read_bytes(const std::string& b, const std::string& name) {
     const auto it = opcode_at.find(so.group_start);
     if (it == opcode_at.end() || it->second != so.group_opcode || so.group_start < ft.summary_start ||
         so.group_start + so.group_length > footer_offset)
-      fail(ft.summary_offset_start, fmt::format("SummaryOffset for {} records points at [{}, +{}), not such a group", opcode_name(so.group_opcode),
-                                                so.group_start, so.group_length));
+      fail(ft.summary_offset_start, fmt::format("SummaryOffset for {} records points at [{}, +{}), not such a group",
+                                                opcode_name(so.group_opcode), so.group_start, so.group_length));
   }
   // The summary's copies agree with the data section; the statistics with the messages.
   for (const auto& s : f.summary_schemas) {
@@ -463,12 +469,13 @@ File read_bytes(const std::string& b, const std::string& name) {
     std::map<std::uint16_t, std::uint64_t> counts;
     for (const auto& m : f.messages) ++counts[m.channel_id];
     if (s.message_count != f.messages.size())
-      fail(ft.summary_start, fmt::format("Statistics: message_count {} but the file holds {} messages", s.message_count, f.messages.size()));
+      fail(ft.summary_start,
+           fmt::format("Statistics: message_count {} but the file holds {} messages", s.message_count, f.messages.size()));
     for (const auto& [id, n] : counts) {
       const auto it = s.channel_message_counts.find(id);
       if (it == s.channel_message_counts.end() || it->second != n)
-        fail(ft.summary_start, fmt::format("Statistics: channel {} holds {} messages, the statistics say {}", id,
-                                           n, it == s.channel_message_counts.end() ? 0 : it->second));
+        fail(ft.summary_start, fmt::format("Statistics: channel {} holds {} messages, the statistics say {}", id, n,
+                                           it == s.channel_message_counts.end() ? 0 : it->second));
     }
     if (s.chunk_count != f.chunks.size())
       fail(ft.summary_start, fmt::format("Statistics: chunk_count {} but the file holds {} chunks", s.chunk_count, f.chunks.size()));

@@ -90,8 +90,7 @@ const std::map<std::string, MsgDef>& definitions() {
         "# Translation and rotation in 3-dimensions of child_frame_id from header.frame_id.\n"
         "Transform transform\n",
         {"std_msgs/msg/Header", "geometry_msgs/msg/Transform"}}},
-      {"tf2_msgs/msg/TFMessage",
-       {"geometry_msgs/TransformStamped[] transforms\n", {"geometry_msgs/msg/TransformStamped"}}},
+      {"tf2_msgs/msg/TFMessage", {"geometry_msgs/TransformStamped[] transforms\n", {"geometry_msgs/msg/TransformStamped"}}},
       {"sensor_msgs/msg/JointState",
        {"# This is a message that holds data to describe the state of a set of torque controlled joints.\n"
         "# Units: position in rad or m, velocity in rad/s or m/s, effort in Nm or N.\n"
@@ -146,10 +145,9 @@ void decode(const std::string& data, T& m, const std::string& where) {
 /// transient_local for /tf_static so that `ros2 bag play` latches it as tf2 expects.
 std::string offered_qos(bool transient_local) {
   constexpr const char* kForever = "    sec: 2147483647\n    nsec: 4294967295\n";
-  return fmt::format(
-      "- history: 3\n  depth: 0\n  reliability: 1\n  durability: {}\n  deadline:\n{}  lifespan:\n{}"
-      "  liveliness: 1\n  liveliness_lease_duration:\n{}  avoid_ros_namespace_conventions: false",
-      transient_local ? 1 : 2, kForever, kForever, kForever);
+  return fmt::format("- history: 3\n  depth: 0\n  reliability: 1\n  durability: {}\n  deadline:\n{}  lifespan:\n{}"
+                     "  liveliness: 1\n  liveliness_lease_duration:\n{}  avoid_ros_namespace_conventions: false",
+                     transient_local ? 1 : 2, kForever, kForever, kForever);
 }
 
 }  // namespace
@@ -220,7 +218,8 @@ std::int64_t parse_utc_ns(const std::string& s) {
   std::tm tm{};
   int consumed = 0;
   if (std::sscanf(s.c_str(), "%4d-%2d-%2dT%2d:%2d:%2d%n", &tm.tm_year, &tm.tm_mon, &tm.tm_mday, &tm.tm_hour, &tm.tm_min, &tm.tm_sec,
-                  &consumed) != 6 || consumed != 19)
+                  &consumed) != 6 ||
+      consumed != 19)
     throw std::invalid_argument("not an ISO 8601 UTC time: '" + s + "'");
   tm.tm_year -= 1900;
   tm.tm_mon -= 1;
@@ -329,8 +328,8 @@ std::vector<hil_msgs::msg::PoseWrenchSample> read_pose_wrench(const File& file) 
   const auto* schema = file.schema(ch->schema_id);
   if (ch->message_encoding != "cdr" || !schema || schema->name != "hil_msgs/msg/PoseWrenchSample")
     throw error::FormatError({file.path, 0, 0, ""},
-                              fmt::format("{} is not hil_msgs/msg/PoseWrenchSample in cdr (schema '{}', encoding '{}')", topic::kPoseWrench,
-                                          schema ? schema->name : std::string("none"), ch->message_encoding));
+                             fmt::format("{} is not hil_msgs/msg/PoseWrenchSample in cdr (schema '{}', encoding '{}')", topic::kPoseWrench,
+                                         schema ? schema->name : std::string("none"), ch->message_encoding));
   std::vector<hil_msgs::msg::PoseWrenchSample> out;
   for (const auto* m : file.messages_on(topic::kPoseWrench)) {
     out.emplace_back();

@@ -212,8 +212,7 @@ void Writer::write(const Message& m) {
   ++stats_.message_count;
   ++stats_.channel_message_counts[m.channel_id];
 
-  if (chunk_records_.size() >= opt_.chunk_size_bytes || (opt_.chunk_messages > 0 && chunk_count_ >= opt_.chunk_messages))
-    close_chunk();
+  if (chunk_records_.size() >= opt_.chunk_size_bytes || (opt_.chunk_messages > 0 && chunk_count_ >= opt_.chunk_messages)) close_chunk();
 }
 
 void Writer::close_chunk() {

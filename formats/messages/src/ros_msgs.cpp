@@ -29,31 +29,22 @@ tf2_msgs::msg::TFMessage to_tf_message(const std::vector<format::StaticFrame>& f
 std::uint8_t diagnostic_level(std::uint8_t device_state) {
   namespace level = diagnostic_msgs::msg::DiagnosticStatus_Constants;
   switch (device_state) {
-    case hil_msgs::msg::DEVICE_OK:
-      return level::OK;
-    case hil_msgs::msg::DEVICE_DEGRADED:
-      return level::WARN;
+    case hil_msgs::msg::DEVICE_OK: return level::OK;
+    case hil_msgs::msg::DEVICE_DEGRADED: return level::WARN;
     case hil_msgs::msg::DEVICE_FAULT:
-    case hil_msgs::msg::DEVICE_DISCONNECTED:
-      return level::ERROR;
-    default:
-      return level::STALE;
+    case hil_msgs::msg::DEVICE_DISCONNECTED: return level::ERROR;
+    default: return level::STALE;
   }
 }
 
 namespace {
 const char* state_name(std::uint8_t state) {
   switch (state) {
-    case hil_msgs::msg::DEVICE_OK:
-      return "ok";
-    case hil_msgs::msg::DEVICE_DEGRADED:
-      return "degraded";
-    case hil_msgs::msg::DEVICE_FAULT:
-      return "fault";
-    case hil_msgs::msg::DEVICE_DISCONNECTED:
-      return "disconnected";
-    default:
-      return "unknown";
+    case hil_msgs::msg::DEVICE_OK: return "ok";
+    case hil_msgs::msg::DEVICE_DEGRADED: return "degraded";
+    case hil_msgs::msg::DEVICE_FAULT: return "fault";
+    case hil_msgs::msg::DEVICE_DISCONNECTED: return "disconnected";
+    default: return "unknown";
   }
 }
 

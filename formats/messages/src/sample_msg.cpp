@@ -63,7 +63,9 @@ format::Sample from_message(const hil_msgs::msg::PoseWrenchSample& m, Eigen::Vec
   s.w_world_ee_rad_per_s = vec(m.twist_world_ee().angular());
   s.f_fp_n = vec(m.wrench_fp().force());
   s.m_fp_nm = vec(m.wrench_fp().torque());
-  if (joints_rad) *joints_rad = Eigen::Map<const Eigen::VectorXd>(m.joint_positions_rad().data(), static_cast<Eigen::Index>(m.joint_positions_rad().size()));
+  if (joints_rad)
+    *joints_rad = Eigen::Map<const Eigen::VectorXd>(m.joint_positions_rad().data(),
+                                                    static_cast<Eigen::Index>(m.joint_positions_rad().size()));
   return s;
 }
 

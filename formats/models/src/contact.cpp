@@ -36,15 +36,22 @@ cid::Scene scene_from_rig(const format::RigSpec& rig) {
   for (std::size_t i = 0; i < rig.objects.size(); ++i) {
     const auto root = root_of(rig, rig.objects[i].frame);
     if (root == "ee") {
-      if (held >= 0) throw FormatError({rig.source, 0, 0, "objects"}, "contact identification needs exactly one object held by the end effector; found '" + rig.objects[static_cast<std::size_t>(held)].name + "' and '" + rig.objects[i].name + "'");
+      if (held >= 0)
+        throw FormatError({rig.source, 0, 0, "objects"},
+                          "contact identification needs exactly one object held by the end effector; found '" +
+                              rig.objects[static_cast<std::size_t>(held)].name + "' and '" + rig.objects[i].name + "'");
       held = static_cast<int>(i);
     } else {
-      if (fixed >= 0) throw FormatError({rig.source, 0, 0, "objects"}, "contact identification needs exactly one fixed object; found '" + rig.objects[static_cast<std::size_t>(fixed)].name + "' and '" + rig.objects[i].name + "'");
+      if (fixed >= 0)
+        throw FormatError({rig.source, 0, 0, "objects"}, "contact identification needs exactly one fixed object; found '" +
+                                                             rig.objects[static_cast<std::size_t>(fixed)].name + "' and '" +
+                                                             rig.objects[i].name + "'");
       fixed = static_cast<int>(i);
     }
   }
   if (held < 0 || fixed < 0)
-    throw FormatError({rig.source, 0, 0, "objects"}, "contact identification needs one object on the end effector (frame chain ending at 'ee') and one fixed object");
+    throw FormatError({rig.source, 0, 0, "objects"},
+                      "contact identification needs one object on the end effector (frame chain ending at 'ee') and one fixed object");
   const int idx[2] = {held, fixed};
   for (int b = 0; b < 2; ++b) {
     const auto& o = rig.objects[static_cast<std::size_t>(idx[b])];
@@ -121,9 +128,7 @@ std::vector<cid::Measurement> measurements(const format::SampleTable& t) {
 Trajectory read_trajectory(const std::string& path) {
   format::CsvOptions o;
   o.required = {"t", "px", "py", "pz", "qw", "qx", "qy", "qz"};
-  o.numeric_if_present = [](const std::string& c) {
-    return c == "vx" || c == "vy" || c == "vz" || c == "wx" || c == "wy" || c == "wz";
-  };
+  o.numeric_if_present = [](const std::string& c) { return c == "vx" || c == "vy" || c == "vz" || c == "wx" || c == "wy" || c == "wz"; };
   const auto csv = format::read_csv(path, o);
   const auto n = csv.rows();
   if (n < 2) throw FormatError({path, 0, 0, ""}, "a trajectory needs at least two rows");
@@ -172,11 +177,11 @@ Truth read_truth(const std::string& path, const format::RigSpec& rig) {
   if (root.has("sticking_threshold_m_per_s")) t.model.v_tm = root.child("sticking_threshold_m_per_s").num_positive();
   if (root.has("sensor")) {
     const auto s = root.child("sensor");
-    s.only({"position_resolution_m", "velocity_resolution_m_per_s", "force_resolution_n", "moment_resolution_nm",
-            "force_noise_n", "moment_noise_nm", "seed"});
+    s.only({"position_resolution_m", "velocity_resolution_m_per_s", "force_resolution_n", "moment_resolution_nm", "force_noise_n",
+            "moment_noise_nm", "seed"});
     t.sensor.position_resolution_m = s.has("position_resolution_m") ? non_negative(s.child("position_resolution_m")) : 0.0;
-    t.sensor.velocity_resolution_m_per_s =
-        s.has("velocity_resolution_m_per_s") ? non_negative(s.child("velocity_resolution_m_per_s")) : 0.0;
+    t.sensor.velocity_resolution_m_per_s = s.has("velocity_resolution_m_per_s") ? non_negative(s.child("velocity_resolution_m_per_s"))
+                                                                                : 0.0;
     t.sensor.force_resolution_n = s.has("force_resolution_n") ? non_negative(s.child("force_resolution_n")) : 0.0;
     t.sensor.moment_resolution_nm = s.has("moment_resolution_nm") ? non_negative(s.child("moment_resolution_nm")) : 0.0;
     t.sensor.force_noise_n = s.has("force_noise_n") ? non_negative(s.child("force_noise_n")) : 0.0;

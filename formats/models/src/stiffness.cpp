@@ -81,7 +81,8 @@ StiffnessTable from_csv(const format::CsvTable& t, int dof, bool require_measure
   for (int k = 1; k <= markers; ++k)
     for (const char* w : {"px", "py", "pz"}) {
       const std::string c = fmt::format("m{}_{}", k, w);
-      if (!t.has(c)) throw FormatError({t.file, 1, 0, c}, fmt::format("marker {} needs its position columns m{}_px m{}_py m{}_pz", k, k, k, k));
+      if (!t.has(c))
+        throw FormatError({t.file, 1, 0, c}, fmt::format("marker {} needs its position columns m{}_px m{}_py m{}_pz", k, k, k, k));
     }
   StiffnessTable out;
   const bool has_tool = t.has("dx");
@@ -170,8 +171,7 @@ void write_stiffness_table(std::ostream& os, const std::vector<hc::Measurement>&
   for (int j = 1; j <= dof; ++j) os << ",j" << j;
   for (const char* c : kLoad) os << ',' << c;
   if (first.kind == hc::MeasurementKind::markers) {
-    for (std::size_t k = 1; k <= first.p_ee_marker_m.size(); ++k)
-      os << fmt::format(",m{0}_px,m{0}_py,m{0}_pz,m{0}_dx,m{0}_dy,m{0}_dz", k);
+    for (std::size_t k = 1; k <= first.p_ee_marker_m.size(); ++k) os << fmt::format(",m{0}_px,m{0}_py,m{0}_pz,m{0}_dx,m{0}_dy,m{0}_dz", k);
   } else {
     const int n = first.kind == hc::MeasurementKind::pose6 ? 6 : 3;
     for (int a = 0; a < n; ++a) os << ',' << kDisp[a];

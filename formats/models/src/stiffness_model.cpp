@@ -58,7 +58,8 @@ hc::ComplianceSet read_springs(const nlohmann::json& springs, const hc::VjmModel
     if (value.is_array()) {
       if (value.size() != 6) throw FormatError({file, 0, 0, field}, "expected 6 rows of 6 numbers");
       for (std::size_t r = 0; r < 6; ++r) {
-        if (!value[r].is_array() || value[r].size() != 6) throw FormatError({file, 0, 0, fmt::format("{}[{}]", field, r)}, "expected 6 numbers");
+        if (!value[r].is_array() || value[r].size() != 6)
+          throw FormatError({file, 0, 0, fmt::format("{}[{}]", field, r)}, "expected 6 numbers");
         for (std::size_t c = 0; c < 6; ++c)
           K(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(c)) = number(value[r][c], file, fmt::format("{}[{}][{}]", field, r, c));
       }
@@ -117,8 +118,13 @@ nlohmann::json robot_to_json(const hc::SerialRobot& robot) {
   j["convention"] = robot.convention == hc::DhConvention::standard ? "standard" : "modified";
   j["joints"] = nlohmann::json::array();
   for (const auto& r : robot.joints)
-    j["joints"].push_back({{"name", r.name}, {"type", r.kind == hc::JointKind::revolute ? "revolute" : "prismatic"}, {"a_m", r.a_m},
-                           {"alpha_rad", r.alpha_rad}, {"d_m", r.d_m}, {"theta_offset_rad", r.theta_offset_rad}, {"lower", r.lower},
+    j["joints"].push_back({{"name", r.name},
+                           {"type", r.kind == hc::JointKind::revolute ? "revolute" : "prismatic"},
+                           {"a_m", r.a_m},
+                           {"alpha_rad", r.alpha_rad},
+                           {"d_m", r.d_m},
+                           {"theta_offset_rad", r.theta_offset_rad},
+                           {"lower", r.lower},
                            {"upper", r.upper}});
   auto pose = [](const Eigen::Isometry3d& T) {
     const Eigen::Matrix4d M = T.matrix();
@@ -180,17 +186,21 @@ void check_model_format(const nlohmann::json& j, const std::string& file, bool r
   const std::string want = "hil.stiffness_model";
   if (!j.is_object()) throw FormatError({file, 0, 0, ""}, "expected a JSON object (a " + want + " file)");
   if (!j.contains("format")) {
-    if (required) throw FormatError({file, 0, 0, "format"}, "not a stiffness model: no \"format\": \"" + want + "\" (write one with `hil stiffness identify --json`)");
+    if (required)
+      throw FormatError({file, 0, 0, "format"},
+                        "not a stiffness model: no \"format\": \"" + want + "\" (write one with `hil stiffness identify --json`)");
     return;
   }
   const auto& f = j.at("format");
   const std::string kind = f.is_string() ? f.get<std::string>() : f.dump();
   if (kind != want && kind != "hil-stiffness-model")
-    throw FormatError({file, 0, 0, "format"}, "this is a '" + kind + "' file, not a stiffness model (" + want + ", written by `hil stiffness identify --json`)");
+    throw FormatError({file, 0, 0, "format"},
+                      "this is a '" + kind + "' file, not a stiffness model (" + want + ", written by `hil stiffness identify --json`)");
   if (j.contains("format_version")) {
     const auto& v = j.at("format_version");
     if (!v.is_number_integer() || v.get<long>() < 1 || v.get<long>() > format::kJsonFormatVersion)
-      throw FormatError({file, 0, 0, "format_version"}, fmt::format("expected 1 to {} (this hil's version of {}), found {}", format::kJsonFormatVersion, want, v.dump()));
+      throw FormatError({file, 0, 0, "format_version"},
+                        fmt::format("expected 1 to {} (this hil's version of {}), found {}", format::kJsonFormatVersion, want, v.dump()));
   }
 }
 
@@ -200,8 +210,11 @@ nlohmann::json result_to_json(const hc::VjmModel& model, const hc::CalibrationRe
   j["version"] = format::kJsonFormatVersion;  // the key of files before "format_version", kept for their readers
   j["parameters"] = nlohmann::json::array();
   for (const auto& p : r.kept)
-    j["parameters"].push_back({{"name", p.parameter.name}, {"value", p.value}, {"std", number_or_null(p.std_dev)},
-                               {"ci95", {number_or_null(p.ci95_low), number_or_null(p.ci95_high)}}, {"pnr", number_or_null(p.pnr)},
+    j["parameters"].push_back({{"name", p.parameter.name},
+                               {"value", p.value},
+                               {"std", number_or_null(p.std_dev)},
+                               {"ci95", {number_or_null(p.ci95_low), number_or_null(p.ci95_high)}},
+                               {"pnr", number_or_null(p.pnr)},
                                {"class", hc::to_string(p.cls)}});
   j["fixed"] = nlohmann::json::array();
   for (const auto& f : r.fixed) j["fixed"].push_back({{"name", f.parameter.name}, {"value", f.value}, {"step", f.step}});
@@ -221,7 +234,8 @@ nlohmann::json result_to_json(const hc::VjmModel& model, const hc::CalibrationRe
   // whose count above the tolerance is its rank, and of the final set.
   j["singular_values_physical"] = std::vector<double>(r.partition.singular_values.data(),
                                                       r.partition.singular_values.data() + r.partition.singular_values.size());
-  j["singular_values"] = std::vector<double>(r.solution.singular_values.data(), r.solution.singular_values.data() + r.solution.singular_values.size());
+  j["singular_values"] = std::vector<double>(r.solution.singular_values.data(),
+                                             r.solution.singular_values.data() + r.solution.singular_values.size());
   j["sigma0_sq"] = number_or_null(r.solution.sigma0_sq);
   j["measurements"] = r.measurements;
   j["equations"] = r.equations;
@@ -231,8 +245,11 @@ nlohmann::json result_to_json(const hc::VjmModel& model, const hc::CalibrationRe
   j["noise"] = {{"position_m", r.noise.position_m}, {"rotation_rad", r.noise.rotation_rad}, {"estimated", r.noise_estimated}};
   j["spd"] = nlohmann::json::array();
   for (const auto& c : r.spd)
-    j["spd"].push_back({{"spring", c.spring}, {"symmetric", c.symmetric}, {"positive_definite", c.positive_definite},
-                        {"min_eigenvalue", c.min_eigenvalue}, {"max_eigenvalue", c.max_eigenvalue}});
+    j["spd"].push_back({{"spring", c.spring},
+                        {"symmetric", c.symmetric},
+                        {"positive_definite", c.positive_definite},
+                        {"min_eigenvalue", c.min_eigenvalue},
+                        {"max_eigenvalue", c.max_eigenvalue}});
   j["springs"] = springs_to_json(model, r.compliance);
   j["robot"] = robot_to_json(model.robot());
   return j;

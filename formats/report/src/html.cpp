@@ -233,8 +233,7 @@ std::string svg_plot(const std::vector<Series>& series, const PlotOptions& o) {
         d += (pen ? "L" : "M") + px(a) + "," + px(b);
         pen = true;
       }
-      s += "<path d='" + d + "' fill='none' stroke='" + col + "' stroke-width='1.3'" +
-           (sr.dashed ? " stroke-dasharray='5,3'" : "") + "/>";
+      s += "<path d='" + d + "' fill='none' stroke='" + col + "' stroke-width='1.3'" + (sr.dashed ? " stroke-dasharray='5,3'" : "") + "/>";
     }
     const double ly = mt + 14 + 16 * static_cast<double>(k);
     s += "\n<rect x='" + px(W - mr + 10) + "' y='" + px(ly - 8) + "' width='12' height='8' fill='" + col + "'/>";
@@ -282,7 +281,8 @@ std::string Page::html() const {
          "</title>\n<style>body{font-family:sans-serif;max-width:980px;margin:1em auto;color:#222}"
          "table{border-collapse:collapse;margin:0.5em 0}td,th{border:1px solid #ccc;padding:2px 8px;text-align:right}"
          "th{background:#f4f4f4}pre{background:#f8f8f8;padding:6px;overflow-x:auto}.plot{margin:0.6em 0}</style>\n"
-         "</head><body>\n<h1>" + escape(title_) + "</h1>\n" + body_ + "</body></html>\n";
+         "</head><body>\n<h1>" +
+         escape(title_) + "</h1>\n" + body_ + "</body></html>\n";
 }
 
 void Page::write(const std::string& path) const {

@@ -206,15 +206,17 @@ std::string permissions_xml(const std::string& name, const std::string& subject,
 }
 
 void check_days(int days) {
-  if (days < 1 || days > 36500) throw error::FormatError({"command line", 0, 0, "--days"}, fmt::format("expected 1..36500, found {}", days));
+  if (days < 1 || days > 36500)
+    throw error::FormatError({"command line", 0, 0, "--days"}, fmt::format("expected 1..36500, found {}", days));
 }
 
 void check_name(const std::string& name) {
-  const bool ok = !name.empty() && name.size() <= 64 && name.front() != '.' &&
-                  std::all_of(name.begin(), name.end(), [](char c) { return std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-' || c == '.'; });
+  const bool ok = !name.empty() && name.size() <= 64 && name.front() != '.' && std::all_of(name.begin(), name.end(), [](char c) {
+    return std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-' || c == '.';
+  });
   if (!ok)
     throw error::FormatError({"command line", 0, 0, "NAME"},
-                              "expected a participant name of letters, digits, '_', '-' or '.' (at most 64), found '" + name + "'");
+                             "expected a participant name of letters, digits, '_', '-' or '.' (at most 64), found '" + name + "'");
 }
 
 struct Layout {
@@ -245,8 +247,9 @@ void verify_signed(const Layout& k, const fs::path& p7s) {
   const auto r = openssl({"smime", "-verify", "-in", p7s.string(), "-CAfile", k.permissions_ca().string(), "-purpose", "any", "-out",
                           "/dev/null"});
   if (r.status != 0)
-    throw error::FormatError({p7s.string(), 0, 0, ""}, "signature does not verify against the permissions CA " + k.permissions_ca().string() +
-                                                            " (changed after signing, or signed by another CA): " + reason(r.output));
+    throw error::FormatError({p7s.string(), 0, 0, ""}, "signature does not verify against the permissions CA " +
+                                                           k.permissions_ca().string() +
+                                                           " (changed after signing, or signed by another CA): " + reason(r.output));
 }
 
 std::string subject_rfc2253(const fs::path& cert) {
@@ -273,7 +276,8 @@ std::string dds_topic(const std::string& topic, const std::string& where) {
                   });
   if (!ok)
     throw error::FormatError({"command line", 0, 0, where}, "expected a DDS topic (rt/hil/pose_wrench) or a ROS 2 topic "
-                                                             "(/hil/pose_wrench), '*' allowed, found '" + topic + "'");
+                                                            "(/hil/pose_wrench), '*' allowed, found '" +
+                                                                topic + "'");
   return t;
 }
 
@@ -287,9 +291,27 @@ void create(const std::string& dir, int days) {
   fs::create_directories(k.dir / "participants");
   write_file(k.config(), kOpensslConfig);
   const auto ca = [&](const fs::path& cert, const fs::path& key, const char* cn) {
-    run_or_throw({"req", "-x509", "-new", "-config", k.config().string(), "-extensions", "ca_ext", "-newkey", "ec", "-pkeyopt",
-                  "ec_paramgen_curve:prime256v1", "-nodes", "-sha256", "-days", std::to_string(days), "-subj",
-                  std::string("/O=hil/CN=") + cn, "-keyout", key.string(), "-out", cert.string()},
+    run_or_throw({"req",
+                  "-x509",
+                  "-new",
+                  "-config",
+                  k.config().string(),
+                  "-extensions",
+                  "ca_ext",
+                  "-newkey",
+                  "ec",
+                  "-pkeyopt",
+                  "ec_paramgen_curve:prime256v1",
+                  "-nodes",
+                  "-sha256",
+                  "-days",
+                  std::to_string(days),
+                  "-subj",
+                  std::string("/O=hil/CN=") + cn,
+                  "-keyout",
+                  key.string(),
+                  "-out",
+                  cert.string()},
                  std::string("making the ") + cn);
     private_file(key);
   };
@@ -315,9 +337,26 @@ void add(const std::string& dir, const std::string& name, const Grants& g, int d
                 "-sha256", "-subj", "/O=hil/CN=" + name, "-keyout", key.string(), "-out", csr.string()},
                "making the key of " + name);
   private_file(key);
-  run_or_throw({"x509", "-req", "-in", csr.string(), "-CA", k.identity_ca().string(), "-CAkey", k.identity_ca_key().string(),
-                "-CAcreateserial", "-CAserial", (k.ca() / "identity_ca.srl").string(), "-sha256", "-days", std::to_string(days),
-                "-extfile", k.config().string(), "-extensions", "participant_ext", "-out", cert.string()},
+  run_or_throw({"x509",
+                "-req",
+                "-in",
+                csr.string(),
+                "-CA",
+                k.identity_ca().string(),
+                "-CAkey",
+                k.identity_ca_key().string(),
+                "-CAcreateserial",
+                "-CAserial",
+                (k.ca() / "identity_ca.srl").string(),
+                "-sha256",
+                "-days",
+                std::to_string(days),
+                "-extfile",
+                k.config().string(),
+                "-extensions",
+                "participant_ext",
+                "-out",
+                cert.string()},
                "signing the certificate of " + name);
   fs::remove(csr);
   write_file(p / "permissions.xml", permissions_xml(name, subject_rfc2253(cert), g, days));
@@ -334,7 +373,8 @@ dds::SecurityFiles participant_files(const std::string& dir, const std::string& 
   need(k.identity_ca(), "identity CA certificate", create_hint);
   need(k.permissions_ca(), "permissions CA certificate", create_hint);
   need(k.governance(), "governance document", create_hint);
-  const std::string add_hint = " (make participant '" + name + "' with: hil keystore add " + dir + " " + name + " --publish/--subscribe TOPICS)";
+  const std::string add_hint = " (make participant '" + name + "' with: hil keystore add " + dir + " " + name +
+                               " --publish/--subscribe TOPICS)";
   need(p / "cert.pem", "certificate of participant '" + name + "'", add_hint);
   need(p / "key.pem", "private key of participant '" + name + "'", add_hint);
   need(p / "permissions.p7s", "permissions of participant '" + name + "'", add_hint);
@@ -342,7 +382,7 @@ dds::SecurityFiles participant_files(const std::string& dir, const std::string& 
   const auto v = openssl({"verify", "-CAfile", k.identity_ca().string(), (p / "cert.pem").string()});
   if (v.status != 0)
     throw error::FormatError({(p / "cert.pem").string(), 0, 0, ""},
-                              "certificate does not verify against the identity CA " + k.identity_ca().string() + ": " + reason(v.output));
+                             "certificate does not verify against the identity CA " + k.identity_ca().string() + ": " + reason(v.output));
   if (public_key({"x509", "-noout", "-pubkey", "-in", (p / "cert.pem").string()}, p / "cert.pem", "certificate") !=
       public_key({"pkey", "-pubout", "-in", (p / "key.pem").string()}, p / "key.pem", "private key"))
     throw error::FormatError({(p / "key.pem").string(), 0, 0, ""}, "private key does not belong to " + (p / "cert.pem").string());
@@ -353,7 +393,7 @@ dds::SecurityFiles participant_files(const std::string& dir, const std::string& 
   const auto b = text.find("<subject_name>"), e = text.find("</subject_name>");
   if (b == std::string::npos || e == std::string::npos || text.substr(b + 14, e - b - 14) != subject)
     throw error::FormatError({(p / "permissions.p7s").string(), 0, 0, "subject_name"},
-                              "the grant is not for this participant's certificate (" + subject + ")");
+                             "the grant is not for this participant's certificate (" + subject + ")");
 
   dds::SecurityFiles f;
   f.identity_ca = k.identity_ca().string();

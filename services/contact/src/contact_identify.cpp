@@ -42,7 +42,7 @@ nlohmann::json num_or_null(double v) { return std::isfinite(v) ? nlohmann::json(
 }  // namespace
 
 std::vector<cid::Vector6d> model_plate_wrenches(const cid::ContactProblem& p, const Eigen::VectorXd& x, const Eigen::Vector2d& theta,
-                                             std::vector<int>& counts) {
+                                                std::vector<int>& counts) {
   Eigen::MatrixX2d A;
   p.regressor(x, A, &counts);
   Eigen::Vector2d th = theta;
@@ -85,8 +85,7 @@ IdentifyResult identify(const cid::ContactProblem& p, const IdentifyOptions& o) 
   r.window_nominal = cid::instantaneous(p, xd, o.window);
   if (p.uncertainties() > 0) r.observability = cid::analyse_observability(p, xd);
   if (!o.geometric) return r;
-  if (p.uncertainties() == 0)
-    throw std::runtime_error("--geometric: the rig declares no geometric uncertainties (model.uncertainties)");
+  if (p.uncertainties() == 0) throw std::runtime_error("--geometric: the rig declares no geometric uncertainties (model.uncertainties)");
   cid::GeometricOptions g;
   g.solver = o.solver == "nm" ? cid::Solver::nelder_mead : cid::Solver::levenberg_marquardt;
   if (o.solver != "nm" && o.solver != "lm") throw std::runtime_error("--solver: expected lm or nm, got '" + o.solver + "'");
@@ -98,16 +97,20 @@ IdentifyResult identify(const cid::ContactProblem& p, const IdentifyOptions& o) 
     const auto& name = p.scene().uncertainties[static_cast<std::size_t>(j)].name;
     if (!p.touches(j)) {
       g.fit[static_cast<std::size_t>(j)] = false;
-      r.notes.push_back("uncertainty '" + name + "' is unobservable: its feature is never near a contact in this run; it stays at its design value");
+      r.notes.push_back("uncertainty '" + name +
+                        "' is unobservable: its feature is never near a contact in this run; it stays at its design value");
     } else if (!o.include_weak && r.observability &&
                std::find(r.observability->weak.begin(), r.observability->weak.end(), name) != r.observability->weak.end()) {
       g.fit[static_cast<std::size_t>(j)] = false;
-      r.notes.push_back("uncertainty '" + name + "' is weakly observable (a prior std changes the regressor by < 1 %): not fitted, kept at its design value (--include-weak fits it)");
+      r.notes.push_back("uncertainty '" + name +
+                        "' is weakly observable (a prior std changes the regressor by < 1 %): not fitted, kept at its design value "
+                        "(--include-weak fits it)");
     }
   }
   if (std::none_of(g.fit.begin(), g.fit.end(), [](bool b) { return b; }))
     throw std::runtime_error("--geometric: no geometric uncertainty is observable in this run (" +
-                             std::string(o.include_weak ? "their features are never in contact" : "never in contact or only weakly observable; --include-weak fits the weak ones") +
+                             std::string(o.include_weak ? "their features are never in contact"
+                                                        : "never in contact or only weakly observable; --include-weak fits the weak ones") +
                              "): nothing to fit");
   const auto t0 = std::chrono::steady_clock::now();
   if (o.lambda == "auto") {
@@ -132,16 +135,14 @@ IdentifyResult identify(const cid::ContactProblem& p, const IdentifyOptions& o) 
 
 void print(std::ostream& out, const cid::ContactProblem& p, const IdentifyResult& r) {
   const auto& sc = p.scene();
-  out << fmt::format("contact identification: {} of {} samples in contact; weights F_max = {:.4g} N, M_max = {:.4g} N m\n",
-                     p.used().size(), p.data().size(), p.force_scale(), p.moment_scale());
+  out << fmt::format("contact identification: {} of {} samples in contact; weights F_max = {:.4g} N, M_max = {:.4g} N m\n", p.used().size(),
+                     p.data().size(), p.force_scale(), p.moment_scale());
   auto theta = [&](const cid::LinearEstimate& e) {
-    out << fmt::format("  K  = {:.5g} ± {:.3g} N/m   (95 %: [{:.5g}, {:.5g}])\n", e.K, e.K_std, e.K - kZ95 * e.K_std,
-                       e.K + kZ95 * e.K_std);
+    out << fmt::format("  K  = {:.5g} ± {:.3g} N/m   (95 %: [{:.5g}, {:.5g}])\n", e.K, e.K_std, e.K - kZ95 * e.K_std, e.K + kZ95 * e.K_std);
     if (e.mu_identifiable)
       out << fmt::format("  mu = {:.4f} ± {:.4f}      (95 %: [{:.4f}, {:.4f}])\n", e.mu, e.mu_std, e.mu - kZ95 * e.mu_std,
                          e.mu + kZ95 * e.mu_std);
-    else
-      out << "  mu: not identifiable\n";
+    else out << "  mu: not identifiable\n";
     out << fmt::format("  rank {}, condition {:.3g}, mean relative force error {:.2f} %\n", e.rank, e.condition,
                        100.0 * e.relative_force_error);
   };
@@ -175,8 +176,7 @@ void print(std::ostream& out, const cid::ContactProblem& p, const IdentifyResult
   if (r.geometric) {
     const auto& g = *r.geometric;
     out << fmt::format("geometric identification (variable projection, lambda = {:.4g}{}; {} evaluations, {} Jacobians, {:.2f} s):\n",
-                       g.lambda, r.lcurve ? " at the L-curve corner" : "", g.evaluations, g.jacobian_evaluations,
-                       r.seconds_geometric);
+                       g.lambda, r.lcurve ? " at the L-curve corner" : "", g.evaluations, g.jacobian_evaluations, r.seconds_geometric);
     for (int j = 0; j < p.uncertainties(); ++j) {
       const auto& u = sc.uncertainties[static_cast<std::size_t>(j)];
       if (!g.fitted[static_cast<std::size_t>(j)]) {
@@ -267,7 +267,8 @@ void write_report(const std::string& dir, const std::string& run_name, const cid
 
   const char* names[6] = {"fx", "fy", "fz", "mx", "my", "mz"};
   for (int group = 0; group < 2; ++group) {
-    page.heading(group == 0 ? "Measured and reconstructed forces (force-plate frame)" : "Measured and reconstructed moments (about the plate origin)");
+    page.heading(group == 0 ? "Measured and reconstructed forces (force-plate frame)"
+                            : "Measured and reconstructed moments (about the plate origin)");
     for (int c = 3 * group; c < 3 * group + 3; ++c) {
       std::vector<rp::Series> s;
       rp::Series meas{"measured", t, {}, "#444", true, false, 1.2};
@@ -334,7 +335,8 @@ void write_report(const std::string& dir, const std::string& run_name, const cid
     rp::PlotOptions o{"L-curve: geometric cost against force cost", "force cost (1/6L)|W(Y - Φθ)|²", "geometric cost (1/M)|x - x_d|²_W",
                       true, true};
     o.marks.push_back({c.force_cost[c.corner], c.geometric_cost[c.corner], fmt::format("λ = {:.3g}", c.lambda[c.corner])});
-    page.plot({{"λ from 1e-4 to 1e3", c.force_cost, c.geometric_cost, "#1f77b4"}, {"", c.force_cost, c.geometric_cost, "#1f77b4", true}}, o);
+    page.plot({{"λ from 1e-4 to 1e3", c.force_cost, c.geometric_cost, "#1f77b4"}, {"", c.force_cost, c.geometric_cost, "#1f77b4", true}},
+              o);
     rp::PlotOptions oc{"Curvature of the L-curve", "λ", "curvature", true, false};
     page.plot({{"curvature", c.lambda, c.curvature, "#ff7f0e"}}, oc);
   }

@@ -101,18 +101,19 @@ int simulate_run(const SimulateArgs& a) {
   info.start_time_utc = "2026-01-01T00:00:00.000Z";
   info.output_rate_hz = rate / a.decimate;
   info.sources.push_back({"simulation", "simulation", rate, "", {}});
-  info.notes = fmt::format(
-      "Simulated by `hil contact simulate` from {} ({} samples at {:.4g} Hz, decimated by {}), truth {}. Sensor: "
-      "position resolution {} m, velocity resolution {} m/s, force resolution {} N (noise {} N), moment resolution {} N m "
-      "(noise {} N m), seed {}.",
-      a.trajectory, traj.t.size(), rate, a.decimate, a.truth.empty() ? "= the rig's nominal model" : a.truth,
-      s.position_resolution_m, s.velocity_resolution_m_per_s, s.force_resolution_n, s.force_noise_n, s.moment_resolution_nm,
-      s.moment_noise_nm, s.seed);
+  info.notes =
+      fmt::format("Simulated by `hil contact simulate` from {} ({} samples at {:.4g} Hz, decimated by {}), truth {}. Sensor: "
+                  "position resolution {} m, velocity resolution {} m/s, force resolution {} N (noise {} N), moment resolution {} N m "
+                  "(noise {} N m), seed {}.",
+                  a.trajectory, traj.t.size(), rate, a.decimate, a.truth.empty() ? "= the rig's nominal model" : a.truth,
+                  s.position_resolution_m, s.velocity_resolution_m_per_s, s.force_resolution_n, s.force_noise_n, s.moment_resolution_nm,
+                  s.moment_noise_nm, s.seed);
   if (!a.inject.empty()) info.notes += " Hidden effects injected (which ones is kept out of the run).";
   format::write_run_info((fs::path(a.out) / "run.yaml").string(), info);
   fs::copy_file(a.rig, fs::path(a.out) / "rig.yaml", fs::copy_options::overwrite_existing);
-  format::human(format::is_stdout(a.truth_out)) << fmt::format("wrote run {}: {} samples at {:.4g} Hz, {} in contact (K = {:.4g} N/m, mu = {:.3g})\n", a.out,
-                           table.samples.size(), info.output_rate_hz, in_contact, truth.model.K, truth.model.mu);
+  format::human(format::is_stdout(a.truth_out))
+      << fmt::format("wrote run {}: {} samples at {:.4g} Hz, {} in contact (K = {:.4g} N/m, mu = {:.3g})\n", a.out, table.samples.size(),
+                     info.output_rate_hz, in_contact, truth.model.K, truth.model.mu);
   return 0;
 }
 

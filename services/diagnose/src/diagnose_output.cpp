@@ -86,7 +86,8 @@ std::vector<dg::LocatedEvent> located_events(const RunDiagnosis& r, const std::s
 /// profile of the split cost), not a standard deviation.
 void add_events(nlohmann::json& params, const std::vector<dg::LocatedEvent>& events) {
   for (const auto& e : events)
-    params[e.name] = {{"value", e.t_s}, {"lower", e.lower_s}, {"upper", e.upper_s}, {"unit", "s"}, {"first_sample", e.first_sample}, {"located", true}};
+    params[e.name] = {{"value", e.t_s}, {"lower", e.lower_s}, {"upper", e.upper_s}, {"unit", "s"}, {"first_sample", e.first_sample},
+                      {"located", true}};
 }
 
 std::string events_text(const std::vector<dg::LocatedEvent>& events) {
@@ -102,32 +103,29 @@ void print_summary(std::ostream& out, const RunDiagnosis& r) {
   const auto& obs = r.obs();
   const auto& ext = extended_score(r);
   const std::string what = r.mode == "contact" ? "wrench" : "deflection";
-  if (r.mode == "stiffness")
-    out << fmt::format("Diagnosis of {} ({} loaded configurations, stiffness table)\n", r.run_name, obs.size());
+  if (r.mode == "stiffness") out << fmt::format("Diagnosis of {} ({} loaded configurations, stiffness table)\n", r.run_name, obs.size());
   else
-    out << fmt::format("Diagnosis of {} ({} samples, {:.1f} s, {} model)\n", r.run_name, obs.size(),
-                       obs.t_s.back() - obs.t_s.front(), r.mode);
+    out << fmt::format("Diagnosis of {} ({} samples, {:.1f} s, {} model)\n", r.run_name, obs.size(), obs.t_s.back() - obs.t_s.front(),
+                       r.mode);
   out << fmt::format("  nominal model:   held-out relative {} error {:.2f} %\n", what, 100 * d.nominal.cv_error);
   const auto& nr = d.nominal_residuals;
   out << fmt::format("  it gets wrong:   {} most (rms {:.3g} {}), ", obs.component[static_cast<std::size_t>(nr.worst_component)],
                      nr.rms(nr.worst_component), obs.unit[static_cast<std::size_t>(nr.worst_component)]);
-  if (!nr.states.empty()) out << fmt::format("in state '{}' ({:.0f} % of the error), ", nr.states.front().label, 100 * nr.states.front().share);
+  if (!nr.states.empty())
+    out << fmt::format("in state '{}' ({:.0f} % of the error), ", nr.states.front().label, 100 * nr.states.front().share);
   out << (nr.white ? "residual white" : "residual not white");
   if (!nr.correlations.empty())
     out << fmt::format(", follows {} ({:+.2f} on {})", nr.correlations.front().signal, nr.correlations.front().correlation,
                        nr.correlations.front().component);
   out << "\n";
   out << fmt::format("  cause:           {}{}\n", d.cause, d.cause == "none" ? "" : " — " + dg::describe_extension(d.cause));
-  if (!d.second_cause.empty())
-    out << fmt::format("  second cause:    {} — {}\n", d.second_cause, dg::describe_extension(d.second_cause));
+  if (!d.second_cause.empty()) out << fmt::format("  second cause:    {} — {}\n", d.second_cause, dg::describe_extension(d.second_cause));
   if (d.extended) {
     out << "    (value ± 95 % interval, i.e. 1.96 std, the wider of the asymptotic and the folds' spread,\n"
            "     with the model forms' shifts added; PNR = |value - nominal| / asymptotic std)\n";
-    for (const auto& f : ext.model_forms)
-      out << "    model form covered: " << f << "\n";
+    for (const auto& f : ext.model_forms) out << "    model form covered: " << f << "\n";
     for (const auto& q : ext.full.reported)
-      if (q.extension)
-        out << fmt::format("    {:<28} {}  (PNR {:.1f})\n", q.name, fmt_value(q.value, q.std, q.unit), q.pnr());
+      if (q.extension) out << fmt::format("    {:<28} {}  (PNR {:.1f})\n", q.name, fmt_value(q.value, q.std, q.unit), q.pnr());
     if (!ext.full.unidentifiable.empty())
       out << fmt::format("    not identifiable from this run, fixed at nominal: {}\n", unidentifiable_text(ext.full));
     for (const auto& e : located_events(r, extended_set(r)))
@@ -136,8 +134,7 @@ void print_summary(std::ostream& out, const RunDiagnosis& r) {
                        d.gain_percent);
   }
   for (const auto& q : ext.full.reported)
-    if (!q.extension && (q.name == "K" || q.name == "mu"))
-      out << fmt::format("    {:<28} {}\n", q.name, fmt_value(q.value, q.std, q.unit));
+    if (!q.extension && (q.name == "K" || q.name == "mu")) out << fmt::format("    {:<28} {}\n", q.name, fmt_value(q.value, q.std, q.unit));
   out << "  candidates (held-out error, gain, verdict):\n";
   for (const auto& c : d.candidates)
     out << fmt::format("    {:<20} {:>9} {:>9}  {}\n", c.name, percent_cell(c.score.cv_error, "{:.2f} %"),
@@ -167,8 +164,9 @@ nlohmann::json to_json(const RunDiagnosis& r) {
   auto res = [&](const dg::ResidualAnalysis& a) {
     nlohmann::json x;
     for (int c = 0; c < 6; ++c)
-      x["rms"][obs.component[static_cast<std::size_t>(c)]] = {{"value", a.rms(c)}, {"unit", obs.unit[static_cast<std::size_t>(c)]},
-                                                               {"relative", a.relative_rms(c)}};
+      x["rms"][obs.component[static_cast<std::size_t>(c)]] = {{"value", a.rms(c)},
+                                                              {"unit", obs.unit[static_cast<std::size_t>(c)]},
+                                                              {"relative", a.relative_rms(c)}};
     x["worst_component"] = obs.component[static_cast<std::size_t>(a.worst_component)];
     x["time_windows"] = nlohmann::json::array();
     for (std::size_t w = 0; w < a.window_share.size(); ++w)
@@ -254,9 +252,8 @@ void write_report(const std::string& dir, const RunDiagnosis& r) {
   page.paragraph("Each time block is predicted by the model fitted on the other blocks (blocked cross-validation).");
   // The components in order of the nominal model's relative error.
   std::vector<int> order{0, 1, 2, 3, 4, 5};
-  std::sort(order.begin(), order.end(), [&](int a, int b) {
-    return d.nominal_residuals.relative_rms(a) > d.nominal_residuals.relative_rms(b);
-  });
+  std::sort(order.begin(), order.end(),
+            [&](int a, int b) { return d.nominal_residuals.relative_rms(a) > d.nominal_residuals.relative_rms(b); });
   for (int c : order) {
     std::vector<double> m(obs.size()), nom(obs.size()), ex(obs.size());
     for (std::size_t k = 0; k < obs.size(); ++k) {
@@ -292,7 +289,8 @@ void write_report(const std::string& dir, const RunDiagnosis& r) {
     page.table({"component", "nominal rms", "nominal relative", "extended rms"}, rows);
     rows.clear();
     for (const auto& s : d.nominal_residuals.states)
-      rows.push_back({s.label, std::to_string(s.samples), fmt::format("{:.2f} %", 100 * s.relative_error), fmt::format("{:.0f} %", 100 * s.share)});
+      rows.push_back({s.label, std::to_string(s.samples), fmt::format("{:.2f} %", 100 * s.relative_error),
+                      fmt::format("{:.0f} %", 100 * s.share)});
     if (!rows.empty()) page.table({"state", "samples", "relative error", "share of the error"}, rows);
     rows.clear();
     for (std::size_t i = 0; i < d.nominal_residuals.correlations.size() && i < 10; ++i) {
@@ -316,11 +314,12 @@ void write_report(const std::string& dir, const RunDiagnosis& r) {
   page.heading("Candidate ranking");
   {
     std::vector<std::vector<std::string>> rows;
-    rows.push_back({"nominal", fmt::format("{:.3f} %", 100 * d.nominal.cv_error), "", "", fmt::format("{:.0f}", d.nominal.bic), "", "reference"});
+    rows.push_back({"nominal", fmt::format("{:.3f} %", 100 * d.nominal.cv_error), "", "", fmt::format("{:.0f}", d.nominal.bic), "",
+                    "reference"});
     for (const auto& c : d.candidates)
       rows.push_back({c.name, percent_cell(c.score.cv_error, "{:.3f} %"), percent_cell(c.gain_percent / 100, "{:+.1f} %"),
-                      std::isfinite(c.z) ? fmt::format("{:.1f}", c.z) : "-", fmt::format("{:.0f}", c.score.bic), fmt::format("{:.1f}", c.pnr),
-                      c.verdict});
+                      std::isfinite(c.z) ? fmt::format("{:.1f}", c.z) : "-", fmt::format("{:.0f}", c.score.bic),
+                      fmt::format("{:.1f}", c.pnr), c.verdict});
     page.table({"candidate", "held-out error", "gain", "z", "BIC", "max PNR", "verdict"}, rows);
     std::vector<double> x, y;
     for (std::size_t i = 0; i < d.candidates.size(); ++i) {
@@ -332,8 +331,8 @@ void write_report(const std::string& dir, const RunDiagnosis& r) {
     if (!d.second_step.empty()) {
       rows.clear();
       for (const auto& c : d.second_step)
-        rows.push_back({d.cause + " + " + c.name, percent_cell(c.score.cv_error, "{:.3f} %"), percent_cell(c.gain_percent / 100, "{:+.1f} %"),
-                        std::isfinite(c.z) ? fmt::format("{:.1f}", c.z) : "-", c.verdict});
+        rows.push_back({d.cause + " + " + c.name, percent_cell(c.score.cv_error, "{:.3f} %"),
+                        percent_cell(c.gain_percent / 100, "{:+.1f} %"), std::isfinite(c.z) ? fmt::format("{:.1f}", c.z) : "-", c.verdict});
       page.heading("Second step (greedy forward selection)", 3);
       page.table({"model", "held-out error", "gain over the cause", "z", "verdict"}, rows);
     }

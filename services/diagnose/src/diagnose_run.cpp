@@ -25,8 +25,8 @@ dg::Context contact_context(const dg::ContactData& d) {
   dg::Context ctx;
   const std::size_t n = d.obs.size();
   auto& s = ctx.signals;
-  for (const char* k : {"speed", "acceleration", "interference", "penetration_rate", "slip_speed", "load", "time", "px",
-                        "py", "pz", "vx", "vy", "vz"})
+  for (const char* k :
+       {"speed", "acceleration", "interference", "penetration_rate", "slip_speed", "load", "time", "px", "py", "pz", "vx", "vy", "vz"})
     s[k].resize(n);
   for (std::size_t k = 0; k < n; ++k) {
     const auto& kin = d.kin[k];
@@ -39,8 +39,9 @@ dg::Context contact_context(const dg::ContactData& d) {
       slip = std::max(slip, c.slip_speed);
       sliding = sliding || !c.tangent.isZero();
     }
-    ctx.state.push_back(cs.empty() ? "no contact"
-                                   : fmt::format("{} contact{}, {}", cs.size(), cs.size() > 1 ? "s" : "", sliding ? "sliding" : "sticking"));
+    ctx.state.push_back(cs.empty()
+                            ? "no contact"
+                            : fmt::format("{} contact{}, {}", cs.size(), cs.size() > 1 ? "s" : "", sliding ? "sliding" : "sticking"));
     s["speed"][k] = kin.v_world_ee.norm();
     const std::size_t a = k > 0 ? k - 1 : 0, b = k + 1 < n ? k + 1 : n - 1;
     s["acceleration"][k] = b > a ? (d.kin[b].v_world_ee - d.kin[a].v_world_ee).norm() / (d.obs.t_s[b] - d.obs.t_s[a]) : 0.0;
@@ -78,13 +79,14 @@ static std::vector<std::string> checked_candidates(const Options& o, const std::
   for (const auto& c : o.candidates)
     if (std::find(all.begin(), all.end(), c) == all.end())
       throw error::FormatError({"command line", 0, 0, "--candidates"},
-                                fmt::format("'{}' is not a candidate here (expected one of {})", c, fmt::join(all, ", ")));
+                               fmt::format("'{}' is not a candidate here (expected one of {})", c, fmt::join(all, ", ")));
   return o.candidates.empty() ? all : o.candidates;
 }
 
 /// Options::cv_offsets, its default resolved for these candidates (the most any of them asks for).
 static int cv_offsets(const Options& o, const std::vector<std::string>& candidates) {
-  if (o.cv_offsets < 0) throw std::invalid_argument("diagnose: cv_offsets must be >= 0 (0: automatic), not " + std::to_string(o.cv_offsets));
+  if (o.cv_offsets < 0)
+    throw std::invalid_argument("diagnose: cv_offsets must be >= 0 (0: automatic), not " + std::to_string(o.cv_offsets));
   if (o.cv_offsets > 0) return o.cv_offsets;
   return dg::default_cv_offsets(candidates);
 }
@@ -155,9 +157,9 @@ RunDiagnosis diagnose_run(const format::Run& run, const Options& o) {
       r.mode = "contact";
       const auto scene = models::scene_from_rig(rig);
       const auto model = models::model_from_rig(rig);
-      r.contact = std::make_unique<dg::ContactData>(dg::make_contact_data(
-          scene, model.v_tm, models::measurements(run.samples), rig.model.contact->force_scale_n, rig.model.contact->moment_scale_nm,
-          o.damping_rates));
+      r.contact = std::make_unique<dg::ContactData>(dg::make_contact_data(scene, model.v_tm, models::measurements(run.samples),
+                                                                          rig.model.contact->force_scale_n,
+                                                                          rig.model.contact->moment_scale_nm, o.damping_rates));
       r.context = contact_context(*r.contact);
       for (const auto& u : r.contact->unfit_uncertainties) r.notes.push_back("geometric_offset does not fit " + u);
       r.notes.push_back("contact_damping takes its " + r.contact->rate_source());

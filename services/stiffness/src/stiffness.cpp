@@ -35,16 +35,18 @@ void print_report(std::ostream& os, const hc::VjmModel& model, const hc::Calibra
   if (sv.size() > 0)
     os << fmt::format("singular values of the final column-scaled weighted observation matrix: {:.3g} .. {:.3g} (all in --json)\n", sv[0],
                       sv[sv.size() - 1]);
-  os << fmt::format("condition number (column-scaled, weighted): {:.3g}; variance factor σ0² = {:.3f} (about 1 if the noise model fits)\n\n",
-                    r.solution.condition, r.solution.sigma0_sq);
+  os << fmt::format(
+      "condition number (column-scaled, weighted): {:.3g}; variance factor σ0² = {:.3f} (about 1 if the noise model fits)\n\n",
+      r.solution.condition, r.solution.sigma0_sq);
   os << fmt::format("{:<10} {:>13} {:>11} {:>27} {:>9} {:>5}\n", "parameter", "value", "std", "95% interval", "pnr", "class");
   for (const auto& p : r.kept)
-    os << fmt::format("{:<10} {:>13.5e} {:>11.3e} [{:>12.4e}, {:>12.4e}] {:>9.1f} {:>5}\n", p.parameter.name, p.value, p.std_dev, p.ci95_low,
-                      p.ci95_high, p.pnr, hc::to_string(p.cls));
+    os << fmt::format("{:<10} {:>13.5e} {:>11.3e} [{:>12.4e}, {:>12.4e}] {:>9.1f} {:>5}\n", p.parameter.name, p.value, p.std_dev,
+                      p.ci95_low, p.ci95_high, p.pnr, hc::to_string(p.cls));
   std::map<std::string, int> by_step;
   for (const auto& f : r.fixed) ++by_step[f.step];
   os << "\nfixed parameters:";
-  for (const auto& [step, n] : by_step) os << fmt::format(" {} {} ({})", n, step == "M4b" ? "non-identifiable" : step == "M5c" ? "assigned" : "neglected", step);
+  for (const auto& [step, n] : by_step)
+    os << fmt::format(" {} {} ({})", n, step == "M4b" ? "non-identifiable" : step == "M5c" ? "assigned" : "neglected", step);
   os << (r.fixed.empty() ? " none\n" : "\n");
   os << "\nresidual RMS per axis:";
   for (std::size_t a = 0; a < 6; ++a)
@@ -53,18 +55,20 @@ void print_report(std::ostream& os, const hc::VjmModel& model, const hc::Calibra
   for (const auto& c : r.spd) {
     const bool zero = c.max_eigenvalue == 0.0 && c.min_eigenvalue == 0.0;
     if (zero) {
-      os << fmt::format("  {:<4} rigid in this model (no parameter kept{})\n", c.spring, c.spring[0] == 'J' ? "; aggregated into the preceding link by M3" : "");
+      os << fmt::format("  {:<4} rigid in this model (no parameter kept{})\n", c.spring,
+                        c.spring[0] == 'J' ? "; aggregated into the preceding link by M3" : "");
       continue;
     }
     if (c.positive_definite)
-      os << fmt::format("  {:<4} symmetric positive definite (eigenvalues {:.3g} .. {:.3g})\n", c.spring, c.min_eigenvalue, c.max_eigenvalue);
+      os << fmt::format("  {:<4} symmetric positive definite (eigenvalues {:.3g} .. {:.3g})\n", c.spring, c.min_eigenvalue,
+                        c.max_eigenvalue);
     else
       os << fmt::format("  {:<4} NOT positive definite: eigenvalues {:.3g} .. {:.3g}{}\n", c.spring, c.min_eigenvalue, c.max_eigenvalue,
-                        c.symmetric ? " (entries fixed by M4b/M5c/M6 or absorbed by other links make it so; only combinations are identified)"
-                                    : " and not symmetric");
+                        c.symmetric
+                            ? " (entries fixed by M4b/M5c/M6 or absorbed by other links make it so; only combinations are identified)"
+                            : " and not symmetric");
   }
 }
-
 
 void write_predictions(std::ostream& os, const models::ModelFile& mf, const models::StiffnessTable& table, bool compensate) {
   const int n = mf.model.dof();
@@ -102,8 +106,8 @@ void write_predictions(std::ostream& os, const models::ModelFile& mf, const mode
       const Eigen::VectorXd qc = mf.model.compensate(mf.k, m.q_rad, m.w_world);
       os << fmt::format(",{:.9f},{:.9f},{:.9f},{:.9f},{:.9f},{:.9f}", T.translation().x(), T.translation().y(), T.translation().z(), rv.x(),
                         rv.y(), rv.z());
-      os << fmt::format(",{:.9f},{:.9f},{:.9f},{:.9f},{:.9f},{:.9f}", Tc.translation().x(), Tc.translation().y(), Tc.translation().z(), rvc.x(),
-                        rvc.y(), rvc.z());
+      os << fmt::format(",{:.9f},{:.9f},{:.9f},{:.9f},{:.9f},{:.9f}", Tc.translation().x(), Tc.translation().y(), Tc.translation().z(),
+                        rvc.x(), rvc.y(), rvc.z());
       for (int j = 0; j < n; ++j) os << fmt::format(",{:.9f}", qc[j]);
     }
     os << '\n';
@@ -115,7 +119,8 @@ void write_simulated_table(std::ostream& os, const hc::VjmModel& model, const hc
   for (const auto& c : hc::check_spd(model, truth))
     if (!c.positive_definite && c.max_eigenvalue != 0.0) spdlog::warn("truth: {} is not symmetric positive definite", c.spring);
   const auto rows = hc::simulate(model, truth, plan, noise);
-  os << fmt::format("# hil stiffness simulate: {}, seed {}, noise σ {} m / {} rad\n", origin, plan.seed, noise.position_m, noise.rotation_rad);
+  os << fmt::format("# hil stiffness simulate: {}, seed {}, noise σ {} m / {} rad\n", origin, plan.seed, noise.position_m,
+                    noise.rotation_rad);
   models::write_stiffness_table(os, rows, model.dof());
 }
 

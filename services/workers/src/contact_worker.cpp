@@ -29,13 +29,14 @@ ContactWorker::ContactWorker(dds::Participant& participant, const format::RigSpe
   const double M = rig.model.contact->moment_scale_nm > 0 ? rig.model.contact->moment_scale_nm : 5.0;
   est_ = std::make_unique<cid::OnlineEstimator>(scene, model.v_tm, F, M);
   writer_ = std::make_unique<dds::Writer<hil_msgs::msg::ContactEstimate>>(participant, dds::topics::kContactEstimate);
-  reader_ = std::make_unique<dds::Reader<hil_msgs::msg::PoseWrenchSample>>(
-      participant, dds::topics::kPoseWrenchSample, [this](const hil_msgs::msg::PoseWrenchSample& m, const auto&) {
-        const auto meas = models::measurement(messages::from_message(m));
-        std::lock_guard<std::mutex> lock(mu_);
-        writer_->write(to_message(est_->update(meas)));
-        ++processed_;
-      });
+  reader_ = std::make_unique<dds::Reader<hil_msgs::msg::PoseWrenchSample>>(participant, dds::topics::kPoseWrenchSample,
+                                                                           [this](const hil_msgs::msg::PoseWrenchSample& m, const auto&) {
+                                                                             const auto meas =
+                                                                                 models::measurement(messages::from_message(m));
+                                                                             std::lock_guard<std::mutex> lock(mu_);
+                                                                             writer_->write(to_message(est_->update(meas)));
+                                                                             ++processed_;
+                                                                           });
   spdlog::info("contact worker: {} -> {} (rig {})", dds::topics::kPoseWrenchSample, dds::topics::kContactEstimate, rig.name);
 }
 

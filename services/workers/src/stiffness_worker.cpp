@@ -7,7 +7,6 @@
 #include <stdexcept>
 #include <thread>
 
-
 #include <hil/dds/topics.hpp>
 #include <hil/error/error.hpp>
 
@@ -51,7 +50,8 @@ hil_msgs::msg::StiffnessMeasurement to_message(const hc::Measurement& m) {
 
 hc::Measurement from_message(const hil_msgs::msg::StiffnessMeasurement& msg, int dof) {
   if (static_cast<int>(msg.joints_rad().size()) != dof)
-    throw std::invalid_argument("measurement with " + std::to_string(msg.joints_rad().size()) + " joints, the robot has " + std::to_string(dof));
+    throw std::invalid_argument("measurement with " + std::to_string(msg.joints_rad().size()) + " joints, the robot has " +
+                                std::to_string(dof));
   hc::Measurement m;
   m.config = static_cast<int>(msg.config());
   m.q_rad = Eigen::Map<const Eigen::VectorXd>(msg.joints_rad().data(), dof);
@@ -60,7 +60,8 @@ hc::Measurement from_message(const hil_msgs::msg::StiffnessMeasurement& msg, int
   m.kind = msg.has_rotation() ? hc::MeasurementKind::pose6 : hc::MeasurementKind::point3;
   m.displacement.resize(msg.has_rotation() ? 6 : 3);
   m.displacement.head<3>() << msg.displacement_world_m().x(), msg.displacement_world_m().y(), msg.displacement_world_m().z();
-  if (msg.has_rotation()) m.displacement.tail<3>() << msg.rotation_world_rad().x(), msg.rotation_world_rad().y(), msg.rotation_world_rad().z();
+  if (msg.has_rotation())
+    m.displacement.tail<3>() << msg.rotation_world_rad().x(), msg.rotation_world_rad().y(), msg.rotation_world_rad().z();
   for (Eigen::Index i = 0; i < m.displacement.size(); ++i)
     if (!std::isfinite(m.displacement[i])) throw std::invalid_argument("non-finite displacement");
   return m;
@@ -85,8 +86,7 @@ hil_msgs::msg::StiffnessEstimate to_message(const hc::OnlineEstimate& e) {
 }
 
 StiffnessWorker::StiffnessWorker(dds::Participant& participant, std::unique_ptr<hc::OnlineIdentifier> identifier)
-    : id_(std::move(identifier)),
-      writer_(participant, dds::topics::kStiffnessEstimate, dds::StreamQos{true, 0, 1}),
+    : id_(std::move(identifier)), writer_(participant, dds::topics::kStiffnessEstimate, dds::StreamQos{true, 0, 1}),
       reader_(participant, dds::topics::kStiffnessMeasurement, [this](const hil_msgs::msg::StiffnessMeasurement& m, const auto&) {
         {
           std::lock_guard<std::mutex> lock(mutex_);
@@ -119,8 +119,8 @@ std::size_t StiffnessWorker::spin(std::chrono::milliseconds timeout) {
   return n;
 }
 
-std::size_t replay_measurements(dds::Participant& participant, const models::StiffnessTable& table, const std::string& path,
-                                double rate_hz, double wait_s) {
+std::size_t replay_measurements(dds::Participant& participant, const models::StiffnessTable& table, const std::string& path, double rate_hz,
+                                double wait_s) {
   dds::Writer<hil_msgs::msg::StiffnessMeasurement> w(participant, dds::topics::kStiffnessMeasurement);
   if (wait_s > 0 && !w.wait_for_readers(1, std::chrono::milliseconds(static_cast<long>(wait_s * 1e3))))
     spdlog::warn("replay: no reader matched within {} s; publishing anyway", wait_s);

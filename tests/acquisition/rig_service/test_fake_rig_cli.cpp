@@ -22,8 +22,8 @@ int port_of(const std::string& line) {
 
 TEST(HilFakeRig, ServesTheRunOverModbus) {
   // Speed ~0 freezes the replay at the run's first sample, so the check is exact.
-  hil::test::Child fake({kHil, "--log-level", "warn", "fake-rig", "--run", kRun, "--no-plate", "--port", "0", "--speed",
-                         "1e-9", "--duration", "60"});
+  hil::test::Child fake({kHil, "--log-level", "warn", "fake-rig", "--run", kRun, "--no-plate", "--port", "0", "--speed", "1e-9",
+                         "--duration", "60"});
   ASSERT_TRUE(fake.ok());
   const std::string line = fake.read_line();
   const int port = port_of(line);

@@ -25,8 +25,8 @@ std::vector<Vector3d> angles_up_to_pi() {
   auto direction = [&] { return Vector3d(normal(rng), normal(rng), normal(rng)).normalized(); };
   std::vector<Vector3d> phis;
   for (int i = 0; i < 40; ++i) phis.push_back(uniform(rng) * direction());
-  for (double a : {1e-12, 1e-9, 1e-6, 1e-4, 1e-2, 0.5 * so3::kSmallAngle_rad, so3::kSmallAngle_rad * (1.0 - 1e-12),
-                   so3::kSmallAngle_rad, so3::kSmallAngle_rad * (1.0 + 1e-12), 1.0, 3.0, kPi - 1e-3, kPi - 1e-6})
+  for (double a : {1e-12, 1e-9, 1e-6, 1e-4, 1e-2, 0.5 * so3::kSmallAngle_rad, so3::kSmallAngle_rad * (1.0 - 1e-12), so3::kSmallAngle_rad,
+                   so3::kSmallAngle_rad * (1.0 + 1e-12), 1.0, 3.0, kPi - 1e-3, kPi - 1e-6})
     phis.push_back(a * direction());
   phis.push_back(Vector3d(0.0, 0.0, kPi - 1e-4));  // along an axis, where the series' branches meet zeros
   return phis;
@@ -96,8 +96,7 @@ TEST(So3Jacobians, LeftIsRightOfMinusPhiAndTheRotatedRight) {
   for (const Vector3d& phi : angles_up_to_pi()) {
     EXPECT_TRUE(so3::left_jacobian(phi).isApprox(so3::right_jacobian(-phi), 1e-15)) << at(phi);
     // Jl(φ) = exp(φ) Jr(φ): the same increment seen in the world frame.
-    EXPECT_LT((so3::left_jacobian(phi) - so3::exp(phi) * so3::right_jacobian(phi)).cwiseAbs().maxCoeff(), 1e-14)
-        << at(phi);
+    EXPECT_LT((so3::left_jacobian(phi) - so3::exp(phi) * so3::right_jacobian(phi)).cwiseAbs().maxCoeff(), 1e-14) << at(phi);
   }
 }
 
@@ -107,15 +106,9 @@ TEST(So3Jacobians, InversesAreInverses) {
   phis.push_back(Vector3d(1.0, 2.0, -5.0).normalized() * 6.0);  // beyond π, short of the singularity at 2π
   for (const Vector3d& phi : phis) {
     const double tol = phi.norm() > kPi ? 1e-12 : 1e-14;
-    EXPECT_LT(
-        (so3::right_jacobian(phi) * so3::right_jacobian_inverse(phi) - Matrix3d::Identity()).cwiseAbs().maxCoeff(), tol)
-        << at(phi);
-    EXPECT_LT(
-        (so3::right_jacobian_inverse(phi) * so3::right_jacobian(phi) - Matrix3d::Identity()).cwiseAbs().maxCoeff(), tol)
-        << at(phi);
-    EXPECT_LT((so3::left_jacobian(phi) * so3::left_jacobian_inverse(phi) - Matrix3d::Identity()).cwiseAbs().maxCoeff(),
-              tol)
-        << at(phi);
+    EXPECT_LT((so3::right_jacobian(phi) * so3::right_jacobian_inverse(phi) - Matrix3d::Identity()).cwiseAbs().maxCoeff(), tol) << at(phi);
+    EXPECT_LT((so3::right_jacobian_inverse(phi) * so3::right_jacobian(phi) - Matrix3d::Identity()).cwiseAbs().maxCoeff(), tol) << at(phi);
+    EXPECT_LT((so3::left_jacobian(phi) * so3::left_jacobian_inverse(phi) - Matrix3d::Identity()).cwiseAbs().maxCoeff(), tol) << at(phi);
     EXPECT_TRUE(so3::left_jacobian_inverse(phi).isApprox(so3::right_jacobian_inverse(-phi), 1e-15)) << at(phi);
   }
 }
@@ -124,10 +117,8 @@ TEST(So3Jacobians, InverseJacobiansAreTheDerivativesOfLog) {
   // log(exp(φ) exp(δ)) ≈ φ + Jr⁻¹(φ) δ and log(exp(δ) exp(φ)) ≈ φ + Jl⁻¹(φ) δ, for |φ| < π.
   for (const Vector3d& phi : angles_up_to_pi()) {
     const Matrix3d R = so3::exp(phi);
-    const Matrix3d fd_r = central_difference([&](const Vector3d& d) { return so3::log(Matrix3d(R * so3::exp(d))); },
-                                             Vector3d::Zero());
-    const Matrix3d fd_l = central_difference([&](const Vector3d& d) { return so3::log(Matrix3d(so3::exp(d) * R)); },
-                                             Vector3d::Zero());
+    const Matrix3d fd_r = central_difference([&](const Vector3d& d) { return so3::log(Matrix3d(R * so3::exp(d))); }, Vector3d::Zero());
+    const Matrix3d fd_l = central_difference([&](const Vector3d& d) { return so3::log(Matrix3d(so3::exp(d) * R)); }, Vector3d::Zero());
     EXPECT_LT((so3::right_jacobian_inverse(phi) - fd_r).cwiseAbs().maxCoeff(), kFdTolerance) << at(phi);
     EXPECT_LT((so3::left_jacobian_inverse(phi) - fd_l).cwiseAbs().maxCoeff(), kFdTolerance) << at(phi);
   }
@@ -167,8 +158,7 @@ TEST(So3Jacobians, ExpOfASumIsAProductToSecondOrder) {
 TEST(So3Jacobians, SeriesAndClosedFormsMeetAtTheThreshold) {
   // Either side of kSmallAngle_rad (and at it) the Jacobians agree to rounding: no step at the switch.
   const Vector3d dir = Vector3d(-0.2, 0.9, 0.4).normalized();
-  const Vector3d below = std::nextafter(so3::kSmallAngle_rad, 0.0) * dir,
-                 above = std::nextafter(so3::kSmallAngle_rad, 1.0) * dir;
+  const Vector3d below = std::nextafter(so3::kSmallAngle_rad, 0.0) * dir, above = std::nextafter(so3::kSmallAngle_rad, 1.0) * dir;
   ASSERT_LT(below.norm(), so3::kSmallAngle_rad);
   ASSERT_GE(above.norm(), so3::kSmallAngle_rad);
   EXPECT_LT((so3::right_jacobian(below) - so3::right_jacobian(above)).cwiseAbs().maxCoeff(), 1e-15);
@@ -181,8 +171,7 @@ TEST(So3Jacobians, AtZeroTheyAreTheIdentityAndNearItFirstOrder) {
   // |φ| = 1e-8: Jr = I - ½[φ]× to rounding (the [φ]×² term is 1e-16 / 6).
   const Vector3d phi(6e-9, -8e-9, 0.0);
   EXPECT_LT((so3::right_jacobian(phi) - (Matrix3d::Identity() - 0.5 * so3::hat(phi))).cwiseAbs().maxCoeff(), 1e-16);
-  EXPECT_LT((so3::right_jacobian_inverse(phi) - (Matrix3d::Identity() + 0.5 * so3::hat(phi))).cwiseAbs().maxCoeff(),
-            1e-16);
+  EXPECT_LT((so3::right_jacobian_inverse(phi) - (Matrix3d::Identity() + 0.5 * so3::hat(phi))).cwiseAbs().maxCoeff(), 1e-16);
   // No overflow or 0/0 at angles whose square underflows.
   EXPECT_TRUE(so3::right_jacobian_inverse(Vector3d(1e-200, 0.0, 0.0)).allFinite());
 }
@@ -195,16 +184,12 @@ TEST(So3Jacobians, RotatingAPoint) {
     const Matrix3d fd = central_difference([&](const Vector3d& q) { return Vector3d(so3::exp(q) * p_b); }, phi);
     EXPECT_LT((so3::rotate_jacobian(phi, p_b) - fd).cwiseAbs().maxCoeff(), kFdTolerance) << at(phi);
     // Perturbed on the right (frame b) and on the left (frame a).
-    const Matrix3d fd_r = central_difference([&](const Vector3d& d) { return Vector3d(R_a_b * so3::exp(d) * p_b); },
-                                             Vector3d::Zero());
-    const Matrix3d fd_l = central_difference([&](const Vector3d& d) { return Vector3d(so3::exp(d) * R_a_b * p_b); },
-                                             Vector3d::Zero());
+    const Matrix3d fd_r = central_difference([&](const Vector3d& d) { return Vector3d(R_a_b * so3::exp(d) * p_b); }, Vector3d::Zero());
+    const Matrix3d fd_l = central_difference([&](const Vector3d& d) { return Vector3d(so3::exp(d) * R_a_b * p_b); }, Vector3d::Zero());
     EXPECT_LT((so3::rotate_jacobian_right(R_a_b, p_b) - fd_r).cwiseAbs().maxCoeff(), kFdTolerance) << at(phi);
     EXPECT_LT((so3::rotate_jacobian_left(R_a_b, p_b) - fd_l).cwiseAbs().maxCoeff(), kFdTolerance) << at(phi);
     // The additive one is the right-perturbed one through Jr, or the left one through Jl.
-    EXPECT_LT((so3::rotate_jacobian(phi, p_b) - so3::rotate_jacobian_left(R_a_b, p_b) * so3::left_jacobian(phi))
-                  .cwiseAbs()
-                  .maxCoeff(),
+    EXPECT_LT((so3::rotate_jacobian(phi, p_b) - so3::rotate_jacobian_left(R_a_b, p_b) * so3::left_jacobian(phi)).cwiseAbs().maxCoeff(),
               1e-14)
         << at(phi);
   }

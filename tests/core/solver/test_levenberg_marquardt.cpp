@@ -94,9 +94,7 @@ TEST(LevenbergMarquardt, VShapedKinkConvergesWithPerParameterDamping) {
   // f = 10 |x0 - 0.3| + smooth in x1 (the kink as a residual sqrt(10|x0 - 0.3|)): the minimum
   // is on the kink. Per-parameter damping brings x0 to it in 16 iterations while x1 still converges;
   // one damping for both crawls (84 iterations), so 40 are not enough without it.
-  auto res = [](const Eigen::VectorXd& x) {
-    return Eigen::Vector2d(std::sqrt(10.0 * std::abs(x(0) - 0.3) + 1e-300), x(1) - 2.0);
-  };
+  auto res = [](const Eigen::VectorXd& x) { return Eigen::Vector2d(std::sqrt(10.0 * std::abs(x(0) - 0.3) + 1e-300), x(1) - 2.0); };
   auto o = tight();
   o.max_iterations = 40;
   o.max_trials = 30;
@@ -284,8 +282,8 @@ TEST(LevenbergMarquardtStopReason, GradientConfirmedOnAFreshJacobianWithSecantUp
 }
 
 TEST(LevenbergMarquardtStopReason, NoParameters) {
-  const auto r = hs::levenberg_marquardt(make([](const Eigen::VectorXd&) { return Eigen::Vector2d(1.0, 2.0); }),
-                                         Eigen::VectorXd(), rules_off());
+  const auto r = hs::levenberg_marquardt(make([](const Eigen::VectorXd&) { return Eigen::Vector2d(1.0, 2.0); }), Eigen::VectorXd(),
+                                         rules_off());
   EXPECT_TRUE(r.converged);
   EXPECT_EQ(r.stop_reason, hs::StopReason::no_parameters);
   EXPECT_DOUBLE_EQ(r.cost, 5.0);
@@ -294,8 +292,8 @@ TEST(LevenbergMarquardtStopReason, NoParameters) {
 TEST(LevenbergMarquardtStopReason, EachReasonHasItsOwnWords) {
   std::set<std::string> words;
   for (auto reason : {hs::StopReason::relative_decrease, hs::StopReason::statistical, hs::StopReason::step_size,
-                      hs::StopReason::small_rejected_step, hs::StopReason::no_decrease, hs::StopReason::stall,
-                      hs::StopReason::gradient, hs::StopReason::max_iterations, hs::StopReason::no_parameters}) {
+                      hs::StopReason::small_rejected_step, hs::StopReason::no_decrease, hs::StopReason::stall, hs::StopReason::gradient,
+                      hs::StopReason::max_iterations, hs::StopReason::no_parameters}) {
     const std::string w = hs::to_string(reason);
     EXPECT_FALSE(w.empty());
     EXPECT_EQ(w.find("unknown"), std::string::npos) << w;

@@ -354,7 +354,8 @@ TEST(BadInput, EveryProblemIsNamed) {
     spoil(x);
     const std::string msg = validate(x);
     EXPECT_NE(msg.find(field), std::string::npos) << field << " not in: " << msg;
-    EXPECT_THAT([&] { simulate(x); }, ::testing::ThrowsMessage<std::invalid_argument>(::testing::HasSubstr("contact_truth: " + msg))) << field;
+    EXPECT_THAT([&] { simulate(x); }, ::testing::ThrowsMessage<std::invalid_argument>(::testing::HasSubstr("contact_truth: " + msg)))
+        << field;
   }
   ContactLaw law;
   law.slip_regularisation_m_per_s = 0.0;

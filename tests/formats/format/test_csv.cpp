@@ -114,7 +114,8 @@ TEST(Csv, BlankLinesInsideDataRefusedUnlessSkipped) {
 
 TEST(Csv, ByteOrderMarkOnlySkippedWhenAsked) {
   auto o = numeric({"a"});
-  const std::string text = "\xEF\xBB\xBF" "a,b\n1,2\n";
+  const std::string text = "\xEF\xBB\xBF"
+                           "a,b\n1,2\n";
   // By default the mark is part of the first name, so `a` is missing (the project writes no mark).
   EXPECT_TRUE(fails_with(parse(text, o), 1, "a", "required column is missing from the header"));
   o.skip_byte_order_mark = true;

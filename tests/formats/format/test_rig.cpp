@@ -56,8 +56,8 @@ TEST(Rig, ShippedExampleIsValid) {
 
 TEST(Rig, UnknownFieldIsNamedWithSuggestion) {
   EXPECT_TRUE(fails_with(parse(replace(kRig, "name: t\n", "name: t\nnmae: x\n")), 3, "nmae", "did you mean 'name'"));
-  EXPECT_TRUE(fails_with(parse(replace(kRig, "friction_coefficient", "friction_coeficient")), 0,
-                         "model.contact.friction_coeficient", "unknown field"));
+  EXPECT_TRUE(fails_with(parse(replace(kRig, "friction_coefficient", "friction_coeficient")), 0, "model.contact.friction_coeficient",
+                         "unknown field"));
 }
 
 TEST(Rig, MissingFieldIsNamed) {
@@ -66,16 +66,16 @@ TEST(Rig, MissingFieldIsNamed) {
 }
 
 TEST(Rig, DegeneratePolyhedra) {
-  EXPECT_TRUE(fails_with(parse(replace(kRig, "[[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]]", "[[0, 0, 0], [1, 0, 0], [0, 1, 0]]")),
-                         13, "objects[0].features[0].polyhedra[0].vertices_m", "at least 4 non-coplanar"));
+  EXPECT_TRUE(fails_with(parse(replace(kRig, "[[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]]", "[[0, 0, 0], [1, 0, 0], [0, 1, 0]]")), 13,
+                         "objects[0].features[0].polyhedra[0].vertices_m", "at least 4 non-coplanar"));
   EXPECT_TRUE(fails_with(parse(replace(kRig, "[[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]]",
                                        "[[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0], [0.5, 0.5, 0]]")),
                          13, "", "coplanar"));
 }
 
 TEST(Rig, BadValues) {
-  EXPECT_TRUE(fails_with(parse(replace(kRig, "stiffness_n_per_m: 1.0e5", "stiffness_n_per_m: -5")), 0,
-                         "model.contact.stiffness_n_per_m", "K must be > 0"));
+  EXPECT_TRUE(fails_with(parse(replace(kRig, "stiffness_n_per_m: 1.0e5", "stiffness_n_per_m: -5")), 0, "model.contact.stiffness_n_per_m",
+                         "K must be > 0"));
   EXPECT_TRUE(fails_with(parse(replace(kRig, "friction_coefficient: 0.3", "friction_coefficient: -0.1")), 0, "", ">= 0"));
   EXPECT_TRUE(fails_with(parse(replace(kRig, "[0, 0, 0.1]", "[0, zero, 0.1]")), 4, "", "expected a number, found 'zero'"));
   EXPECT_TRUE(fails_with(parse(replace(kRig, "[0, 0, 0.1]", "[0, .nan, 0.1]")), 4, "", "finite"));

@@ -24,8 +24,9 @@ TEST(Run, InfoFields) {
   EXPECT_EQ(info.sources.at(0).kind, "can");
   EXPECT_TRUE(fails_with([] { hil::format::parse_run_info(kInfo + "sources:\n  - {name: fp, kind: usb}\n", "run.yaml"); }, 6,
                          "sources[0].kind", "expected can, modbus"));
-  EXPECT_TRUE(fails_with([] { hil::format::parse_run_info("format_version: 1\nrig: x\nstart_time: yesterday\noutput_rate_hz: 50\n", "run.yaml"); },
-                         3, "start_time", "ISO 8601"));
+  EXPECT_TRUE(
+      fails_with([] { hil::format::parse_run_info("format_version: 1\nrig: x\nstart_time: yesterday\noutput_rate_hz: 50\n", "run.yaml"); },
+                 3, "start_time", "ISO 8601"));
   EXPECT_TRUE(fails_with([] { hil::format::parse_run_info("format_version: 1\nrig: x\nstart_time: 2026-11-21T09:00:00Z\n", "run.yaml"); },
                          0, "output_rate_hz", "required field is missing"));
   EXPECT_TRUE(fails_with([] { hil::format::parse_run_info(kInfo + "output_rate: 5\n", "run.yaml"); }, 5, "output_rate",
@@ -74,8 +75,8 @@ TEST(Run, DeviceIdentityMustBeAMapOfValues) {
   const std::string src = kInfo + "sources:\n  - name: fp\n    kind: can\n    identity:\n";
   const auto ok = hil::format::parse_run_info(src + "      serial: FT-1\n      counts_per_force: 1000000\n", "run.yaml");
   EXPECT_EQ(ok.sources.at(0).identity.at(1).second, "1000000");
-  EXPECT_TRUE(fails_with([&] { hil::format::parse_run_info(src + "      serial: [1, 2]\n", "run.yaml"); }, 9,
-                         "sources[0].identity.serial", "expected a single value"));
+  EXPECT_TRUE(fails_with([&] { hil::format::parse_run_info(src + "      serial: [1, 2]\n", "run.yaml"); }, 9, "sources[0].identity.serial",
+                         "expected a single value"));
   EXPECT_TRUE(fails_with([&] { hil::format::parse_run_info(src + "      bad key: x\n", "run.yaml"); }, 0, "sources[0].identity",
                          "identity keys are names"));
   EXPECT_TRUE(fails_with([&] { hil::format::parse_run_info(kInfo + "sources:\n  - {name: fp, kind: can, identity: FT-1}\n", "run.yaml"); },

@@ -75,9 +75,7 @@ TEST(Samples, TruncatedLastLine) {
   EXPECT_TRUE(fails_with(parse(kHeader + "\n" + row(0.0) + "\n" + cut), 3, "", "truncated last line"));
 }
 
-TEST(Samples, RaggedRow) {
-  EXPECT_TRUE(fails_with(parse(kHeader + "\n" + row(0.0) + ",7\n"), 2, "", "row has 21 cells, header has 20"));
-}
+TEST(Samples, RaggedRow) { EXPECT_TRUE(fails_with(parse(kHeader + "\n" + row(0.0) + ",7\n"), 2, "", "row has 21 cells, header has 20")); }
 
 TEST(Samples, EmptyFile) {
   EXPECT_TRUE(fails_with(parse(""), 0, "", "empty file"));

@@ -109,8 +109,7 @@ TEST(ImportConfig, ReadsEveryField) {
 }
 
 TEST(ImportConfig, ExpandsXyzColumns) {
-  EXPECT_EQ(expand_columns({"time", "m1_xyz", "xyz", "F_x"}),
-            (std::vector<std::string>{"time", "m1_x", "m1_y", "m1_z", "xyz", "F_x"}));
+  EXPECT_EQ(expand_columns({"time", "m1_xyz", "xyz", "F_x"}), (std::vector<std::string>{"time", "m1_x", "m1_y", "m1_z", "xyz", "F_x"}));
 }
 
 TEST(ImportConfig, UnknownKeyNamesLineFieldAndSuggestion) {
@@ -162,8 +161,7 @@ TEST(ImportConfig, BadValuesAreRefused) {
 
 TEST(ImportConfig, MissingRequiredFields) {
   EXPECT_EQ(error_of(replace(kGood, "ee: tool\n", "")).where().field, "ee");
-  EXPECT_EQ(error_of(replace(kGood, "  columns: [t, a_xyz, b_xyz, c_xyz, d_xyz, F_xyz, M_xyz, cop]\n", "")).where().field,
-            "csv.columns");
+  EXPECT_EQ(error_of(replace(kGood, "  columns: [t, a_xyz, b_xyz, c_xyz, d_xyz, F_xyz, M_xyz, cop]\n", "")).where().field, "csv.columns");
   EXPECT_EQ(error_of("format_version: 1\n").where().field, "time");
   EXPECT_EQ(error_of("").message(), "empty import config");
   EXPECT_GT(error_of("a: [1, 2\n").where().line, 0u);  // YAML syntax error
@@ -207,8 +205,8 @@ TEST(TimeText, BadTextSaysWhatWasExpectedWhere) {
   EXPECT_NE(why.find("end of the time text"), std::string::npos) << why;
   EXPECT_FALSE(parse_datetime_us("2023-09-20_16:40:52.", p, &why));
   EXPECT_FALSE(parse_iso8601_utc_us("2026-11-21T10:00:00"));
-  EXPECT_THAT([] { check_datetime_pattern("%Y-%m-%d %H:%M:%S %q"); },
-              ::testing::ThrowsMessage<std::invalid_argument>(::testing::HasSubstr("unknown directive %q (known: %Y %m %d %H %M %S %f %%)")));
+  EXPECT_THAT([] { check_datetime_pattern("%Y-%m-%d %H:%M:%S %q"); }, ::testing::ThrowsMessage<std::invalid_argument>(::testing::HasSubstr(
+                                                                          "unknown directive %q (known: %Y %m %d %H %M %S %f %%)")));
   EXPECT_THAT([] { check_datetime_pattern("%Y-%m-%d %H:%M:%S %Y"); },
               ::testing::ThrowsMessage<std::invalid_argument>(::testing::HasSubstr("%Y appears twice")));
 }

@@ -23,9 +23,7 @@ Eigen::Matrix3Xd markers_body() {
   return b;
 }
 
-Eigen::Matrix3Xd to_world(const Eigen::Matrix3d& R, const Eigen::Vector3d& p, const Eigen::Matrix3Xd& b) {
-  return (R * b).colwise() + p;
-}
+Eigen::Matrix3Xd to_world(const Eigen::Matrix3d& R, const Eigen::Vector3d& p, const Eigen::Matrix3Xd& b) { return (R * b).colwise() + p; }
 
 TEST(RigidFit, ExactOnRotatedTranslatedMarkers) {
   std::mt19937 rng(1);

@@ -176,8 +176,7 @@ TEST(Import, MissingExtraCellIsWrittenAsNan) {
 TEST(Import, ReferenceFromFirstRowsAtTheMarkerCentroid) {
   Synthetic s = make_rows();
   std::string cfg = kConfig;
-  cfg.replace(cfg.find("reference_m"), cfg.find('\n', cfg.find("reference_m")) - cfg.find("reference_m"),
-              "reference_rows: 1");
+  cfg.replace(cfg.find("reference_m"), cfg.find('\n', cfg.find("reference_m")) - cfg.find("reference_m"), "reference_rows: 1");
   const auto run = import_text(s.text(), cfg);
   // The body frame is the world-aligned frame at the markers' centroid in the first row.
   const Eigen::Vector3d c0 = ((R_at(0) * reference()).colwise() + p_at(0)).rowwise().mean();
@@ -279,8 +278,7 @@ bodies: [{name: base, markers: [a, b, c], reference_rows: 2}]
 ee: base
 wrench: {force: [F_x, F_y, F_z], moment: [M_x, M_y, M_z]}
 )";
-  const std::string rows[] = {"20/09/2023 16:40:59.995", "20/09/2023 16:41:00.005", "20/09/2023 16:41:00.032",
-                              "20/09/2023 16:41:00.042"};
+  const std::string rows[] = {"20/09/2023 16:40:59.995", "20/09/2023 16:41:00.005", "20/09/2023 16:41:00.032", "20/09/2023 16:41:00.042"};
   std::string data;
   for (const auto& r : rows) data += r + ";1;0;0;0;1;0;0;0;1;0;0;-700;0;0;0\n";
   const auto run = import_text(data, cfg);

@@ -261,7 +261,8 @@ const std::string kRig = std::string(HIL_SOURCE_DIR) + "/examples/rigs/press_ben
 TEST(Recording, SchemasAreRos2BagStyleWithTheHilMsgsPackageTexts) {
   const auto ws = ros2msg_schema("geometry_msgs/msg/WrenchStamped");
   EXPECT_EQ(ws.rfind("std_msgs/Header header\nWrench wrench\n"), ws.find("std_msgs/Header header"));
-  for (const auto* dep : {"MSG: std_msgs/Header\n", "MSG: builtin_interfaces/Time\n", "MSG: geometry_msgs/Wrench\n", "MSG: geometry_msgs/Vector3\n"}) {
+  for (const auto* dep :
+       {"MSG: std_msgs/Header\n", "MSG: builtin_interfaces/Time\n", "MSG: geometry_msgs/Wrench\n", "MSG: geometry_msgs/Vector3\n"}) {
     const auto p = ws.find(dep);
     ASSERT_NE(p, std::string::npos) << dep;
     EXPECT_EQ(ws.substr(p - 82, 82), "\n" + std::string(80, '=') + "\n");
@@ -307,7 +308,8 @@ TEST_P(ExportPressSlide, ChannelsCountsAndValues) {
     EXPECT_EQ(ch.message_encoding, "cdr") << ch.topic;
     // The ros2 profile requires the QoS; /tf_static is latched (durability 1: transient_local).
     EXPECT_NE(ch.metadata.at("offered_qos_profiles").find(ch.topic == topic::kTfStatic ? "durability: 1\n" : "durability: 2\n"),
-              std::string::npos) << ch.topic;
+              std::string::npos)
+        << ch.topic;
     EXPECT_EQ(f.schema(ch.schema_id)->encoding, "ros2msg") << ch.topic;
   }
   EXPECT_EQ(f.schema(f.channel(topic::kWrench)->schema_id)->name, "geometry_msgs/msg/WrenchStamped");
@@ -372,7 +374,8 @@ TEST(Recording, WithoutARigNoTfStaticAndJointsNamedJ1ToJn) {
     for (int i = 0; i < 4; ++i) {
       s.t_s = 0.01 * i;
       s.f_fp_n.z() = -i;
-      w.write_sample(s, static_cast<std::uint64_t>(i), q, {.wrench_seq = 9, .pose_seq = 8, .wrench_age_s = 0.001, .pose_age_s = 0.002, .quality = 32});
+      w.write_sample(s, static_cast<std::uint64_t>(i), q,
+                     {.wrench_seq = 9, .pose_seq = 8, .wrench_age_s = 0.001, .pose_age_s = 0.002, .quality = 32});
     }
     hil_msgs::msg::DeviceStatus st;
     st.stamp(to_ros_time(1'000'000'000'050));
@@ -421,8 +424,8 @@ TEST(Recording, ReadPoseWrenchRefusesAFileWithoutTheChannel) {
 
 TEST(Recording, CorruptPayloadIsNamed) {
   hil_msgs::msg::PoseWrenchSample m;
-  EXPECT_TRUE(hil::test::fails_with([&] { from_cdr(std::string("\x00\x01\x00\x00\x01", 5), m, "x.mcap: /hil/pose_wrench message 3"); },
-                                    0, "", "x.mcap: /hil/pose_wrench message 3: CDR payload of 5 bytes does not decode"));
+  EXPECT_TRUE(hil::test::fails_with([&] { from_cdr(std::string("\x00\x01\x00\x00\x01", 5), m, "x.mcap: /hil/pose_wrench message 3"); }, 0,
+                                    "", "x.mcap: /hil/pose_wrench message 3: CDR payload of 5 bytes does not decode"));
   EXPECT_TRUE(hil::test::fails_with([] { tf_message_from_cdr(std::string("\x00\x01\x00\x00\xff\xff\x00\x00", 8), "x"); }, 0, "",
                                     "x: CDR payload of 8 bytes does not decode"));
 }

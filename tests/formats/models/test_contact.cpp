@@ -16,9 +16,11 @@ TEST(RigContact, BadTruthAndTrajectoryFilesAreRefusedWithWhereAndWhat) {
   const auto rig = format::load_rig(std::string(HIL_SOURCE_DIR) + "/examples/acu/acu.yaml");
   // Unknown key and unknown uncertainty in a truth file: file, line and field named.
   const auto bad = dir.file("truth.yaml", "stiffness_n_per_m: 1.8e5\nfriction: 0.2\n");
-  EXPECT_TRUE(hil::test::fails_with([&] { hil::models::read_truth(bad, rig); }, 2, "friction", "unknown field; known here: stiffness_n_per_m, friction_coefficient"));
+  EXPECT_TRUE(hil::test::fails_with([&] { hil::models::read_truth(bad, rig); }, 2, "friction",
+                                    "unknown field; known here: stiffness_n_per_m, friction_coefficient"));
   const auto neg = dir.file("neg.yaml", "stiffness_n_per_m: -1\n");
-  EXPECT_TRUE(hil::test::fails_with([&] { hil::models::read_truth(neg, rig); }, 1, "stiffness_n_per_m", "expected a positive number, found -1"));
+  EXPECT_TRUE(hil::test::fails_with([&] { hil::models::read_truth(neg, rig); }, 1, "stiffness_n_per_m",
+                                    "expected a positive number, found -1"));
   // The sensor's seed and resolutions are checked too, with their line.
   const auto seed = dir.file("seed.yaml", "stiffness_n_per_m: 1.8e5\nsensor:\n  force_noise_n: 0.1\n  seed: -3\n");
   EXPECT_TRUE(hil::test::fails_with([&] { hil::models::read_truth(seed, rig); }, 4, "sensor.seed", "expected a seed from 0 to"));

@@ -59,16 +59,21 @@ TEST(StiffnessIo, TableKindsAndRoundTrip) {
 
 TEST(StiffnessIo, BadTablesNameLineAndColumn) {
   const std::string h = kHeader;
-  EXPECT_TRUE(fails_with([&] { io::parse_stiffness_table("config,j1,j2,j3,j4,j5,fx,fy,fz,mx,my,mz,dx,dy,dz\n1,0,0,0,0,0,0,0,0,0,0,0,0,0,0\n", "t.csv", 6, true); },
-                         1, "j6", "missing joint column"));
-  EXPECT_TRUE(fails_with([&] { io::parse_stiffness_table(h + ",dx,dy,dz\n1.5,0,0,0,0,0,0,1,2,3,0,0,0,0,0,0\n", "t.csv", 6, true); }, 2, "config",
-                         "integer"));
-  EXPECT_TRUE(fails_with([&] { io::parse_stiffness_table(h + ",dx,dy,dz,rx\n1,0,0,0,0,0,0,1,2,3,0,0,0,0,0,0,0\n", "t.csv", 6, true); }, 1, "ry",
-                         "together"));
-  EXPECT_TRUE(fails_with([&] { io::parse_stiffness_table(h + "\n1,0,0,0,0,0,0,1,2,3,0,0,0\n", "t.csv", 6, true); }, 1, "dx", "no measured"));
-  EXPECT_TRUE(fails_with([&] { io::parse_stiffness_table(h + ",m1_dx,m1_dy,m1_dz\n1,0,0,0,0,0,0,1,2,3,0,0,0,0,0,0\n", "t.csv", 6, true); }, 1,
-                         "m1_px", "position columns"));
-  EXPECT_TRUE(fails_with([&] { io::parse_stiffness_table(h + ",dx,dy,dz\n1,0,0,0,0,0,0,1,2,nan,0,0,0,0,0,0\n", "t.csv", 6, true); }, 2, "", ""));
+  EXPECT_TRUE(fails_with(
+      [&] {
+        io::parse_stiffness_table("config,j1,j2,j3,j4,j5,fx,fy,fz,mx,my,mz,dx,dy,dz\n1,0,0,0,0,0,0,0,0,0,0,0,0,0,0\n", "t.csv", 6, true);
+      },
+      1, "j6", "missing joint column"));
+  EXPECT_TRUE(fails_with([&] { io::parse_stiffness_table(h + ",dx,dy,dz\n1.5,0,0,0,0,0,0,1,2,3,0,0,0,0,0,0\n", "t.csv", 6, true); }, 2,
+                         "config", "integer"));
+  EXPECT_TRUE(fails_with([&] { io::parse_stiffness_table(h + ",dx,dy,dz,rx\n1,0,0,0,0,0,0,1,2,3,0,0,0,0,0,0,0\n", "t.csv", 6, true); }, 1,
+                         "ry", "together"));
+  EXPECT_TRUE(fails_with([&] { io::parse_stiffness_table(h + "\n1,0,0,0,0,0,0,1,2,3,0,0,0\n", "t.csv", 6, true); }, 1, "dx",
+                         "no measured"));
+  EXPECT_TRUE(fails_with([&] { io::parse_stiffness_table(h + ",m1_dx,m1_dy,m1_dz\n1,0,0,0,0,0,0,1,2,3,0,0,0,0,0,0\n", "t.csv", 6, true); },
+                         1, "m1_px", "position columns"));
+  EXPECT_TRUE(fails_with([&] { io::parse_stiffness_table(h + ",dx,dy,dz\n1,0,0,0,0,0,0,1,2,nan,0,0,0,0,0,0\n", "t.csv", 6, true); }, 2, "",
+                         ""));
   // Predict reads the same table without the measured columns.
   EXPECT_EQ(io::parse_stiffness_table(h + "\n1,0,0,0,0,0,0,1,2,3,0,0,0\n", "t.csv", 6, false).rows.size(), 1u);
 }
@@ -87,7 +92,8 @@ TEST(StiffnessIo, SpringsInEveryFormAndTheirErrors) {
   const auto back = io::read_springs(io::springs_to_json(m, k), m, "model.json");
   for (std::size_t s = 0; s < k.size(); ++s) EXPECT_TRUE(hil::test::near(back[s], k[s], 0.0));
   EXPECT_TRUE(fails_with([&] { io::read_springs(nlohmann::json::parse(R"({"L9": 1})"), m, "t.json"); }, 0, "springs.L9", "unknown spring"));
-  EXPECT_TRUE(fails_with([&] { io::read_springs(nlohmann::json::parse(R"({"L1": {"k77": 1}})"), m, "t.json"); }, 0, "springs.L1.k77", "unknown key"));
+  EXPECT_TRUE(fails_with([&] { io::read_springs(nlohmann::json::parse(R"({"L1": {"k77": 1}})"), m, "t.json"); }, 0, "springs.L1.k77",
+                         "unknown key"));
   EXPECT_TRUE(fails_with([&] { io::read_springs(nlohmann::json::parse(R"({"L1": {"beam": {"length_m": 1}}})"), m, "t.json"); }, 0,
                          "springs.L1.beam.EA_n", "missing"));
 }

@@ -23,8 +23,7 @@ std::vector<std::pair<double, double>> path_points(const std::string& svg) {
   const std::string d = svg.substr(b + 9, e - b - 9);
   std::vector<std::pair<double, double>> pts;
   static const std::regex re("[ML]([-0-9.]+),([-0-9.]+)");
-  for (std::sregex_iterator it(d.begin(), d.end(), re), end; it != end; ++it)
-    pts.emplace_back(std::stod((*it)[1]), std::stod((*it)[2]));
+  for (std::sregex_iterator it(d.begin(), d.end(), re), end; it != end; ++it) pts.emplace_back(std::stod((*it)[1]), std::stod((*it)[2]));
   return pts;
 }
 

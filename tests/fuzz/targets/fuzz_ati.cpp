@@ -21,10 +21,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       std::int32_t cpf = 0, cpt = 0;
       std::uint8_t fu = 0, tu = 0;
       ati::Firmware fw;
-      if (ati::decode_gauges_first(f, status, g) != (f.len == 8))
-        hil::fuzz::violated("fuzz_ati", "gauges (first) accepted iff 8 bytes");
-      if (ati::decode_gauges_second(f, g) != (f.len == 6))
-        hil::fuzz::violated("fuzz_ati", "gauges (second) accepted iff 6 bytes");
+      if (ati::decode_gauges_first(f, status, g) != (f.len == 8)) hil::fuzz::violated("fuzz_ati", "gauges (first) accepted iff 8 bytes");
+      if (ati::decode_gauges_second(f, g) != (f.len == 6)) hil::fuzz::violated("fuzz_ati", "gauges (second) accepted iff 6 bytes");
       for (unsigned part = 0; part < 4; ++part) (void)ati::decode_matrix_part(f, part, row);
       const std::string serial = ati::decode_serial(f);
       if (serial.size() > 8) hil::fuzz::violated("fuzz_ati", "serial longer than 8 characters");

@@ -13,8 +13,7 @@
 namespace hil::fuzz {
 
 [[noreturn]] inline void unexpected(const char* target, const std::exception* e) {
-  std::fprintf(stderr, "%s: unexpected exception %s: %s\n", target, e ? typeid(*e).name() : "(not std::exception)",
-               e ? e->what() : "");
+  std::fprintf(stderr, "%s: unexpected exception %s: %s\n", target, e ? typeid(*e).name() : "(not std::exception)", e ? e->what() : "");
   std::abort();
 }
 

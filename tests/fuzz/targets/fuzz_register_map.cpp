@@ -13,7 +13,7 @@ using namespace hil::drivers;
 
 namespace {
 const char* const kQuantities[] = {"j1", "j2", "j3", "j4", "j5", "j6", "j7", "j16", "j17", "px",
-                                   "py", "pz",  "rx", "ry", "rz", "x",  "",   "j0",  "J1"};
+                                   "py", "pz", "rx", "ry", "rz", "x",  "",   "j0",  "J1"};
 
 bool covered(const std::vector<ReadBlock>& blocks, RegisterTable t, unsigned addr, const ReadBlock** hit) {
   for (const auto& b : blocks)
@@ -67,8 +67,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     for (const auto& e : map.entries) {
       const ReadBlock* b = nullptr;
       const ReadBlock* b2 = nullptr;
-      if (!covered(blocks, e.table, e.address, &b) ||
-          !covered(blocks, e.table, e.address + register_count(e.type) - 1, &b2) || b != b2)
+      if (!covered(blocks, e.table, e.address, &b) || !covered(blocks, e.table, e.address + register_count(e.type) - 1, &b2) || b != b2)
         hil::fuzz::violated("fuzz_register_map", "an entry's registers are not read in one block");
       std::int16_t turns = 0;
       if (e.turns_address >= 0) {

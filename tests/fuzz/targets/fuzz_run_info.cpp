@@ -5,8 +5,6 @@
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const std::string text(reinterpret_cast<const char*>(data), size);
-  hil::fuzz::answers_or<hil::error::FormatError>("fuzz_run_info", [&] {
-    (void)hil::format::parse_run_info(text, "fuzz.run.yaml");
-  });
+  hil::fuzz::answers_or<hil::error::FormatError>("fuzz_run_info", [&] { (void)hil::format::parse_run_info(text, "fuzz.run.yaml"); });
   return 0;
 }

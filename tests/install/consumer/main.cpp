@@ -39,8 +39,8 @@ ci::Body body_of(const hil::format::RigSpec& rig, const std::string& name, bool 
 int main(int argc, char** argv) try {
   if (argc != 2) throw std::runtime_error("usage: consumer OUT_DIR");
   const auto rig = hil::format::load_rig(HIL_DATA_DIR "/examples/acu/acu.yaml");
-  std::printf("rig %s objects %zu features %zu polyhedra %zu\n", rig.name.c_str(), rig.objects.size(),
-              hil::format::total_features(rig), hil::format::total_polyhedra(rig));
+  std::printf("rig %s objects %zu features %zu polyhedra %zu\n", rig.name.c_str(), rig.objects.size(), hil::format::total_features(rig),
+              hil::format::total_polyhedra(rig));
 
   ci::Scene scene;
   scene.bodies = {body_of(rig, "acu", true), body_of(rig, "receptacle", false)};
@@ -54,8 +54,8 @@ int main(int argc, char** argv) try {
   const ci::Vector6d w = ci::plate_wrench(scene, model, scene.design(), k, ws, contacts);
   std::printf("contacts %zu\n", contacts.size());
   for (const auto& p : contacts)
-    std::printf("contact delta %.6g point %.6g %.6g %.6g normal %.6g %.6g %.6g\n", p.delta, p.point.x(), p.point.y(),
-                p.point.z(), p.normal.x(), p.normal.y(), p.normal.z());
+    std::printf("contact delta %.6g point %.6g %.6g %.6g normal %.6g %.6g %.6g\n", p.delta, p.point.x(), p.point.y(), p.point.z(),
+                p.normal.x(), p.normal.y(), p.normal.z());
   std::printf("plate wrench %.6g %.6g %.6g %.6g %.6g %.6g\n", w(0), w(1), w(2), w(3), w(4), w(5));
 
   hil::format::Sample s;
@@ -74,9 +74,9 @@ int main(int argc, char** argv) try {
   Eigen::VectorXd joints_back;
   const auto s2 = hil::messages::from_message(back, &joints_back);
   if (joints_back.size() != 2) throw std::runtime_error("joints lost in the round trip");
-  std::printf("cdr type %s bytes %u index %llu t %.6g z %.6g fz %.6g my %.6g joints %.6g %.6g\n", type.getName(),
-              payload.length, static_cast<unsigned long long>(back.sample_index()), s2.t_s, s2.p_world_ee_m.z(),
-              s2.f_fp_n.z(), s2.m_fp_nm.y(), joints_back(0), joints_back(1));
+  std::printf("cdr type %s bytes %u index %llu t %.6g z %.6g fz %.6g my %.6g joints %.6g %.6g\n", type.getName(), payload.length,
+              static_cast<unsigned long long>(back.sample_index()), s2.t_s, s2.p_world_ee_m.z(), s2.f_fp_n.z(), s2.m_fp_nm.y(),
+              joints_back(0), joints_back(1));
 
   const auto run = hil::format::load_run(HIL_DATA_DIR "/examples/runs/press_slide");
   for (const auto compression : {hil::mcap::Compression::zstd, hil::mcap::Compression::lz4}) {

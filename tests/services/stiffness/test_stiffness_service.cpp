@@ -102,6 +102,9 @@ TEST(StiffnessService, AModelFileOfAnotherKindIsRefusedNamingIt) {
   const hc::VjmModel model(hc::kr270_like());
   hil::test::TempDir dir;
   const auto path = dir.file("diag.json", R"({"format": "hil.diagnosis", "format_version": 1})");
-  EXPECT_TRUE(hil::test::fails_with([&] { st::make_online_identifier(model, path, {1e-5, 1e-5}, {}); }, 0, "format",
-                                    "this is a 'hil.diagnosis' file, not a stiffness model"));
+  EXPECT_TRUE(hil::test::fails_with(
+      [&] {
+        st::make_online_identifier(model, path, {1e-5, 1e-5}, {});
+      },
+      0, "format", "this is a 'hil.diagnosis' file, not a stiffness model"));
 }

@@ -32,8 +32,8 @@ TEST(StiffnessMessages, RoundTripAndRefusals) {
   m.displacement.conservativeResize(3);
   EXPECT_EQ(st::from_message(st::to_message(m), 6).kind, hc::MeasurementKind::point3);
   m.kind = hc::MeasurementKind::markers;
-  EXPECT_THAT([&] { st::to_message(m); },
-              ::testing::ThrowsMessage<std::invalid_argument>(::testing::HasSubstr("marker measurements have no StiffnessMeasurement form")));
+  EXPECT_THAT([&] { st::to_message(m); }, ::testing::ThrowsMessage<std::invalid_argument>(
+                                              ::testing::HasSubstr("marker measurements have no StiffnessMeasurement form")));
 }
 
 TEST(StiffnessWorker, PublishesAnEstimateAfterEachMeasurement) {

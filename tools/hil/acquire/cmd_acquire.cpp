@@ -38,7 +38,8 @@ void add_acquire(CLI::App& app) {
                   "run the device threads at this SCHED_FIFO priority (1-99) where permitted; 0: normal scheduling")
       ->check(CLI::Range(0, 99))
       ->capture_default_str();
-  cmd->add_flag("!--no-ros-topics", o.ros_topics, "do not publish rt/hil/wrench, rt/hil/pose, rt/hil/joint_states, rt/tf_static, rt/diagnostics");
+  cmd->add_flag("!--no-ros-topics", o.ros_topics,
+                "do not publish rt/hil/wrench, rt/hil/pose, rt/hil/joint_states, rt/tf_static, rt/diagnostics");
   cmd->add_option("--play", o.play, "start the fake rig in-process playing this run (no hardware, no SocketCAN)")
       ->check(CLI::ExistingDirectory);
   cmd->add_flag("--mcap", o.mcap, "also record run.mcap in the run folder (ROS 2 channels, docs/mcap.md)");

@@ -33,21 +33,21 @@ std::string fmt_pws(const hil_msgs::msg::PoseWrenchSample& m) {
   const auto& f = m.wrench_fp().force();
   const auto& t = m.wrench_fp().torque();
   return fmt::format("#{} t={:.4f} p=[{:.6f} {:.6f} {:.6f}] f=[{:.3f} {:.3f} {:.3f}] m=[{:.4f} {:.4f} {:.4f}] q={} ages={:.1f}/{:.1f} ms",
-                     m.sample_index(), m.t_s(), p.x(), p.y(), p.z(), f.x(), f.y(), f.z(), t.x(), t.y(), t.z(),
-                     m.quality_flags(), m.wrench_age_s() * 1e3, m.pose_age_s() * 1e3);
+                     m.sample_index(), m.t_s(), p.x(), p.y(), p.z(), f.x(), f.y(), f.z(), t.x(), t.y(), t.z(), m.quality_flags(),
+                     m.wrench_age_s() * 1e3, m.pose_age_s() * 1e3);
 }
 
 std::string fmt_status(const hil_msgs::msg::DeviceStatus& m) {
   static const char* states[] = {"ok", "degraded", "fault", "disconnected"};
   return fmt::format("{} {} connected={} rate={:.1f} Hz age={:.1f} ms samples={} dropped={} errors={}{}", m.device(),
-                     m.state() < 4 ? states[m.state()] : "?", m.connected(), m.rate_hz(), m.last_sample_age_s() * 1e3,
-                     m.samples(), m.frames_dropped(), m.errors(), m.last_error().empty() ? "" : " last: " + m.last_error());
+                     m.state() < 4 ? states[m.state()] : "?", m.connected(), m.rate_hz(), m.last_sample_age_s() * 1e3, m.samples(),
+                     m.frames_dropped(), m.errors(), m.last_error().empty() ? "" : " last: " + m.last_error());
 }
 
 std::string fmt_contact(const hil_msgs::msg::ContactEstimate& m) {
   return fmt::format("t={:.3f} points={} K_inst={:.4g} mu_inst={:.3f} K={:.4g}+-{:.2g} mu={:.3f}+-{:.2g} n={} err={:.3f}", m.t_s(),
-                     m.contact_points(), m.k_instant_n_per_m(), m.mu_instant(), m.k_global_n_per_m(), m.k_global_std(),
-                     m.mu_global(), m.mu_global_std(), m.samples_used(), m.relative_force_error());
+                     m.contact_points(), m.k_instant_n_per_m(), m.mu_instant(), m.k_global_n_per_m(), m.k_global_std(), m.mu_global(),
+                     m.mu_global_std(), m.samples_used(), m.relative_force_error());
 }
 
 std::string fmt_stiffness(const hil_msgs::msg::StiffnessEstimate& m) {
@@ -142,9 +142,10 @@ void add_echo(CLI::App& app) {
       // /tf_static is latched (transient local): a late echo still gets the tree.
       if (topic == dds::topics::kTfStatic) return echo<tf2_msgs::msg::TFMessage>(p, topic, fmt_tf, o, dds::StreamQos{true, 1, 1});
       if (topic == dds::topics::kDiagnostics) return echo<diagnostic_msgs::msg::DiagnosticArray>(p, topic, fmt_diagnostics, o);
-      throw error::FormatError({"command line", 0, 0, "TOPIC"}, "unknown topic '" + o.topic +
-                                    "' (known: pose_wrench, device_status, contact_estimate, stiffness_estimate, "
-                                    "stiffness_measurement, tf_static, diagnostics)");
+      throw error::FormatError({"command line", 0, 0, "TOPIC"},
+                               "unknown topic '" + o.topic +
+                                   "' (known: pose_wrench, device_status, contact_estimate, stiffness_estimate, "
+                                   "stiffness_measurement, tf_static, diagnostics)");
     });
   });
 }

@@ -60,8 +60,7 @@ int replay(const ReplayOptions& o) {
     if (o.speed > 0)
       std::this_thread::sleep_until(start + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
                                                 std::chrono::duration<double>((samples[i].t_s() - t0) / o.speed)));
-    if (!w.write(samples[i]))
-      throw std::runtime_error(fmt::format("replay: DDS refused sample {}", i));
+    if (!w.write(samples[i])) throw std::runtime_error(fmt::format("replay: DDS refused sample {}", i));
     ++sent;
   }
   if (o.wait_readers > 0) w.wait_for_acknowledgments(std::chrono::seconds(10));
@@ -74,7 +73,8 @@ void add_replay(CLI::App& app) {
   static ReplayOptions o;
   cmd->add_option("RUN", o.run, "run folder, or an MCAP recording (.mcap)")->required()->check(CLI::ExistingPath);
   cmd->add_option("--speed", o.speed, "1 = real time, 10 = ten times faster, 0 = as fast as possible")->capture_default_str();
-  cmd->add_option("--wait-subscribers", o.wait_readers, "wait for this many subscribers before starting, and for their acknowledgments at the end");
+  cmd->add_option("--wait-subscribers", o.wait_readers,
+                  "wait for this many subscribers before starting, and for their acknowledgments at the end");
   cmd->add_option("--wait-timeout", o.wait_s, "seconds to wait for subscribers")->capture_default_str();
   cmd->callback([] { set_action([] { return replay(o); }); });
 }

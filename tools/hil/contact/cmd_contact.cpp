@@ -82,7 +82,9 @@ void add_contact(CLI::App& app) {
   sim->add_option("--trajectory", sa.trajectory, "CSV: t,px,py,pz,qw,qx,qy,qz[,vx,vy,vz,wx,wy,wz] (ee in world)")->required();
   sim->add_option("--out", sa.out, "run folder to write")->required();
   sim->add_option("--truth", sa.truth, "YAML with the true K, mu, sensor model and geometric uncertainties");
-  sim->add_option("--decimate", sa.decimate, "keep every Nth sample (e.g. 20: 1 kHz -> 50 Hz)")->capture_default_str()->check(CLI::Range(1, 1000000));
+  sim->add_option("--decimate", sa.decimate, "keep every Nth sample (e.g. 20: 1 kHz -> 50 Hz)")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 1000000));
   sim->add_option("--force-resolution", sa.force_resolution, "N");
   sim->add_option("--moment-resolution", sa.moment_resolution, "N m");
   sim->add_option("--position-resolution", sa.position_resolution, "m");
@@ -112,13 +114,22 @@ void add_contact(CLI::App& app) {
             if (v == "auto") return std::string();
             char* end = nullptr;
             const double x = std::strtod(v.c_str(), &end);
-            return end != v.c_str() && *end == '\0' && std::isfinite(x) && x >= 0 ? std::string() : "expected a number >= 0 or 'auto', found '" + v + "'";
+            return end != v.c_str() && *end == '\0' && std::isfinite(x) && x >= 0 ? std::string()
+                                                                                  : "expected a number >= 0 or 'auto', found '" + v + "'";
           },
           "NUMBER|auto"));
-  id->add_option("--solver", ia.solver, "lm (Levenberg-Marquardt) or nm (Nelder-Mead)")->capture_default_str()->check(CLI::IsMember({"lm", "nm"}));
-  id->add_option("--jacobian", ia.jacobian, "golub-pereyra or kaufman (lm only)")->capture_default_str()->check(CLI::IsMember({"golub-pereyra", "kaufman"}));
-  id->add_option("--window", ia.window, "sliding window (samples) of the instantaneous estimates")->capture_default_str()->check(CLI::Range(1, 1000000));
-  id->add_option("--lcurve-points", ia.lcurve_points, "values of lambda on the L-curve")->capture_default_str()->check(CLI::Range(3, 10000));
+  id->add_option("--solver", ia.solver, "lm (Levenberg-Marquardt) or nm (Nelder-Mead)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"lm", "nm"}));
+  id->add_option("--jacobian", ia.jacobian, "golub-pereyra or kaufman (lm only)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"golub-pereyra", "kaufman"}));
+  id->add_option("--window", ia.window, "sliding window (samples) of the instantaneous estimates")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 1000000));
+  id->add_option("--lcurve-points", ia.lcurve_points, "values of lambda on the L-curve")
+      ->capture_default_str()
+      ->check(CLI::Range(3, 10000));
   id->add_option("--json", ia.json, "write the results as JSON (hil.contact_identification; - for stdout, the text then goes to stderr)");
   id->add_option("--report", ia.report, "write an HTML report into this folder");
   id->callback([] { set_action([] { return identify(ia); }); });

@@ -24,8 +24,8 @@ void on_signal(int) { g_stop = true; }
 
 struct WorkerArgs {
   std::string rig;
-  long count = 0;        ///< stop after this many samples (0: run until interrupted)
-  double duration = 0;   ///< stop after this many seconds (0: no limit)
+  long count = 0;       ///< stop after this many samples (0: run until interrupted)
+  double duration = 0;  ///< stop after this many seconds (0: no limit)
 };
 
 int worker(const WorkerArgs& a) {
@@ -40,8 +40,8 @@ int worker(const WorkerArgs& a) {
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
   w.flush();
   const auto e = w.global();
-  std::cout << fmt::format("contact worker: {} samples, running global K = {:.5g} ± {:.3g} N/m, mu = {:.4g} ± {:.3g}\n",
-                           w.processed(), e.K, e.K_std, e.mu, e.mu_std);
+  std::cout << fmt::format("contact worker: {} samples, running global K = {:.5g} ± {:.3g} N/m, mu = {:.4g} ± {:.3g}\n", w.processed(), e.K,
+                           e.K_std, e.mu, e.mu_std);
   return 0;
 }
 }  // namespace

@@ -42,14 +42,12 @@ int diagnose_cmd(const DiagnoseArgs& a) {
   const bool tty = isatty(STDERR_FILENO) != 0;
   if (!a.quiet)
     o.progress = [tty](int step, int total, const std::string& what) {
-      if (tty)
-        std::cerr << fmt::format("\r[diagnose {}/{}] {:<60}", step, total, what) << std::flush;
-      else
-        std::cerr << fmt::format("[diagnose {}/{}] {}\n", step, total, what);
+      if (tty) std::cerr << fmt::format("\r[diagnose {}/{}] {:<60}", step, total, what) << std::flush;
+      else std::cerr << fmt::format("[diagnose {}/{}] {}\n", step, total, what);
     };
   // A file is a stiffness-experiment table; a folder a run.
   const auto r = std::filesystem::is_regular_file(a.run) ? diagnose::diagnose_table(a.run, a.rig, o)
-                                                          : diagnose::diagnose_run(format::load_run(a.run, a.rig), o);
+                                                         : diagnose::diagnose_run(format::load_run(a.run, a.rig), o);
   if (!a.quiet && tty) std::cerr << "\r" << std::string(80, ' ') << "\r";
   auto& text = human(is_stdout(a.json));
   diagnose::print_summary(text, r);
@@ -66,8 +64,8 @@ std::string candidates_help() {
   namespace dg = hil::diagnose;
   return fmt::format("only these candidate causes (default: all that apply). Contact runs: {}; deflection runs: {}; "
                      "stiffness tables: {}",
-                     fmt::join(dg::effect_names(dg::FamilyKind::contact), ", "), fmt::join(dg::effect_names(dg::FamilyKind::deflection), ", "),
-                     fmt::join(dg::stiffness_extensions(), ", "));
+                     fmt::join(dg::effect_names(dg::FamilyKind::contact), ", "),
+                     fmt::join(dg::effect_names(dg::FamilyKind::deflection), ", "), fmt::join(dg::stiffness_extensions(), ", "));
 }
 
 std::string cv_offsets_help() {
@@ -91,12 +89,10 @@ void add_diagnose(CLI::App& app) {
   d->add_option("--report", da.report, "write an HTML report into this folder");
   d->add_option("--candidates", da.candidates, candidates_help())->delimiter(',');
   d->add_option("--folds", da.folds, "blocks of the cross-validation over time")->capture_default_str()->check(CLI::Range(2, 1000));
-  d->add_option("--cv-offsets", da.cv_offsets, cv_offsets_help())
-      ->capture_default_str()
-      ->check(CLI::Range(0, 64));
+  d->add_option("--cv-offsets", da.cv_offsets, cv_offsets_help())->capture_default_str()->check(CLI::Range(0, 64));
   const std::map<std::string, hil::diagnose::RateSource> rates{{"auto", hil::diagnose::RateSource::automatic},
-                                                                {"twist", hil::diagnose::RateSource::twist},
-                                                                {"poses", hil::diagnose::RateSource::poses}};
+                                                               {"twist", hil::diagnose::RateSource::twist},
+                                                               {"poses", hil::diagnose::RateSource::poses}};
   d->add_option("--damping-rates", da.damping_rates,
                 "where contact_damping's penetration rates come from: auto (per axis, the pose slope where it beats the "
                 "reported twist), twist, poses")

@@ -147,8 +147,7 @@ int fake_rig(const FakeRigOptions& o) {
   const auto start = std::chrono::steady_clock::now();
   const double scenario_end = scenario->duration_s() / o.speed;
   bool told_end = false;
-  spdlog::info("fake-rig: playing {:.1f} s of scenario at {}x{}; Ctrl-C stops", scenario->duration_s(), o.speed,
-               o.loop ? ", looping" : "");
+  spdlog::info("fake-rig: playing {:.1f} s of scenario at {}x{}; Ctrl-C stops", scenario->duration_s(), o.speed, o.loop ? ", looping" : "");
   while (!g_stop) {
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
     const double t = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -163,8 +162,7 @@ int fake_rig(const FakeRigOptions& o) {
   if (plate) {
     const auto s = plate->stats();
     spdlog::info("fake-rig: plate requests {}, gauge answers {}, frames sent {}, dropped {}, corrupted {}, error frames {}, ignored {}",
-                 s.requests, s.gauge_answers, s.frames_sent, s.frames_dropped, s.answers_corrupted, s.error_frames_sent,
-                 s.ignored_silent);
+                 s.requests, s.gauge_answers, s.frames_sent, s.frames_dropped, s.answers_corrupted, s.error_frames_sent, s.ignored_silent);
   }
   if (robot) {
     const auto s = robot->stats();
@@ -178,9 +176,8 @@ int fake_rig(const FakeRigOptions& o) {
 
 void add_fake_rig(CLI::App& app) {
   static FakeRigOptions o;
-  auto* cmd = app.add_subcommand("fake-rig",
-                                 "Fake force plate (ATI F/T CAN on SocketCAN) and robot controller (Modbus TCP on "
-                                 "127.0.0.1) playing a recorded run, with fault injection");
+  auto* cmd = app.add_subcommand("fake-rig", "Fake force plate (ATI F/T CAN on SocketCAN) and robot controller (Modbus TCP on "
+                                             "127.0.0.1) playing a recorded run, with fault injection");
   cmd->add_option("--rig", o.rig, "rig file (default: the run's rig.yaml)");
   cmd->add_option("--run", o.run, "run folder to replay (default: a still rig)");
   cmd->add_option("--speed", o.speed, "playback speed factor")->check(CLI::PositiveNumber)->capture_default_str();
@@ -203,13 +200,14 @@ void add_fake_rig(CLI::App& app) {
   g_robot->add_flag("--no-robot", o.no_robot, "no fake robot controller");
   g_robot->add_option("--host", o.host, "listen address (127.0.0.0/8 only)")->capture_default_str();
   g_robot->add_option("--port", o.port, "TCP port (default: the rig's; 0: any free port)")->check(CLI::Range(0, 65535));
-  g_robot->add_option("--register-map", o.register_map, "ur or float32 (default: the rig's)")
-      ->check(CLI::IsMember({"ur", "float32"}));
+  g_robot->add_option("--register-map", o.register_map, "ur or float32 (default: the rig's)")->check(CLI::IsMember({"ur", "float32"}));
   g_robot->add_option("--modbus-exceptions", o.exceptions, "share of requests answered with exception 6 (busy)")
       ->check(CLI::Range(0.0, 1.0));
   g_robot->add_option("--modbus-exception-window", o.exception_windows, "START:DURATION (s) of exception answers; repeatable");
   g_robot->add_option("--modbus-slow", o.slow_fraction, "share of requests answered slowly")->check(CLI::Range(0.0, 1.0));
-  g_robot->add_option("--modbus-slow-delay", o.slow_delay_s, "delay of a slow answer (s)")->check(CLI::NonNegativeNumber)->capture_default_str();
+  g_robot->add_option("--modbus-slow-delay", o.slow_delay_s, "delay of a slow answer (s)")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
   g_robot->add_option("--modbus-silent", o.robot_silent, "START:DURATION (s) without answers; repeatable");
   g_robot->add_option("--robot-delay", o.robot_delay_s, "extra delay on every answer (s)")->check(CLI::NonNegativeNumber);
   g_robot->add_option("--robot-clock-offset", o.robot_clock_offset_s, "device clock offset (s)");

@@ -28,8 +28,8 @@ int run_import(const ImportArgs& a) {
   const auto run = hil::import::import_table(table, cfg, a.rig_name);
   hil::import::write_imported_run(a.out, run);
   const auto check = format::load_run(a.out);  // what readers will see: must pass the strict reader
-  std::cout << fmt::format("imported {} -> {} (rig '{}', {} samples, {:.2f} Hz)\n", a.data, a.out, run.info.rig,
-                           check.samples.size(), run.info.output_rate_hz);
+  std::cout << fmt::format("imported {} -> {} (rig '{}', {} samples, {:.2f} Hz)\n", a.data, a.out, run.info.rig, check.samples.size(),
+                           run.info.output_rate_hz);
   std::cout << hil::import::report_text(run.report);
   return 0;
 }
@@ -37,8 +37,7 @@ int run_import(const ImportArgs& a) {
 }  // namespace
 
 void add_import(CLI::App& app) {
-  auto* cmd = app.add_subcommand(
-      "import", "Turn a marker-plus-force-plate CSV (motion capture + force plate) into a run folder");
+  auto* cmd = app.add_subcommand("import", "Turn a marker-plus-force-plate CSV (motion capture + force plate) into a run folder");
   static ImportArgs args;
   cmd->add_option("DATA", args.data, "the CSV (or other delimited) data file")->required()->check(CLI::ExistingFile);
   cmd->add_option("--config", args.config, "mapping config (YAML, see docs/import.md)")->required()->check(CLI::ExistingFile);

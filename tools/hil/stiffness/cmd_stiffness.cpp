@@ -31,7 +31,6 @@ using format::tag_format;
 using format::write_json;
 using format::Output;
 
-
 namespace {
 
 struct ReductionArgs {
@@ -106,7 +105,8 @@ hc::PipelineOptions pipeline_options(const ReductionArgs& a, const hc::VjmModel&
 void add_reduction_options(CLI::App* cmd, ReductionArgs& a) {
   cmd->add_option("--noise-pos-m", a.noise_pos_m, "position noise σ per axis, m (default: estimated from the residuals)");
   cmd->add_option("--noise-rot-rad", a.noise_rot_rad, "rotation noise σ per axis, rad (default: estimated)");
-  cmd->add_option("--neglect-below", a.neglect_below, "M6: neglect parameters whose parameter-to-noise ratio stays below this (0: off)")->capture_default_str();
+  cmd->add_option("--neglect-below", a.neglect_below, "M6: neglect parameters whose parameter-to-noise ratio stays below this (0: off)")
+      ->capture_default_str();
   cmd->add_option("--pnr-low", a.pnr_low, "G1- below, G1~ from")->capture_default_str();
   cmd->add_option("--pnr-high", a.pnr_high, "G1+ from")->capture_default_str();
   cmd->add_option("--rank-tol", a.rank_tol, "rank tolerance on the column-scaled singular values")->capture_default_str();
@@ -132,7 +132,8 @@ int identify(const std::string& data_path, const std::string& rig, const std::st
 }
 
 // ---- predict
-int predict(const std::string& model_path, const std::string& data_path, const std::string& rig, bool compensate, const std::string& out_path) {
+int predict(const std::string& model_path, const std::string& data_path, const std::string& rig, bool compensate,
+            const std::string& out_path) {
   const hc::SerialRobot robot = rig.empty() ? hc::SerialRobot{} : load_robot(rig);
   const auto mf = models::read_model_file(model_path, rig.empty() ? nullptr : &robot);
   const auto table = read_stiffness_table(data_path, mf.model.dof(), false);
@@ -165,7 +166,9 @@ int simulate(const SimArgs& a) {
   plan.force_n = a.force_n;
   plan.moment_nm = a.moment_nm;
   plan.seed = a.seed;
-  plan.kind = a.measure == "pose6" ? hc::MeasurementKind::pose6 : a.measure == "point3" ? hc::MeasurementKind::point3 : hc::MeasurementKind::markers;
+  plan.kind = a.measure == "pose6"    ? hc::MeasurementKind::pose6
+              : a.measure == "point3" ? hc::MeasurementKind::point3
+                                      : hc::MeasurementKind::markers;
   for (const auto& m : a.markers) {
     double x = 0, y = 0, z = 0;
     char c1 = 0, c2 = 0;
@@ -177,7 +180,8 @@ int simulate(const SimArgs& a) {
   if (plan.kind == hc::MeasurementKind::markers && plan.p_ee_marker_m.empty())
     throw FormatError({"command line", 0, 0, "--marker"}, "--measure markers needs at least one --marker X,Y,Z");
   Output out(a.out.empty() ? "-" : a.out);
-  write_simulated_table(out.stream(), model, truth, plan, {a.noise_pos_m, a.noise_rot_rad}, fmt::format("rig {}, truth {}", a.rig, a.truth));
+  write_simulated_table(out.stream(), model, truth, plan, {a.noise_pos_m, a.noise_rot_rad},
+                        fmt::format("rig {}, truth {}", a.rig, a.truth));
   out.close();
   return 0;
 }
@@ -226,7 +230,9 @@ void add_stiffness(CLI::App& app) {
     static ReductionArgs a;
     cmd->add_option("DATA", data, "stiffness-experiment table (CSV, docs/calibration.md)")->required();
     cmd->add_option("--rig", rig, "rig file with the robot's DH table")->required();
-    cmd->add_option("--json", json, "write the report and the identified model as JSON (hil.stiffness_model; - for stdout, the text report then goes to stderr)");
+    cmd->add_option(
+        "--json", json,
+        "write the report and the identified model as JSON (hil.stiffness_model; - for stdout, the text report then goes to stderr)");
     add_reduction_options(cmd, a);
     cmd->callback([] { set_action([] { return identify(data, rig, json, a); }); });
   }
@@ -246,11 +252,15 @@ void add_stiffness(CLI::App& app) {
     static SimArgs a;
     cmd->add_option("--rig", a.rig, "rig file with the robot's DH table")->required();
     cmd->add_option("--truth", a.truth, "truth file (JSON \"springs\", docs/calibration.md)")->required();
-    cmd->add_option("--configs", a.configs, "random configurations within the joint limits")->capture_default_str()->check(CLI::Range(1, 1000000));
+    cmd->add_option("--configs", a.configs, "random configurations within the joint limits")
+        ->capture_default_str()
+        ->check(CLI::Range(1, 1000000));
     cmd->add_option("--loads-per-config", a.loads, "random loads per configuration")->capture_default_str()->check(CLI::Range(1, 1000));
     cmd->add_option("--force-n", a.force_n, "force magnitude of each load, N")->capture_default_str();
     cmd->add_option("--moment-nm", a.moment_nm, "moment magnitude of each load, N·m")->capture_default_str();
-    cmd->add_option("--measure", a.measure, "pose6 (dx..rz), point3 (dx dy dz) or markers")->capture_default_str()->check(CLI::IsMember({"pose6", "point3", "markers"}));
+    cmd->add_option("--measure", a.measure, "pose6 (dx..rz), point3 (dx dy dz) or markers")
+        ->capture_default_str()
+        ->check(CLI::IsMember({"pose6", "point3", "markers"}));
     cmd->add_option("--marker", a.markers, "marker position X,Y,Z in the tool frame, m (repeat)");
     cmd->add_option("--noise-pos-m", a.noise_pos_m, "position noise σ, m")->capture_default_str();
     cmd->add_option("--noise-rot-rad", a.noise_rot_rad, "rotation noise σ, rad")->capture_default_str();
@@ -266,7 +276,9 @@ void add_stiffness(CLI::App& app) {
     static bool complete = true;
     cmd->add_option("--rig", rig, "rig file (default: the built-in KR-270-like robot)");
     cmd->add_option("--configs", configs, "random configurations (2 loads each)")->capture_default_str();
-    cmd->add_option("--measure", measure, "pose6, point3, point3-forces or markers")->capture_default_str()->check(CLI::IsMember({"pose6", "point3", "point3-forces", "markers"}));
+    cmd->add_option("--measure", measure, "pose6, point3, point3-forces or markers")
+        ->capture_default_str()
+        ->check(CLI::IsMember({"pose6", "point3", "point3-forces", "markers"}));
     cmd->add_option("--seed", seed, "random seed")->capture_default_str();
     cmd->callback([] { set_action([] { return table1(rig, configs, measure, seed, complete); }); });
   }

@@ -53,8 +53,8 @@ class RawWriter;
 class Acquirer {
  public:
   /// \param bus, recorder  not owned, may be null; must outlive the Acquirer.
-  Acquirer(AcquirerOptions options, std::unique_ptr<drivers::ForcePlate> plate,
-           std::unique_ptr<drivers::RobotControllerDriver> robot, dds::Participant* bus, RunRecorder* recorder);
+  Acquirer(AcquirerOptions options, std::unique_ptr<drivers::ForcePlate> plate, std::unique_ptr<drivers::RobotControllerDriver> robot,
+           dds::Participant* bus, RunRecorder* recorder);
   ~Acquirer();
   Acquirer(const Acquirer&) = delete;
   Acquirer& operator=(const Acquirer&) = delete;
@@ -100,7 +100,7 @@ class Acquirer {
   mutable std::mutex mutex_;  ///< guards sync_, monitors, writers, sinks
   Synchronizer sync_;
   DeviceMonitor plate_mon_, robot_mon_;
-  StateLog plate_log_, robot_log_;  ///< which state changes reach the log (all reach the bus)
+  StateLog plate_log_, robot_log_;          ///< which state changes reach the log (all reach the bus)
   drivers::DeviceCounters plate_counters_;  ///< the plate driver's counters after its last poll
   std::unique_ptr<dds::Writer<hil_msgs::msg::PoseWrenchSample>> w_sample_;
   std::unique_ptr<dds::Writer<hil_msgs::msg::DeviceStatus>> w_status_;

@@ -56,7 +56,7 @@ class DeviceMonitor {
   std::int64_t last_drop_ns_ = 0;
   std::uint64_t samples_ = 0, dropped_ = 0, errors_ = 0;
   std::string last_error_;
-  std::deque<std::int64_t> recent_;  ///< sample times within the last second
+  std::deque<std::int64_t> recent_;        ///< sample times within the last second
   std::deque<std::int64_t> recent_drops_;  ///< times of lost readings within the last second
   double drops_tolerated_;
   DeviceState state_ = DeviceState::disconnected;

@@ -23,11 +23,11 @@
 namespace hil::acquisition {
 
 struct SyncConfig {
-  double wrench_rate_hz = 1000.0;  ///< nominal input rate of the force plate
-  double output_rate_hz = 50.0;    ///< must divide the wrench rate (decimation factor = ratio)
-  int fir_half_length = 0;         ///< taps on each side of the centre; 0 = 2 x decimation factor
-  double pose_timeout_s = 0.1;     ///< wait at most this long for a pose after a sample's time
-  double pose_stale_s = 0.05;      ///< a pose older than this at the sample time is stale
+  double wrench_rate_hz = 1000.0;     ///< nominal input rate of the force plate
+  double output_rate_hz = 50.0;       ///< must divide the wrench rate (decimation factor = ratio)
+  int fir_half_length = 0;            ///< taps on each side of the centre; 0 = 2 x decimation factor
+  double pose_timeout_s = 0.1;        ///< wait at most this long for a pose after a sample's time
+  double pose_stale_s = 0.05;         ///< a pose older than this at the sample time is stale
   double twist_half_window_s = 0.02;  ///< poses within +- this fit the twist
   /// A step longer than this many nominal periods is a gap (frames lost). Polling jitter on a
   /// loaded machine makes 1.5-period steps common; 2.5 means at least one reading is missing.
@@ -71,7 +71,7 @@ class Synchronizer {
   std::deque<WrenchReading> window_;  ///< last 2*half+1 grid values
   WrenchReading prev_;                ///< the previous reading (for interpolation)
   bool have_prev_ = false;
-  std::int64_t grid_ns_ = 0;          ///< next grid time
+  std::int64_t grid_ns_ = 0;  ///< next grid time
   std::int64_t reset_ns_ = 0;
   int since_output_ = 0;
   bool gap_pending_ = false;

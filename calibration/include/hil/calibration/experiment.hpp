@@ -9,10 +9,10 @@
 namespace hil::calibration {
 
 struct ExperimentPlan {
-  int configurations = 50;    ///< random configurations, uniform within the joint limits
-  int loads_per_config = 1;   ///< random loads per configuration
-  double force_n = 1000.0;    ///< magnitude of the force of each load (random direction)
-  double moment_nm = 0.0;     ///< magnitude of the moment of each load (random direction); 0 = pure force
+  int configurations = 50;   ///< random configurations, uniform within the joint limits
+  int loads_per_config = 1;  ///< random loads per configuration
+  double force_n = 1000.0;   ///< magnitude of the force of each load (random direction)
+  double moment_nm = 0.0;    ///< magnitude of the moment of each load (random direction); 0 = pure force
   MeasurementKind kind = MeasurementKind::pose6;
   std::vector<Eigen::Vector3d> p_ee_marker_m;  ///< markers in the tool frame (kind == markers)
   std::uint64_t seed = 1;
@@ -20,8 +20,7 @@ struct ExperimentPlan {
 
 /// Measurements of `truth` under random configurations and loads, plus Gaussian noise
 /// (N(0, σ²) per measured axis; σ = 0 gives exact data).
-std::vector<Measurement> simulate(const VjmModel& model, const ComplianceSet& truth, const ExperimentPlan& plan,
-                                  const NoiseModel& noise);
+std::vector<Measurement> simulate(const VjmModel& model, const ComplianceSet& truth, const ExperimentPlan& plan, const NoiseModel& noise);
 
 /// Tip compliance (6x6, frame at the tip, x along the beam) of a cantilever of length L with axial
 /// rigidity EA (N), bending rigidities EI_y, EI_z (N·m²) and torsional rigidity GJ (N·m²):

@@ -14,10 +14,10 @@
 namespace hil::calibration {
 
 struct CompressedSystem {
-  Eigen::MatrixXd R;          ///< min(m, n) x n, upper triangular (Qᵀ A_w)
-  Eigen::VectorXd z;          ///< min(m, n): Qᵀ t_w
-  double rss_outside = 0.0;   ///< ‖t_w‖² - ‖z‖², computed as the squared norm of the rest of Qᵀ t_w
-  Eigen::Index rows = 0;      ///< m, number of weighted equations
+  Eigen::MatrixXd R;         ///< min(m, n) x n, upper triangular (Qᵀ A_w)
+  Eigen::VectorXd z;         ///< min(m, n): Qᵀ t_w
+  double rss_outside = 0.0;  ///< ‖t_w‖² - ‖z‖², computed as the squared norm of the rest of Qᵀ t_w
+  Eigen::Index rows = 0;     ///< m, number of weighted equations
 };
 
 CompressedSystem compress(const Eigen::Ref<const Eigen::MatrixXd>& A_w, const Eigen::Ref<const Eigen::VectorXd>& t_w);
@@ -32,10 +32,10 @@ struct LsqSolution {
   Eigen::VectorXd singular_values;  ///< of the column-scaled weighted observation matrix, descending
   int rank = 0;
   bool full_rank = false;
-  double condition = 0.0;   ///< σ_max / σ_min of the column-scaled matrix (∞ if rank deficient)
-  double rss = 0.0;         ///< weighted residual sum of squares (χ² if the noise model is right)
-  Eigen::Index dof = 0;     ///< rows - rank
-  double sigma0_sq = 0.0;   ///< rss / dof: about 1 when the noise model fits the data
+  double condition = 0.0;  ///< σ_max / σ_min of the column-scaled matrix (∞ if rank deficient)
+  double rss = 0.0;        ///< weighted residual sum of squares (χ² if the noise model is right)
+  Eigen::Index dof = 0;    ///< rows - rank
+  double sigma0_sq = 0.0;  ///< rss / dof: about 1 when the noise model fits the data
 };
 
 /// Rank of a column-scaled matrix: singular values above tolerance · σ_max.

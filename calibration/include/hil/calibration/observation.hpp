@@ -53,12 +53,12 @@ enum class MeasurementKind {
 
 /// One loaded configuration and what was measured.
 struct Measurement {
-  int config = 0;                 ///< configuration id (several loads may share one)
-  Eigen::VectorXd q_rad;          ///< joint values (rad or m)
+  int config = 0;                       ///< configuration id (several loads may share one)
+  Eigen::VectorXd q_rad;                ///< joint values (rad or m)
   Vector6d w_world = Vector6d::Zero();  ///< load [f (N); m (N·m)] at the tool point, world frame
   MeasurementKind kind = MeasurementKind::pose6;
   std::vector<Eigen::Vector3d> p_ee_marker_m;  ///< markers: positions in the tool frame
-  Eigen::VectorXd displacement;   ///< measured values, measurement_rows() of them (may be empty for prediction)
+  Eigen::VectorXd displacement;                ///< measured values, measurement_rows() of them (may be empty for prediction)
 };
 
 /// Noise of the measuring device: standard deviation per axis (diagonal Σ, η = Σ^-1/2).
@@ -75,15 +75,14 @@ Eigen::MatrixXd projection(const Measurement& m, const Eigen::Isometry3d& T_worl
 
 /// Weighted least-squares system η A π ≈ η t for a parameter set over many measurements.
 struct WeightedSystem {
-  Eigen::MatrixXd A_w;      ///< m x n
-  Eigen::VectorXd t_w;      ///< m
-  Eigen::VectorXd sigma;    ///< per-row standard deviation (m or rad); η = 1/σ
-  std::vector<int> axis;    ///< per-row axis (see row_axes)
+  Eigen::MatrixXd A_w;           ///< m x n
+  Eigen::VectorXd t_w;           ///< m
+  Eigen::VectorXd sigma;         ///< per-row standard deviation (m or rad); η = 1/σ
+  std::vector<int> axis;         ///< per-row axis (see row_axes)
   std::vector<int> measurement;  ///< per-row index of its measurement
 };
 /// \throws std::invalid_argument on shape mismatch or non-positive noise.
-WeightedSystem build_system(const VjmModel& model, const ParameterSet& set, const std::vector<Measurement>& data,
-                            const NoiseModel& noise);
+WeightedSystem build_system(const VjmModel& model, const ParameterSet& set, const std::vector<Measurement>& data, const NoiseModel& noise);
 
 /// Predicted measurement (S t) for a compliance set.
 Eigen::VectorXd predict(const VjmModel& model, const ComplianceSet& k, const Measurement& m);

@@ -19,10 +19,10 @@ namespace hil::calibration {
 
 /// One line of the reduction table.
 struct ReductionLine {
-  std::string step;         ///< "complete", "M1", "M2", ...
+  std::string step;  ///< "complete", "M1", "M2", ...
   std::string description;
-  int count = 0;            ///< parameters left after the step
-  int rank = -1;            ///< rank of A for that set (-1: not computed)
+  int count = 0;  ///< parameters left after the step
+  int rank = -1;  ///< rank of A for that set (-1: not computed)
 };
 
 /// Which entries of a link's 6x6 compliance (in its spring frame) may be non-zero.
@@ -88,13 +88,13 @@ struct PipelineOptions {
   bool symmetrise = true;
   bool sparsify = true;
   bool aggregate = true;
-  std::map<int, Template> templates;            ///< M2 user templates by link index
-  std::map<std::string, double> priorities;     ///< M5b, by parameter name (default_priority otherwise)
-  std::map<std::string, double> fixed_values;   ///< M5c constants by parameter name (default 0)
+  std::map<int, Template> templates;           ///< M2 user templates by link index
+  std::map<std::string, double> priorities;    ///< M5b, by parameter name (default_priority otherwise)
+  std::map<std::string, double> fixed_values;  ///< M5c constants by parameter name (default 0)
   AlgebraicOptions algebraic;
   PnrThresholds pnr;
-  double neglect_below = 2.0;  ///< M6 threshold on the parameter-to-noise ratio; 0 disables M6
-  bool complete_ranks = false; ///< also compute the rank of the complete and M1 models (costly)
+  double neglect_below = 2.0;   ///< M6 threshold on the parameter-to-noise ratio; 0 disables M6
+  bool complete_ranks = false;  ///< also compute the rank of the complete and M1 models (costly)
 };
 
 /// The physically reduced set and the table lines of the steps run.
@@ -117,21 +117,21 @@ struct FixedParameter {
 /// Everything the `identify` report shows.
 struct CalibrationResult {
   std::vector<ReductionLine> reduction;
-  Partition partition;             ///< on the M3 set (column indices into `physical`)
+  Partition partition;  ///< on the M3 set (column indices into `physical`)
   Splitting splitting;
-  ParameterSet physical;           ///< the set after M1-M3
-  ParameterSet base;               ///< the factorised set (before M3): column indices refer to it
+  ParameterSet physical;  ///< the set after M1-M3
+  ParameterSet base;      ///< the factorised set (before M3): column indices refer to it
   std::vector<KeptParameter> kept;
   std::vector<FixedParameter> fixed;
-  int rank_physical = 0;           ///< rank of A for the physical set
-  int rank_algebraic = 0;          ///< rank of A for the M5 output (= its dimension when complete)
-  int rank_final = 0;              ///< after M6
-  LsqSolution solution;            ///< of the final set
-  NoiseModel noise;                ///< used for the weights
+  int rank_physical = 0;   ///< rank of A for the physical set
+  int rank_algebraic = 0;  ///< rank of A for the M5 output (= its dimension when complete)
+  int rank_final = 0;      ///< after M6
+  LsqSolution solution;    ///< of the final set
+  NoiseModel noise;        ///< used for the weights
   bool noise_estimated = false;
   std::array<double, 6> residual_rms{};  ///< per axis dx dy dz rx ry rz (m, rad); NaN where nothing measured
   std::array<int, 6> residual_rows{};
-  ComplianceSet compliance;        ///< identified + fixed values, per spring
+  ComplianceSet compliance;  ///< identified + fixed values, per spring
   std::vector<SpdCheck> spd;
   std::size_t measurements = 0;
   Eigen::Index equations = 0;
@@ -142,15 +142,14 @@ struct AlgebraicResult {
   Partition partition;
   Splitting splitting;
   int rank_algebraic = 0;
-  std::vector<int> free_cols;               ///< kept (identified) columns
-  std::vector<int> fixed_cols;              ///< G2, M5c and M6 columns
+  std::vector<int> free_cols;   ///< kept (identified) columns
+  std::vector<int> fixed_cols;  ///< G2, M5c and M6 columns
   std::vector<double> fixed_values;
   std::vector<std::string> fixed_steps;
-  LsqSolution solution;                     ///< of free_cols with the others fixed
+  LsqSolution solution;  ///< of free_cols with the others fixed
 };
-AlgebraicResult reduce_algebraic(const VjmModel& model, const CompressedSystem& sys, const ParameterSet& base,
-                                 const std::vector<int>& cols, const PipelineOptions& options,
-                                 std::vector<ReductionLine>* lines = nullptr);
+AlgebraicResult reduce_algebraic(const VjmModel& model, const CompressedSystem& sys, const ParameterSet& base, const std::vector<int>& cols,
+                                 const PipelineOptions& options, std::vector<ReductionLine>* lines = nullptr);
 
 /// Runs M1-M6 and the final identification. A noise entry ≤ 0 is estimated from the residuals of
 /// a first fit of the physical set. \throws std::invalid_argument on bad input.

@@ -50,9 +50,9 @@ struct SerialRobot {
 /// Poses of every body of the chain at one configuration. Body 0 is the base (fixed in the world),
 /// body i (1..N) is the link moved by joints 1..i; its frame is DH frame i.
 struct ChainPoses {
-  std::vector<Eigen::Isometry3d> T_world_body;  ///< N+1 entries
-  std::vector<Eigen::Vector3d> joint_axis_world;   ///< unit axis of joint i (index i-1)
-  std::vector<Eigen::Vector3d> p_world_joint_m;    ///< a point on joint i's axis (its DH origin), index i-1
+  std::vector<Eigen::Isometry3d> T_world_body;    ///< N+1 entries
+  std::vector<Eigen::Vector3d> joint_axis_world;  ///< unit axis of joint i (index i-1)
+  std::vector<Eigen::Vector3d> p_world_joint_m;   ///< a point on joint i's axis (its DH origin), index i-1
   Eigen::Isometry3d T_world_ee = Eigen::Isometry3d::Identity();
 };
 

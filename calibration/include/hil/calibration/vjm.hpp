@@ -30,9 +30,9 @@ enum class SpringKind { link, joint };
 
 struct Spring {
   SpringKind kind = SpringKind::link;
-  int index = 0;   ///< link 0..N or joint 1..N
-  int dim = 6;     ///< 6 for links, 1 for joints
-  int body = 0;    ///< body whose frame the spring frame is fixed in (link i: body i)
+  int index = 0;                                                    ///< link 0..N or joint 1..N
+  int dim = 6;                                                      ///< 6 for links, 1 for joints
+  int body = 0;                                                     ///< body whose frame the spring frame is fixed in (link i: body i)
   Eigen::Isometry3d T_body_spring = Eigen::Isometry3d::Identity();  ///< link springs: frame S_i in body i
   double length_m = 0.0;  ///< link springs: distance from the proximal joint origin to the distal point
   std::string name;       ///< "L0".."LN", "J1".."JN"
@@ -95,8 +95,8 @@ void check_shapes(const VjmModel& model, const ComplianceSet& k);
 /// Physical plausibility of one spring's compliance matrix.
 struct SpdCheck {
   std::string spring;
-  double asymmetry = 0.0;        ///< max |k - kᵀ| / max |k|
-  double min_eigenvalue = 0.0;   ///< of the symmetric part
+  double asymmetry = 0.0;       ///< max |k - kᵀ| / max |k|
+  double min_eigenvalue = 0.0;  ///< of the symmetric part
   double max_eigenvalue = 0.0;
   bool symmetric = false;
   bool positive_definite = false;

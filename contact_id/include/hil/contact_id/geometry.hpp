@@ -101,7 +101,6 @@ Eigen::Isometry3d uncertainty_transform(const Uncertainty& u, double x);
 
 /// The transform of feature (body, feature) for the uncertainty vector x: the composition, in list
 /// order, of the transforms of the uncertainties acting on it (identity if none).
-Eigen::Isometry3d feature_transform(const std::vector<Uncertainty>& us, const Eigen::VectorXd& x, int body,
-                                    int feature);
+Eigen::Isometry3d feature_transform(const std::vector<Uncertainty>& us, const Eigen::VectorXd& x, int body, int feature);
 
 }  // namespace hil::contact_id

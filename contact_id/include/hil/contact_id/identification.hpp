@@ -51,8 +51,8 @@ class ContactProblem {
   const std::vector<int>& used() const { return used_; }  ///< indices of the samples used
   Eigen::Index rows() const { return static_cast<Eigen::Index>(6 * used_.size()); }
   int uncertainties() const { return static_cast<int>(scene_.uncertainties.size()); }
-  const Eigen::VectorXd& y() const { return y_; }          ///< W^{-1/2} Y (stacked, 6 rows per used sample)
-  const Eigen::VectorXd& weights() const { return w_; }    ///< the row weights (1/F_max, 1/M_max)
+  const Eigen::VectorXd& y() const { return y_; }        ///< W^{-1/2} Y (stacked, 6 rows per used sample)
+  const Eigen::VectorXd& weights() const { return w_; }  ///< the row weights (1/F_max, 1/M_max)
   double force_scale() const { return f_scale_; }
   double moment_scale() const { return m_scale_; }
   double v_tm() const { return opt_.v_tm; }
@@ -71,10 +71,10 @@ class ContactProblem {
 
  private:
   struct VarPair {
-    int a;           ///< used-sample index
-    int p1, p2;      ///< flattened polyhedron indices
-    int f1, f2;      ///< their features
-    double gap;      ///< lower bound on the pair's distance at x_u^d (-inf when in contact)
+    int a;       ///< used-sample index
+    int p1, p2;  ///< flattened polyhedron indices
+    int f1, f2;  ///< their features
+    double gap;  ///< lower bound on the pair's distance at x_u^d (-inf when in contact)
   };
   /// Feature transforms, displacement bounds and posed fixed bodies at x (into the scratch below).
   void prepare(const Eigen::VectorXd& x) const;
@@ -91,7 +91,7 @@ class ContactProblem {
   std::vector<Measurement> data_;
   ProblemOptions opt_;
   std::vector<int> used_;
-  std::vector<Regressor> fixed_;        ///< per used sample: contribution of pairs no x_u moves
+  std::vector<Regressor> fixed_;  ///< per used sample: contribution of pairs no x_u moves
   std::vector<int> fixed_contacts_;
   std::vector<VarPair> var_;
   std::vector<Eigen::Isometry3d> T_o1_, T_o2_;  ///< per used sample (T_o2_ empty when object 2 is fixed)
@@ -99,20 +99,20 @@ class ContactProblem {
   std::vector<bool> touched_;
   std::array<std::vector<std::pair<int, int>>, 2> index_;  ///< flattened polyhedron -> (feature, polyhedron)
   Eigen::VectorXd y_, w_;
-  Eigen::MatrixX2d A_design_;           ///< W^{-1/2} Φ^T at x_u^d (computed once)
+  Eigen::MatrixX2d A_design_;  ///< W^{-1/2} Φ^T at x_u^d (computed once)
   std::vector<int> contacts_design_;
   double f_scale_ = 1.0, m_scale_ = 1.0;
-  std::array<bool, 2> fixed_body_{};    ///< body not carried by the end effector: one pose for all samples
-  std::vector<double> reach_;           ///< per uncertainty: vertex displacement per unit |x_j - x_j^d|
-  mutable std::array<std::vector<Eigen::Isometry3d>, 2> Tf_;  ///< feature transforms at the current x
-  mutable std::array<std::vector<double>, 2> disp_;           ///< per feature: displacement bound from x_u^d
-  mutable std::array<std::vector<PosedPolyhedron>, 2> posed_; ///< fixed bodies posed at the current x
-  mutable std::vector<PosedPolyhedron> plus_, minus_;         ///< moved feature at x ± h (sensitivity)
+  std::array<bool, 2> fixed_body_{};                           ///< body not carried by the end effector: one pose for all samples
+  std::vector<double> reach_;                                  ///< per uncertainty: vertex displacement per unit |x_j - x_j^d|
+  mutable std::array<std::vector<Eigen::Isometry3d>, 2> Tf_;   ///< feature transforms at the current x
+  mutable std::array<std::vector<double>, 2> disp_;            ///< per feature: displacement bound from x_u^d
+  mutable std::array<std::vector<PosedPolyhedron>, 2> posed_;  ///< fixed bodies posed at the current x
+  mutable std::vector<PosedPolyhedron> plus_, minus_;          ///< moved feature at x ± h (sensitivity)
   mutable PosedPolyhedron pa_, pb_;
   mutable ClipWorkspace clip_;
-  double max_turn_rad_ = 0.0;                  ///< largest finite-difference rotation step
-  mutable Eigen::VectorXd base_x_;             ///< x of the last regressor() evaluation (empty: none)
-  mutable std::vector<SatRecord> base_sat_;    ///< per var_ pair: its separating-axis pass at base_x_
+  double max_turn_rad_ = 0.0;                ///< largest finite-difference rotation step
+  mutable Eigen::VectorXd base_x_;           ///< x of the last regressor() evaluation (empty: none)
+  mutable std::vector<SatRecord> base_sat_;  ///< per var_ pair: its separating-axis pass at base_x_
 };
 
 /// The linear estimate of θ = (K, μK) with its statistics.
@@ -120,14 +120,14 @@ struct LinearEstimate {
   Eigen::Vector2d theta = Eigen::Vector2d::Zero();
   Eigen::Matrix2d cov = Eigen::Matrix2d::Zero();
   int rank = 0;
-  double condition = 0.0;      ///< σ_max / σ_min of W^{-1/2} Φ^T (inf when rank deficient)
-  double sigma2 = 0.0;         ///< residual variance (weighted units)
+  double condition = 0.0;  ///< σ_max / σ_min of W^{-1/2} Φ^T (inf when rank deficient)
+  double sigma2 = 0.0;     ///< residual variance (weighted units)
   double K = 0.0, K_std = 0.0;
   double mu = 0.0, mu_std = 0.0;
-  bool mu_identifiable = false;  ///< false when all contacts stick (Φ's friction column is zero)
+  bool mu_identifiable = false;       ///< false when all contacts stick (Φ's friction column is zero)
   double relative_force_error = 0.0;  ///< sqrt of the mean squared weighted residual (paper: mean relative force error)
   Eigen::Index rows = 0;
-  std::string note;            ///< e.g. why μ is not identifiable
+  std::string note;  ///< e.g. why μ is not identifiable
 };
 
 /// Least squares on weighted rows (A θ ≈ b) by SVD. \throws std::runtime_error if A is zero.
@@ -172,17 +172,17 @@ struct GeometricOptions {
   double lambda = 1e-2;
   Solver solver = Solver::levenberg_marquardt;
   VpJacobian jacobian = VpJacobian::golub_pereyra;
-  int max_iterations = 200;          ///< LM iterations, or NM iterations
-  int max_evaluations = 20000;       ///< NM objective evaluations
+  int max_iterations = 200;     ///< LM iterations, or NM iterations
+  int max_evaluations = 20000;  ///< NM objective evaluations
   /// Stop when an accepted step lowers the objective by less than this fraction (statistically
   /// meaningful changes are of order 1/(6L), far larger).
-  double tolerance = 1e-7;           ///< (LM also stops when 5 iterations gained < 100 x this)
-  double x_tolerance = 1e-5;         ///< stop when a step is shorter than this (prior-std units)
+  double tolerance = 1e-7;    ///< (LM also stops when 5 iterations gained < 100 x this)
+  double x_tolerance = 1e-5;  ///< stop when a step is shorter than this (prior-std units)
   /// LM also stops when two accepted steps in a row lowered the objective by less than this many
   /// units of σ²/(6L) (σ² estimated by the force cost): a change of the weighted χ² = 6L f/σ² below
   /// this is statistically meaningless (1 is the change of a one-standard-deviation parameter move).
   double statistical_tolerance = 1e-2;
-  std::vector<bool> fit;             ///< which x_j to fit (empty: all touched ones)
+  std::vector<bool> fit;  ///< which x_j to fit (empty: all touched ones)
   /// Nelder-Mead stops as soon as its best objective is <= this (to measure the effort needed to
   /// reach another solver's optimum); -inf: off.
   double stop_at_objective = -std::numeric_limits<double>::infinity();
@@ -193,7 +193,7 @@ struct GeometricOptions {
 struct GeometricEstimate {
   Eigen::VectorXd x, x_std;  ///< estimate and standard deviation (0 for the ones not fitted)
   std::vector<bool> fitted;
-  LinearEstimate theta;      ///< θ at x; K_std, mu_std from the joint covariance of (θ, x)
+  LinearEstimate theta;  ///< θ at x; K_std, mu_std from the joint covariance of (θ, x)
   double lambda = 0.0;
   double force_cost = 0.0;      ///< (1/6L) ||W^{-1/2}(Y - Φθ)||²
   double geometric_cost = 0.0;  ///< (1/M) Σ ((x - x^d)/σ)²
@@ -219,11 +219,11 @@ struct Observability {
   Eigen::MatrixXd ratio;
   /// Correlations of the normalised columns [Φ_c, ∂Φ/∂x_1 c, ..., ∂Φ/∂x_M c] for c = 1 (P1) and 2 (P2), eq. 28-29.
   Eigen::MatrixXd P1, P2;
-  std::vector<bool> touched;                  ///< feature ever near a contact
-  std::vector<std::string> unobservable;      ///< never touched, zero sensitivity, or absorbed by θ
-  std::vector<std::string> weak;              ///< sensitivity over a prior std below 1 % of the regressor
+  std::vector<bool> touched;                                 ///< feature ever near a contact
+  std::vector<std::string> unobservable;                     ///< never touched, zero sensitivity, or absorbed by θ
+  std::vector<std::string> weak;                             ///< sensitivity over a prior std below 1 % of the regressor
   std::vector<std::pair<std::string, std::string>> coupled;  ///< |P1| and |P2| >= 0.85
-  std::vector<double> projected_singular_values;  ///< of the VP Jacobian in prior-std units
+  std::vector<double> projected_singular_values;             ///< of the VP Jacobian in prior-std units
 };
 Observability analyse_observability(const ContactProblem& p, const Eigen::VectorXd& x);
 

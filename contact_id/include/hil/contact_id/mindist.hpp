@@ -25,8 +25,8 @@ namespace hil::contact_id {
 /// The result for one pair: δ > 0 when the solids interfere.
 struct PairContact {
   double delta = 0.0;
-  Vec3 point = Vec3::Zero();   ///< world
-  Vec3 normal = Vec3::UnitZ(); ///< world, direction of the normal force on object 1
+  Vec3 point = Vec3::Zero();    ///< world
+  Vec3 normal = Vec3::UnitZ();  ///< world, direction of the normal force on object 1
 };
 
 /// Reusable buffers for clipping (no allocation once warmed up).
@@ -65,13 +65,13 @@ bool penetration_or_gap(const PosedPolyhedron& a, const PosedPolyhedron& b, doub
 /// pass order: 2 k for +axis k, 2 k + 1 for -axis k.
 struct SatRecord {
   static constexpr int kWatch = 8;
-  double gap = 0.0;          ///< >= 0: apart, a lower bound on their distance; < 0: interfering
-  double best = 0.0;         ///< interfering: the smallest push (δ)
-  int best_index = -1;       ///< its candidate
+  double gap = 0.0;     ///< >= 0: apart, a lower bound on their distance; < 0: interfering
+  double best = 0.0;    ///< interfering: the smallest push (δ)
+  int best_index = -1;  ///< its candidate
   /// The other candidates that could come lowest after the motion (evaluated again)...
   int watch[kWatch] = {};
   int watched = 0;
-  double second_still = 0.0;   ///< ...and the smallest push of all the rest (bound under translations)
+  double second_still = 0.0;  ///< ...and the smallest push of all the rest (bound under translations)
   /// ...less the most a turn up to max_turn_rad can take off (bound under turns: each candidate's
   /// turn rate times max_turn_rad times the lever r_a + r_b + |c_a - c_b|)
   double second_turning = 0.0;
@@ -79,15 +79,15 @@ struct SatRecord {
 };
 
 /// `near(a, b) && penetration(a, b, out, ws)`, recording the pass for rotations up to max_turn_rad.
-bool penetration_recorded(const PosedPolyhedron& a, const PosedPolyhedron& b, double max_turn_rad, PairContact& out,
-                          SatRecord& record, ClipWorkspace& ws);
+bool penetration_recorded(const PosedPolyhedron& a, const PosedPolyhedron& b, double max_turn_rad, PairContact& out, SatRecord& record,
+                          ClipWorkspace& ws);
 
 /// `near(a, b) && penetration(a, b, out, ws)` for a pair recorded before a rigid motion of one of
 /// them that moved no vertex more than moved_m and turned it by at most turn_rad. When the record
 /// proves that the same axis still gives the smallest push, only that axis is evaluated (the
 /// result is the full pass's); when it proves the pair still apart, nothing is; else a full pass.
-bool penetration_after_motion(const PosedPolyhedron& a, const PosedPolyhedron& b, const SatRecord& record, double moved_m,
-                              double turn_rad, PairContact& out, ClipWorkspace& ws);
+bool penetration_after_motion(const PosedPolyhedron& a, const PosedPolyhedron& b, const SatRecord& record, double moved_m, double turn_rad,
+                              PairContact& out, ClipWorkspace& ws);
 
 /// Broad phase (bounding spheres, then world boxes): may the two polyhedra be closer than `margin`?
 inline bool near(const PosedPolyhedron& a, const PosedPolyhedron& b, double margin = 0.0) {

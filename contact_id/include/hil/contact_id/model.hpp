@@ -38,9 +38,9 @@ struct Scene {
 
 /// Contact parameters. \pre K > 0, μ >= 0 (checked by `check()`).
 struct ContactModel {
-  double K = 1.8e5;       ///< N/m
-  double mu = 0.2;        ///< sliding friction coefficient
-  double v_tm = 1e-3;     ///< sticking threshold on the tangential speed, m/s
+  double K = 1.8e5;    ///< N/m
+  double mu = 0.2;     ///< sliding friction coefficient
+  double v_tm = 1e-3;  ///< sticking threshold on the tangential speed, m/s
   /// \throws std::invalid_argument naming the bad value.
   void check() const;
   Eigen::Vector2d theta() const { return {K, mu * K}; }
@@ -55,12 +55,12 @@ struct Kinematics {
 
 /// One contact point found by mindist, in world coordinates.
 struct ContactPoint {
-  double delta = 0.0;            ///< interference distance, m (> 0)
-  Vec3 point = Vec3::Zero();     ///< p_i, world
-  Vec3 normal = Vec3::UnitZ();   ///< e_n,i, world (direction of the normal force on object 1)
-  Vec3 tangent = Vec3::Zero();   ///< e_t,i, world; zero while sticking
-  double slip_speed = 0.0;       ///< |v_t,i|, m/s
-  int poly1 = -1, poly2 = -1;    ///< flattened polyhedron indices in object 1 and 2
+  double delta = 0.0;           ///< interference distance, m (> 0)
+  Vec3 point = Vec3::Zero();    ///< p_i, world
+  Vec3 normal = Vec3::UnitZ();  ///< e_n,i, world (direction of the normal force on object 1)
+  Vec3 tangent = Vec3::Zero();  ///< e_t,i, world; zero while sticking
+  double slip_speed = 0.0;      ///< |v_t,i|, m/s
+  int poly1 = -1, poly2 = -1;   ///< flattened polyhedron indices in object 1 and 2
 };
 
 /// Posed polyhedra of both bodies for one sample and one x_u (reusable buffers).
@@ -113,9 +113,9 @@ struct SensorModel {
 
 /// The simulated measurement of one sample.
 struct SimulatedSample {
-  Kinematics kin;   ///< as measured (quantised)
-  Vector6d w_fp;        ///< plate wrench as measured (quantised, noisy)
-  Vector6d w_fp_true;   ///< noise-free plate wrench
+  Kinematics kin;      ///< as measured (quantised)
+  Vector6d w_fp;       ///< plate wrench as measured (quantised, noisy)
+  Vector6d w_fp_true;  ///< noise-free plate wrench
   int contacts = 0;
 };
 
@@ -125,7 +125,7 @@ std::vector<SimulatedSample> simulate(const Scene& s, const ContactModel& m, con
                                       const std::vector<Kinematics>& truth, const SensorModel& sensor);
 
 /// The noise-free plate wrench of one sample.
-Vector6d plate_wrench(const Scene& s, const ContactModel& m, const Eigen::VectorXd& x, const Kinematics& k,
-                  MindistWorkspace& ws, std::vector<ContactPoint>& contacts);
+Vector6d plate_wrench(const Scene& s, const ContactModel& m, const Eigen::VectorXd& x, const Kinematics& k, MindistWorkspace& ws,
+                      std::vector<ContactPoint>& contacts);
 
 }  // namespace hil::contact_id

@@ -32,12 +32,12 @@ struct ContactSlots {
 
 /// What the terms write from φ into the contact model before the contacts are computed.
 struct ContactChannels {
-  Eigen::VectorXd x;                                ///< feature uncertainties x_u (m, rad), from the design
-  double delay_s = 0.0;                             ///< the wrench stream's lag behind the poses
+  Eigen::VectorXd x;                                 ///< feature uncertainties x_u (m, rad), from the design
+  double delay_s = 0.0;                              ///< the wrench stream's lag behind the poses
   hil::Matrix6d compliance = hil::Matrix6d::Zero();  ///< ee deflection per measured ee wrench (ee frame)
-  bool deflect = false;                             ///< the ee pose is deflected by `compliance`
-  double stiffness_exponent = 1.0;                  ///< normal force K δ_ref (δ/δ_ref)^p
-  bool recompute = false;                           ///< the contacts depend on φ: recomputed by mindist
+  bool deflect = false;                              ///< the ee pose is deflected by `compliance`
+  double stiffness_exponent = 1.0;                   ///< normal force K δ_ref (δ/δ_ref)^p
+  bool recompute = false;                            ///< the contacts depend on φ: recomputed by mindist
 };
 
 /// One contact of one sample, as the per-contact columns see it.

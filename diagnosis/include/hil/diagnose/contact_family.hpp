@@ -39,13 +39,13 @@ std::string describe_extension(const std::string& name);
 /// The measured run in the form the contact family needs.
 struct ContactData {
   cid::Scene scene;
-  double v_tm = 1e-3;                       ///< sticking threshold, m/s
-  std::vector<cid::Kinematics> kin;         ///< measured ee pose and twist per sample
-  Observations obs;                         ///< plate wrench (fp frame, about the fp origin)
+  double v_tm = 1e-3;                                    ///< sticking threshold, m/s
+  std::vector<cid::Kinematics> kin;                      ///< measured ee pose and twist per sample
+  Observations obs;                                      ///< plate wrench (fp frame, about the fp origin)
   std::vector<std::vector<cid::ContactPoint>> contacts;  ///< per sample, nominal geometry and measured pose
-  double delta_ref_m = 1e-4;                ///< median interference in contact (nonlinear_stiffness)
-  std::vector<int> fit_uncertainties;       ///< observable x_u (geometric_offset fits these)
-  std::vector<std::string> unfit_uncertainties;  ///< and why the others are not fitted
+  double delta_ref_m = 1e-4;                             ///< median interference in contact (nonlinear_stiffness)
+  std::vector<int> fit_uncertainties;                    ///< observable x_u (geometric_offset fits these)
+  std::vector<std::string> unfit_uncertainties;          ///< and why the others are not fitted
   std::size_t samples_in_contact = 0;
   /// Per plate component, the sensor's quantisation step seen in the data (0: not quantised). A
   /// constant offset cannot be known better than step/√12, whatever the number of samples.
@@ -87,7 +87,7 @@ enum class RateSource {
 
 /// One axis's penetration-rate source (ContactData::v_rate_world).
 struct RateChoice {
-  std::vector<double> v_m_per_s;       ///< per sample: the pose slope or the reported velocity
+  std::vector<double> v_m_per_s;  ///< per sample: the pose slope or the reported velocity
   bool from_poses = false;
   double position_quantum_m = 0.0, velocity_quantum_m_per_s = 0.0;  ///< 0: not quantised
   /// The slope's estimated mean square error (noise + smoothing bias) over the twist's bound q_v²/12
@@ -104,9 +104,8 @@ RateChoice choose_rate(const std::vector<double>& t_s, const std::vector<double>
 
 /// \param force_scale_n, moment_scale_nm the weights' scales (0: the largest measured component).
 /// \throws std::runtime_error if no sample brings the objects into contact.
-ContactData make_contact_data(const cid::Scene& scene, double v_tm, const std::vector<cid::Measurement>& m,
-                              double force_scale_n = 0.0, double moment_scale_nm = 0.0,
-                              RateSource rates = RateSource::automatic);
+ContactData make_contact_data(const cid::Scene& scene, double v_tm, const std::vector<cid::Measurement>& m, double force_scale_n = 0.0,
+                              double moment_scale_nm = 0.0, RateSource rates = RateSource::automatic);
 
 /// The nominal contact model with a set of extensions. Not thread-safe: when the contacts depend on
 /// φ (geometric_offset, robot_compliance, time_offset), design() keeps scratch and the last
@@ -196,16 +195,16 @@ class ContactFamily : public ModelFamily {
     double gap_m;      ///< lower bound on their distance at the design geometry (-inf: interfering)
   };
   struct PairTable {
-    std::vector<std::vector<NearPair>> near;                 ///< per sample, pairs closer than kReach_m
-    std::array<std::vector<std::pair<int, int>>, 2> index;   ///< flattened polyhedron -> (feature, polyhedron)
-    std::array<std::vector<double>, 2> radius_m;             ///< farthest vertex from the body origin (design)
+    std::vector<std::vector<NearPair>> near;                ///< per sample, pairs closer than kReach_m
+    std::array<std::vector<std::pair<int, int>>, 2> index;  ///< flattened polyhedron -> (feature, polyhedron)
+    std::array<std::vector<double>, 2> radius_m;            ///< farthest vertex from the body origin (design)
   };
   /// Feature transforms at x and how far each polyhedron moved from the design geometry.
   struct Geometry {
     Eigen::VectorXd x;
     std::array<std::vector<Eigen::Isometry3d>, 2> T_body_feature;
-    std::array<std::vector<double>, 2> moved_m;                ///< per flattened polyhedron
-    std::array<std::vector<bool>, 2> changed;                  ///< per feature: differs from the base
+    std::array<std::vector<double>, 2> moved_m;  ///< per flattened polyhedron
+    std::array<std::vector<bool>, 2> changed;    ///< per feature: differs from the base
   };
   struct Base {
     bool valid = false;
@@ -244,17 +243,17 @@ double max_min_eigenvalue(const Matrix6d& C, const std::vector<Matrix6d>& free_d
 
 /// Effects injected into a simulation (zero / one = absent). Same parameterisations as above.
 struct Effects {
-  std::map<std::string, double> geometric;   ///< x_u true values by name (others at design)
-  Matrix6d compliance = Matrix6d::Zero();            ///< robot compliance C (ee frame; m/N, rad/N, rad/(N m))
+  std::map<std::string, double> geometric;  ///< x_u true values by name (others at design)
+  Matrix6d compliance = Matrix6d::Zero();   ///< robot compliance C (ee frame; m/N, rad/N, rad/(N m))
   double time_offset_s = 0.0;
   Vector6d sensor_bias = Vector6d::Zero();
-  Vector6d sensor_gain = Vector6d::Zero();           ///< γ per component
+  Vector6d sensor_gain = Vector6d::Zero();  ///< γ per component
   double viscous_n_s_per_m = 0.0;
   double damping_n_s_per_m = 0.0;
-  bool damping_friction = false;             ///< the friction bound follows the total normal force
+  bool damping_friction = false;  ///< the friction bound follows the total normal force
   double stiffness_exponent = 1.0;
   double delta_ref_m = 1e-4;
-  std::vector<std::string> names() const;    ///< the effects present
+  std::vector<std::string> names() const;  ///< the effects present
 };
 
 /// Draws an effect of the named kind with a seeded random magnitude, sized to stand well above the
@@ -265,9 +264,8 @@ void draw_effect(const std::string& name, unsigned seed, const cid::Scene& scene
 /// Forward simulation with effects: for each true (commanded) kinematics, the plate wrench of the
 /// extended model; the measured kinematics are the commanded ones (the pose the robot reports).
 /// `t_s` gives the times (for time_offset); the sensor model quantises and adds noise.
-std::vector<cid::SimulatedSample> simulate_with_effects(const cid::Scene& s, const cid::ContactModel& m,
-                                                        const Effects& e, const std::vector<double>& t_s,
-                                                        const std::vector<cid::Kinematics>& truth,
+std::vector<cid::SimulatedSample> simulate_with_effects(const cid::Scene& s, const cid::ContactModel& m, const Effects& e,
+                                                        const std::vector<double>& t_s, const std::vector<cid::Kinematics>& truth,
                                                         const cid::SensorModel& sensor);
 
 }  // namespace hil::diagnose

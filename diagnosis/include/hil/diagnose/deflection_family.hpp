@@ -41,9 +41,9 @@ const std::vector<std::string>& deflection_extensions();
 /// χ²₁ 95 % bound (3.84 long-run noise variances) more than the best one; never narrower than the
 /// two samples around the change (a fold that did not see them: the whole gap).
 struct RestEvent {
-  double t_s = 0.0;       ///< the step's time in the model: midway between the samples around the change
+  double t_s = 0.0;  ///< the step's time in the model: midway between the samples around the change
   double lower_s = 0.0, upper_s = 0.0;
-  int first_sample = 0;   ///< the first sample (index into the observations) at the new rest pose
+  int first_sample = 0;  ///< the first sample (index into the observations) at the new rest pose
   /// The searched samples around the change: the last at the old rest pose, the first at the new.
   /// Adjacent samples for a fit on every sample; for a fold whose held-out block holds the change,
   /// the whole gap, across which the model ramps (below).
@@ -66,12 +66,12 @@ struct ChangePoints {
   std::vector<int> position, lower, upper;
   double inflation = 1.0;  ///< the variance of the intervals, in noise variances (>= 1)
 };
-ChangePoints locate_changes(const Eigen::MatrixXd& residual, const std::vector<double>& t_s = {}, int max_events = 8,
-                            int min_segment = 3, int window = 10);
+ChangePoints locate_changes(const Eigen::MatrixXd& residual, const std::vector<double>& t_s = {}, int max_events = 8, int min_segment = 3,
+                            int window = 10);
 
 struct DeflectionData {
-  Observations obs;             ///< deflection: dx dy dz (m), rx ry rz (rad)
-  Eigen::MatrixXd load;         ///< N x 6: the plate's force (N) and moment (N m) about p_0, world axes
+  Observations obs;      ///< deflection: dx dy dz (m), rx ry rz (rad)
+  Eigen::MatrixXd load;  ///< N x 6: the plate's force (N) and moment (N m) about p_0, world axes
   std::vector<double> speed_m_per_s;
 };
 

@@ -47,19 +47,19 @@ struct ResidualAnalysis {
 
 /// Per-sample context for the analysis: state labels and candidate signals.
 struct Context {
-  std::vector<std::string> state;                       ///< per sample (may be empty)
-  std::map<std::string, std::vector<double>> signals;   ///< per sample
+  std::vector<std::string> state;                      ///< per sample (may be empty)
+  std::map<std::string, std::vector<double>> signals;  ///< per sample
 };
 
 ResidualAnalysis analyse_residuals(const Observations& obs, const Eigen::MatrixXd& prediction, const Context& ctx);
 
 struct DiagnoseOptions {
   CvOptions cv;
-  double min_gain = 0.02;     ///< relative held-out error reduction an extension must bring (2 %)
+  double min_gain = 0.02;  ///< relative held-out error reduction an extension must bring (2 %)
   /// and its consistency: the paired, autocorrelation-robust z of the per-sample error reduction (a
   /// gain carried by a few large residuals alone, e.g. an extension absorbing outliers, has z < 1)
   double min_z = 1.0;
-  double min_pnr = 5.0;       ///< practical identifiability (G1+)
+  double min_pnr = 5.0;  ///< practical identifiability (G1+)
   /// and its size: the held-out mean squared (weighted) error must fall by at least this fraction
   /// of the measurement noise variance (estimated from the nominal residual's first differences),
   /// so that effects far below the sensor's resolution are not named however precisely fitted.
@@ -74,8 +74,8 @@ struct DiagnoseOptions {
 struct CandidateResult {
   std::string name;
   Score score;
-  double gain_percent = 0.0;  ///< held-out error reduction against the model it extends
-  double z = 0.0;             ///< significance of that reduction
+  double gain_percent = 0.0;    ///< held-out error reduction against the model it extends
+  double z = 0.0;               ///< significance of that reduction
   double noise_fraction = 0.0;  ///< held-out MSE reduction over the noise variance
   /// Second step: the weighted mean squared change of the joint fit's prediction when the added
   /// candidate's parameters go to their nominal value (0), the nominal model's linear parameters
@@ -84,19 +84,19 @@ struct CandidateResult {
   /// The largest PNR among the parameters this candidate adds (not those of the model it extends).
   double pnr = 0.0;
   bool supported = false;
-  bool applicable = true;     ///< false: the model could not be built or fitted on this run
-  std::string verdict;        ///< why (not)
+  bool applicable = true;  ///< false: the model could not be built or fitted on this run
+  std::string verdict;     ///< why (not)
 };
 
 struct Diagnosis {
   Score nominal;
-  double noise_relative = 0.0;  ///< the measurement noise (weighted rms) estimated from the residual's differences
+  double noise_relative = 0.0;              ///< the measurement noise (weighted rms) estimated from the residual's differences
   std::vector<CandidateResult> candidates;  ///< ranked: supported first, then by held-out error
   std::string cause = "none";
-  std::string second_cause;                 ///< empty: none
+  std::string second_cause;  ///< empty: none
   std::vector<CandidateResult> second_step;
-  std::optional<Score> extended;            ///< the nominal model with the cause (and second cause)
-  double gain_percent = 0.0;                ///< held-out: 100 (1 - extended / nominal)
+  std::optional<Score> extended;  ///< the nominal model with the cause (and second cause)
+  double gain_percent = 0.0;      ///< held-out: 100 (1 - extended / nominal)
   ResidualAnalysis nominal_residuals, extended_residuals;
   double seconds = 0.0;
 };
@@ -105,8 +105,8 @@ using ModelFactory = std::function<std::unique_ptr<ModelFamily>(const std::set<s
 /// Progress: (step, total, what).
 using Progress = std::function<void(int, int, const std::string&)>;
 
-Diagnosis diagnose(const ModelFactory& make, const std::vector<std::string>& candidates, const Observations& obs,
-                   const Context& ctx, const DiagnoseOptions& o = {}, const Progress& progress = {});
+Diagnosis diagnose(const ModelFactory& make, const std::vector<std::string>& candidates, const Observations& obs, const Context& ctx,
+                   const DiagnoseOptions& o = {}, const Progress& progress = {});
 
 /// Paired comparison of held-out predictions: the mean reduction of the per-sample squared weighted
 /// error over its autocorrelation-robust (Newey-West) standard error.

@@ -18,8 +18,8 @@ namespace hil::diagnose {
 
 /// The measured outputs: 6 components per sample.
 struct Observations {
-  std::vector<double> t_s;                         ///< sample times, s (increasing)
-  Eigen::MatrixXd y;                               ///< N x 6, physical units
+  std::vector<double> t_s;                                                   ///< sample times, s (increasing)
+  Eigen::MatrixXd y;                                                         ///< N x 6, physical units
   Eigen::Matrix<double, 6, 1> weight = Eigen::Matrix<double, 6, 1>::Ones();  ///< 1 / scale per component
   std::vector<std::string> component{"fx", "fy", "fz", "mx", "my", "mz"};
   std::vector<std::string> unit{"N", "N", "N", "N m", "N m", "N m"};
@@ -30,8 +30,8 @@ struct Observations {
 struct Param {
   std::string name;
   std::string unit;
-  double scale = 1.0;       ///< typical magnitude: finite-difference steps, LM scaling
-  bool extension = false;   ///< belongs to the extension (PNR-checked), not to the nominal model
+  double scale = 1.0;                    ///< typical magnitude: finite-difference steps, LM scaling
+  bool extension = false;                ///< belongs to the extension (PNR-checked), not to the nominal model
   double lower = -1e300, upper = 1e300;  ///< bounds (nonlinear parameters only)
 };
 
@@ -69,10 +69,10 @@ struct Fit;
 /// A quantity a family locates from the data instead of fitting it (e.g. rest_change's event times):
 /// reported with the interval where it can be, not a standard deviation.
 struct LocatedEvent {
-  std::string name;        ///< e.g. event_1_s
-  double t_s = 0.0;        ///< where the model puts it
+  std::string name;  ///< e.g. event_1_s
+  double t_s = 0.0;  ///< where the model puts it
   double lower_s = 0.0, upper_s = 0.0;
-  int first_sample = 0;    ///< the first sample (index into the observations) after it
+  int first_sample = 0;  ///< the first sample (index into the observations) after it
 };
 
 /// A separable model family: prediction = A(φ) θ, 6 rows per sample (row 6k + c).
@@ -115,7 +115,7 @@ class ModelFamily {
 /// A parameter the run cannot determine: fixed at its nominal value (0) and not reported.
 struct Unidentifiable {
   std::string name;
-  std::string reason;                   ///< e.g. "collinear with muK, gain_fy"
+  std::string reason;  ///< e.g. "collinear with muK, gain_fy"
   std::vector<std::string> collinear_with;
 };
 
@@ -126,23 +126,23 @@ struct Fit {
   std::vector<bool> fixed;
   std::vector<Unidentifiable> unidentifiable;
   bool is_fixed(Eigen::Index j) const { return static_cast<std::size_t>(j) < fixed.size() && fixed[static_cast<std::size_t>(j)]; }
-  Eigen::MatrixXd cov;          ///< of (θ, φ): σ² (JᵀJ)⁺ at the optimum, times variance_inflation
+  Eigen::MatrixXd cov;              ///< of (θ, φ): σ² (JᵀJ)⁺ at the optimum, times variance_inflation
   double variance_inflation = 1.0;  ///< long-run variance factor of the autocorrelated residuals (>= 1)
-  int rank = 0;                 ///< numerical rank of J (θ and φ columns)
-  int parameters = 0;           ///< θ + φ
-  double rss = 0.0;             ///< weighted residual sum of squares over the fitted rows
-  double sigma2 = 0.0;          ///< rss / (rows - rank)
+  int rank = 0;                     ///< numerical rank of J (θ and φ columns)
+  int parameters = 0;               ///< θ + φ
+  double rss = 0.0;                 ///< weighted residual sum of squares over the fitted rows
+  double sigma2 = 0.0;              ///< rss / (rows - rank)
   long rows = 0;
-  int evaluations = 0;          ///< designs computed
+  int evaluations = 0;                 ///< designs computed
   std::vector<std::string> phi_names;  ///< the names of φ's entries (the model's nonlinear())
   bool converged = true;
   std::vector<Reported> reported;
-  std::string invalid;          ///< why the fitted parameters are not physical (empty: they are)
+  std::string invalid;  ///< why the fitted parameters are not physical (empty: they are)
 };
 
 struct FitOptions {
   int max_iterations = 40;
-  double tolerance = 1e-6;      ///< relative cost decrease that ends LM
+  double tolerance = 1e-6;  ///< relative cost decrease that ends LM
   /// LM also ends when an iteration lowers the cost by less than this many residual variances
   /// (cost / (rows - parameters)); 0: off. A change of the training cost that small moves no
   /// prediction and no test statistic (a parameter one standard deviation off costs one variance).
@@ -168,8 +168,8 @@ double relative_error(const Observations& obs, const Eigen::MatrixXd& prediction
 struct Score;
 
 struct CvOptions {
-  int folds = 5;                ///< contiguous time blocks
-  int gap_samples = 5;          ///< samples either side of a test block left out of training
+  int folds = 5;        ///< contiguous time blocks
+  int gap_samples = 5;  ///< samples either side of a test block left out of training
   FitOptions fit;
   /// A fold's fit only predicts its held-out block: it starts from the family's own starts (and, in
   /// a second step, from the same fold's fit of the model it extends), never from a point computed
@@ -195,17 +195,17 @@ struct CvOptions {
 /// The score of one model.
 struct Score {
   std::string model;
-  Fit full;                     ///< fitted on every sample (parameters, intervals)
+  Fit full;                       ///< fitted on every sample (parameters, intervals)
   Eigen::MatrixXd cv_prediction;  ///< N x 6, each block predicted by the fit on the others
   /// With CvOptions::offsets > 1: the same held-out prediction on the grid shifted by i/offsets of
   /// a block, i = 1 .. offsets - 1.
   std::vector<Eigen::MatrixXd> cv_shifted;
-  double cv_error = 0.0;        ///< held-out relative error (blocked CV; rms over the grid offsets)
-  double train_error = 0.0;     ///< relative error of the full fit on all samples
-  double bic = 0.0, aic = 0.0;  ///< n ln(rss/n) + k ln(n) | + 2k, n weighted rows, k = rank
-  double min_extension_pnr = 0.0;   ///< smallest PNR over the identifiable extension parameters
+  double cv_error = 0.0;           ///< held-out relative error (blocked CV; rms over the grid offsets)
+  double train_error = 0.0;        ///< relative error of the full fit on all samples
+  double bic = 0.0, aic = 0.0;     ///< n ln(rss/n) + k ln(n) | + 2k, n weighted rows, k = rank
+  double min_extension_pnr = 0.0;  ///< smallest PNR over the identifiable extension parameters
   double max_extension_pnr = 0.0;
-  bool identifiable = false;    ///< some extension parameter has PNR >= 5 (G1+)
+  bool identifiable = false;  ///< some extension parameter has PNR >= 5 (G1+)
   /// Why the folds were skipped (CvOptions::screen); then cv_error is NaN and cv_prediction empty.
   std::string screened;
   bool held_out() const { return screened.empty(); }

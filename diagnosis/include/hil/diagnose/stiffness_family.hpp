@@ -28,7 +28,7 @@ namespace hil::diagnose {
 const std::vector<std::string>& stiffness_extensions();
 
 struct StiffnessData {
-  Observations obs;                 ///< t_s: the row number (blocked folds hold out neighbouring rows)
+  Observations obs;                               ///< t_s: the row number (blocked folds hold out neighbouring rows)
   std::vector<Eigen::Matrix<double, 6, 1>> load;  ///< per row: w (world; N, N m)
   /// Per row, per compliance parameter (joints first, then the link directions): M_p (6x6).
   std::vector<std::vector<Eigen::Matrix<double, 6, 6>>> joint_ops, link_ops;

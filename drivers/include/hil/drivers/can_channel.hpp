@@ -23,7 +23,7 @@ enum class IoStatus : std::uint8_t {
 const char* to_string(IoStatus s) noexcept;
 
 struct CanChannelStats {
-  std::uint64_t rx_frames = 0;     ///< frames returned by receive (error frames included)
+  std::uint64_t rx_frames = 0;  ///< frames returned by receive (error frames included)
   std::uint64_t tx_frames = 0;
   std::uint64_t rx_dropped = 0;    ///< frames lost before we read them (kernel SO_RXQ_OVFL, full queue)
   std::uint64_t tx_failed = 0;     ///< sends that failed or timed out
@@ -32,11 +32,11 @@ struct CanChannelStats {
 
 /// What an endpoint listens to. Same meaning for every implementation.
 struct CanChannelOptions {
-  std::vector<CanFilter> filters;        ///< empty = every data frame (CAN_RAW_FILTER)
-  std::uint32_t error_mask = kCanErrMask; ///< error classes delivered (CAN_RAW_ERR_FILTER); 0 = none
-  bool fd = true;                        ///< accept and send CAN FD frames (CAN_RAW_FD_FRAMES)
-  bool receive_own = false;              ///< see our own sends (CAN_RAW_RECV_OWN_MSGS)
-  std::size_t rx_queue = 8192;           ///< loopback: queue length before frames are dropped
+  std::vector<CanFilter> filters;          ///< empty = every data frame (CAN_RAW_FILTER)
+  std::uint32_t error_mask = kCanErrMask;  ///< error classes delivered (CAN_RAW_ERR_FILTER); 0 = none
+  bool fd = true;                          ///< accept and send CAN FD frames (CAN_RAW_FD_FRAMES)
+  bool receive_own = false;                ///< see our own sends (CAN_RAW_RECV_OWN_MSGS)
+  std::size_t rx_queue = 8192;             ///< loopback: queue length before frames are dropped
 };
 
 /// A CAN endpoint. One thread sends and one receives at a time (the two may differ).
@@ -82,9 +82,9 @@ class CanLoopbackBus : public std::enable_shared_from_this<CanLoopbackBus> {
 /// A `candump -L` log file as a channel. Read mode returns the logged frames in order with their
 /// logged timestamps (optionally paced in real time); write mode appends one line per sent frame.
 struct CanLogOptions {
-  std::string interface;   ///< read: only lines of this interface (empty = all); write: name to log
-  bool realtime = false;   ///< read: wait so frames come out at their logged spacing
-  double speed = 1.0;      ///< read with realtime: playback speed factor
+  std::string interface;      ///< read: only lines of this interface (empty = all); write: name to log
+  bool realtime = false;      ///< read: wait so frames come out at their logged spacing
+  double speed = 1.0;         ///< read with realtime: playback speed factor
   CanChannelOptions channel;  ///< read: filters and error mask applied to logged frames
 };
 

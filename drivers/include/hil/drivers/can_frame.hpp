@@ -80,9 +80,9 @@ struct CanErrorInfo {
   int lost_arbitration_bit = -1;  ///< -1 = unspecified
   bool controller = false;        ///< controller problem (details below)
   bool rx_overflow = false, tx_overflow = false;
-  bool warning = false;        ///< error-warning level reached (rx or tx)
-  bool error_passive = false;  ///< error-passive (rx or tx)
-  bool back_to_active = false; ///< recovered to error-active
+  bool warning = false;         ///< error-warning level reached (rx or tx)
+  bool error_passive = false;   ///< error-passive (rx or tx)
+  bool back_to_active = false;  ///< recovered to error-active
   bool protocol = false;
   std::uint8_t protocol_type = 0, protocol_location = 0;
   bool transceiver = false;
@@ -98,11 +98,9 @@ std::string describe(const CanErrorInfo& e);
 
 /// Builders for the fakes and tests.
 CanFrame make_error_frame(std::uint32_t classes, std::array<std::uint8_t, 8> data = {}) noexcept;
-inline constexpr std::uint32_t kErrTxTimeout = 0x001, kErrLostArb = 0x002, kErrCrtl = 0x004, kErrProt = 0x008,
-                               kErrTrx = 0x010, kErrAck = 0x020, kErrBusOff = 0x040, kErrBusError = 0x080,
-                               kErrRestarted = 0x100, kErrCnt = 0x200;
-inline constexpr std::uint8_t kErrCrtlRxOverflow = 0x01, kErrCrtlTxOverflow = 0x02, kErrCrtlRxWarning = 0x04,
-                              kErrCrtlTxWarning = 0x08, kErrCrtlRxPassive = 0x10, kErrCrtlTxPassive = 0x20,
-                              kErrCrtlActive = 0x40;
+inline constexpr std::uint32_t kErrTxTimeout = 0x001, kErrLostArb = 0x002, kErrCrtl = 0x004, kErrProt = 0x008, kErrTrx = 0x010,
+                               kErrAck = 0x020, kErrBusOff = 0x040, kErrBusError = 0x080, kErrRestarted = 0x100, kErrCnt = 0x200;
+inline constexpr std::uint8_t kErrCrtlRxOverflow = 0x01, kErrCrtlTxOverflow = 0x02, kErrCrtlRxWarning = 0x04, kErrCrtlTxWarning = 0x08,
+                              kErrCrtlRxPassive = 0x10, kErrCrtlTxPassive = 0x20, kErrCrtlActive = 0x40;
 
 }  // namespace hil::drivers

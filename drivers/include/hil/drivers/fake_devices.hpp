@@ -64,22 +64,22 @@ struct TimeWindow {
 };
 
 struct CanFaults {
-  double drop_fraction = 0.0;     ///< share of response frames not sent
-  double corrupt_fraction = 0.0;  ///< share of responses sent with a wrong length (truncated)
-  std::vector<TimeWindow> silent;   ///< no answers at all
-  std::vector<TimeWindow> bus_off;  ///< a bus-off error frame, silence, then "controller restarted"
-  double error_frame_rate_hz = 0.0; ///< error-passive error frames per second (status bit 0x4000 set meanwhile)
-  double extra_delay_s = 0.0;       ///< every answer this much later
-  bool silent_now = false;          ///< switch: silent until cleared
+  double drop_fraction = 0.0;        ///< share of response frames not sent
+  double corrupt_fraction = 0.0;     ///< share of responses sent with a wrong length (truncated)
+  std::vector<TimeWindow> silent;    ///< no answers at all
+  std::vector<TimeWindow> bus_off;   ///< a bus-off error frame, silence, then "controller restarted"
+  double error_frame_rate_hz = 0.0;  ///< error-passive error frames per second (status bit 0x4000 set meanwhile)
+  double extra_delay_s = 0.0;        ///< every answer this much later
+  bool silent_now = false;           ///< switch: silent until cleared
 };
 
 struct ModbusFaults {
-  double exception_fraction = 0.0;  ///< share of requests answered with exception 6 (server busy)
+  double exception_fraction = 0.0;            ///< share of requests answered with exception 6 (server busy)
   std::vector<TimeWindow> exception_windows;  ///< every request answered with an exception
-  double slow_fraction = 0.0;       ///< share of requests answered after slow_delay_s
+  double slow_fraction = 0.0;                 ///< share of requests answered after slow_delay_s
   double slow_delay_s = 0.0;
-  std::vector<TimeWindow> silent;   ///< requests not answered
-  double extra_delay_s = 0.0;       ///< every answer this much later
+  std::vector<TimeWindow> silent;  ///< requests not answered
+  double extra_delay_s = 0.0;      ///< every answer this much later
   bool silent_now = false;
 };
 
@@ -129,8 +129,8 @@ class FakeAtiForcePlate {
   void set_faults(const CanFaults& f);
 
   struct Stats {
-    std::uint64_t requests = 0, gauge_answers = 0, frames_sent = 0, frames_dropped = 0, answers_corrupted = 0,
-                  error_frames_sent = 0, ignored_silent = 0;
+    std::uint64_t requests = 0, gauge_answers = 0, frames_sent = 0, frames_dropped = 0, answers_corrupted = 0, error_frames_sent = 0,
+                  ignored_silent = 0;
     /// Gauge answers whose frames all went out intact (none dropped, corrupted or refused by the
     /// channel): the readings a driver could have received.
     std::uint64_t gauge_answers_delivered = 0;
@@ -169,13 +169,11 @@ class FakeRobotController {
   void start();
   void stop() noexcept;
   /// State served when there is no scenario.
-  void set_state(std::span<const double> joints_rad, const Eigen::Vector3d& p_base_tcp_m,
-                 const Eigen::Quaterniond& q_base_tcp);
+  void set_state(std::span<const double> joints_rad, const Eigen::Vector3d& p_base_tcp_m, const Eigen::Quaterniond& q_base_tcp);
   void set_faults(const ModbusFaults& f);
 
   struct Stats {
-    std::uint64_t connections = 0, requests = 0, replies = 0, exceptions = 0, slow = 0, ignored_silent = 0,
-                  writes_refused = 0;
+    std::uint64_t connections = 0, requests = 0, replies = 0, exceptions = 0, slow = 0, ignored_silent = 0, writes_refused = 0;
   };
   Stats stats() const;
 
@@ -187,7 +185,7 @@ class FakeRobotController {
 };
 
 /// Writes a state into a register image (size ≥ highest address + 2) through a map. Pure.
-void encode_state(const RegisterMap& map, std::span<const double> joints_rad, const Eigen::Vector3d& p_m,
-                  const Eigen::Quaterniond& q, std::span<std::uint16_t> holding);
+void encode_state(const RegisterMap& map, std::span<const double> joints_rad, const Eigen::Vector3d& p_m, const Eigen::Quaterniond& q,
+                  std::span<std::uint16_t> holding);
 
 }  // namespace hil::drivers

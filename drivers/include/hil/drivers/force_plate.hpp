@@ -37,7 +37,7 @@ struct CanSignal {
   unsigned length_bits = 16;
   bool is_signed = true;
   bool big_endian = false;
-  double scale = 1.0;   ///< physical = raw * scale + offset (N, N·m; status: raw)
+  double scale = 1.0;  ///< physical = raw * scale + offset (N, N·m; status: raw)
   double offset = 0.0;
 };
 
@@ -58,12 +58,12 @@ struct ForcePlateConfig {
   std::uint32_t base_id = 0;        ///< ATI base id (0..0x7F)
   double rate_hz = 1000.0;
   Eigen::Isometry3d T_fp_sensor = Eigen::Isometry3d::Identity();  ///< sensor frame in the plate frame
-  std::vector<CanSignal> signals;   ///< declarative only
-  std::vector<double> saturation_limits;  ///< |fx fy fz mx my mz| limits in N, N·m; empty = unknown
-  double response_timeout_s = 0.0;  ///< per poll; 0 = 0.9 period (ATI) or 3 periods (declarative)
-  double startup_timeout_s = 0.1;   ///< per start-up request (ATI)
+  std::vector<CanSignal> signals;                                 ///< declarative only
+  std::vector<double> saturation_limits;                          ///< |fx fy fz mx my mz| limits in N, N·m; empty = unknown
+  double response_timeout_s = 0.0;                                ///< per poll; 0 = 0.9 period (ATI) or 3 periods (declarative)
+  double startup_timeout_s = 0.1;                                 ///< per start-up request (ATI)
   int startup_tries = 3;
-  unsigned tare_samples = 16;       ///< samples averaged by tare()
+  unsigned tare_samples = 16;  ///< samples averaged by tare()
   /// \throws ConfigError naming the field.
   void validate() const;
   double response_timeout() const noexcept;
@@ -135,8 +135,7 @@ class ForcePlate {
   /// `out`) on the way. \returns ok with `f` filled, timeout at the deadline, closed, bus_error
   /// at once on a bus-off error frame, or bad_frame on a channel error (`context` names what was
   /// awaited). Real-time safe.
-  PollStatus next_data_frame(std::chrono::steady_clock::time_point deadline, CanFrame& f, WrenchSample& out,
-                             const char* context) noexcept;
+  PollStatus next_data_frame(std::chrono::steady_clock::time_point deadline, CanFrame& f, WrenchSample& out, const char* context) noexcept;
 
   ForcePlateConfig cfg_;
   std::unique_ptr<CanChannel> channel_;

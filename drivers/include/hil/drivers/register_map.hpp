@@ -36,7 +36,7 @@ struct RegisterEntry {
   RegisterTable table = RegisterTable::holding;
   RegisterType type = RegisterType::int16;
   WordOrder word_order = WordOrder::big;
-  double scale = 1.0;   ///< value = raw * scale + offset (+ 2π · turns)
+  double scale = 1.0;  ///< value = raw * scale + offset (+ 2π · turns)
   double offset = 0.0;
   int turns_address = -1;  ///< UR: register with the joint's revolution count (int16), -1 = none
 };

@@ -24,24 +24,23 @@ struct DeviceCounters {
   std::uint64_t samples = 0;
   std::uint64_t timeouts = 0;
   std::uint64_t bad_frames = 0;
-  std::uint64_t late_frames = 0;     ///< answers that came after their poll had given up
-  std::uint64_t error_frames = 0;    ///< CAN error frames seen
+  std::uint64_t late_frames = 0;   ///< answers that came after their poll had given up
+  std::uint64_t error_frames = 0;  ///< CAN error frames seen
   std::uint64_t bus_off_events = 0;
-  std::uint64_t exceptions = 0;      ///< Modbus exception responses
+  std::uint64_t exceptions = 0;  ///< Modbus exception responses
   std::uint64_t retries = 0;
   std::uint64_t reconnects = 0;      ///< successful reconnections after a lost link
   std::uint64_t dropped_frames = 0;  ///< frames the channel lost (kernel overflow)
   std::uint32_t consecutive_failures = 0;
   bool connected = false;
-  bool bus_off = false;              ///< last error frame said bus-off and nothing valid came since
+  bool bus_off = false;  ///< last error frame said bus-off and nothing valid came since
 };
 
 /// Paces a polling loop at a fixed rate on absolute deadlines (no drift); counts overruns.
 class RatePacer {
  public:
   explicit RatePacer(double rate_hz)
-      : period_(std::chrono::nanoseconds(static_cast<std::int64_t>(1e9 / rate_hz))),
-        next_(std::chrono::steady_clock::now()) {}
+      : period_(std::chrono::nanoseconds(static_cast<std::int64_t>(1e9 / rate_hz))), next_(std::chrono::steady_clock::now()) {}
   /// Sleeps until the next period starts. When more than one period late, skips ahead.
   void wait() {
     next_ += period_;

@@ -14,10 +14,10 @@ namespace hil::dds {
 template <class Msg>
 struct TypeSupportOf;  // specialised below for every bus type
 
-#define HIL_DDS_TYPE(ns, T)                   \
-  template <>                                 \
-  struct TypeSupportOf<ns::T> {               \
-    using type = ns::T##PubSubType;           \
+#define HIL_DDS_TYPE(ns, T)         \
+  template <>                       \
+  struct TypeSupportOf<ns::T> {     \
+    using type = ns::T##PubSubType; \
   };
 HIL_DDS_TYPE(builtin_interfaces::msg, Time)
 HIL_DDS_TYPE(std_msgs::msg, Header)

@@ -25,12 +25,12 @@ struct AcquireOptions {
   bool progress = true;
   int wait_subscribers = 0;
   int rt_priority = 0;  ///< SCHED_FIFO priority of the device threads (0: normal)
-  std::string play;  ///< run folder for the in-process fake rig
+  std::string play;     ///< run folder for the in-process fake rig
   double play_speed = 1.0;
   bool play_over_socketcan = false;  ///< the fake plate talks on the SocketCAN interface instead of loopback
   drivers::CanFaults plate_faults;
   drivers::ModbusFaults robot_faults;
-  bool mcap = false;                     ///< also record run.mcap (docs/mcap.md)
+  bool mcap = false;                      ///< also record run.mcap (docs/mcap.md)
   std::string mcap_compression = "zstd";  ///< none | zstd | lz4
   /// The bus participant (unless no_bus). The default is domain 0 with hil's host-only profile;
   /// a command passes cli::participant_options() so that --dds-domain, --dds-profile and --secure hold.

@@ -63,7 +63,7 @@ struct JacobianCoefficients {
 inline JacobianCoefficients jacobian_coefficients(double angle_rad) {
   const double t = angle_rad, t2 = t * t;
   if (t < kSmallAngle_rad)
-    return {0.5 - t2 / 24.0 * (1.0 - t2 / 30.0 * (1.0 - t2 / 56.0)),          // 1/2 - θ²/24 + θ⁴/720 - θ⁶/40320
+    return {0.5 - t2 / 24.0 * (1.0 - t2 / 30.0 * (1.0 - t2 / 56.0)),           // 1/2 - θ²/24 + θ⁴/720 - θ⁶/40320
             1.0 / 6.0 - t2 / 120.0 * (1.0 - t2 / 42.0 * (1.0 - t2 / 72.0)),    // 1/6 - θ²/120 + θ⁴/5040 - θ⁶/362880
             1.0 / 12.0 + t2 / 720.0 * (1.0 + t2 / 42.0 * (1.0 + t2 / 40.0))};  // 1/12 + θ²/720 + θ⁴/30240 + θ⁶/1209600
   const double half = 0.5 * t, s = std::sin(half);
@@ -95,9 +95,7 @@ inline Eigen::Matrix3d right_jacobian_inverse(const Eigen::Vector3d& phi_rad) {
 }
 
 /// Jl(φ)⁻¹ = Jr(-φ)⁻¹; the derivative of log on the left: log(exp(δ) exp(φ)) ≈ φ + Jl(φ)⁻¹ δ.
-inline Eigen::Matrix3d left_jacobian_inverse(const Eigen::Vector3d& phi_rad) {
-  return right_jacobian_inverse(-phi_rad);
-}
+inline Eigen::Matrix3d left_jacobian_inverse(const Eigen::Vector3d& phi_rad) { return right_jacobian_inverse(-phi_rad); }
 
 /// ∂(exp(φ) p)/∂φ for the rotation vector itself (additive increments, as a least-squares fit of φ
 /// takes them): -exp(φ) [p]× Jr(φ), in the units of p per rad. With exp(φ) = R_a_b, p is in frame b
@@ -107,14 +105,10 @@ inline Eigen::Matrix3d rotate_jacobian(const Eigen::Vector3d& phi_a_b_rad, const
 }
 
 /// ∂(R exp(δ) p)/∂δ at δ = 0 (a perturbation on the right, in frame b): -R [p]×.
-inline Eigen::Matrix3d rotate_jacobian_right(const Eigen::Matrix3d& R_a_b, const Eigen::Vector3d& p_b) {
-  return -R_a_b * hat(p_b);
-}
+inline Eigen::Matrix3d rotate_jacobian_right(const Eigen::Matrix3d& R_a_b, const Eigen::Vector3d& p_b) { return -R_a_b * hat(p_b); }
 
 /// ∂(exp(δ) R p)/∂δ at δ = 0 (a perturbation on the left, in frame a): -[R p]×.
-inline Eigen::Matrix3d rotate_jacobian_left(const Eigen::Matrix3d& R_a_b, const Eigen::Vector3d& p_b) {
-  return -hat(R_a_b * p_b);
-}
+inline Eigen::Matrix3d rotate_jacobian_left(const Eigen::Matrix3d& R_a_b, const Eigen::Vector3d& p_b) { return -hat(R_a_b * p_b); }
 
 }  // namespace so3
 }  // namespace hil

@@ -21,9 +21,9 @@ struct Problem {
   /// Called when the last point given to `residual` becomes the current iterate (for the caller's
   /// state that goes with it).
   std::function<void()> accepted;
-  Eigen::VectorXd scale;              ///< x units per scaled unit; empty: ones
-  Eigen::VectorXd lower, upper;       ///< box bounds on x (trial points are clamped); empty: none
-  std::vector<bool> fixed;            ///< parameters held at their starting value; empty: none
+  Eigen::VectorXd scale;         ///< x units per scaled unit; empty: ones
+  Eigen::VectorXd lower, upper;  ///< box bounds on x (trial points are clamped); empty: none
+  std::vector<bool> fixed;       ///< parameters held at their starting value; empty: none
 };
 
 /// How the damping μ starts and changes.
@@ -38,8 +38,8 @@ enum class Damping {
 struct Options {
   int max_iterations = 100;
   Damping damping = Damping::gain_ratio;
-  int max_trials = 12;         ///< damped trials per iteration with a freshly computed Jacobian
-  int max_trials_secant = 3;   ///< ... with a secant-updated one
+  int max_trials = 12;        ///< damped trials per iteration with a freshly computed Jacobian
+  int max_trials_secant = 3;  ///< ... with a secant-updated one
   /// Per-parameter damping μ D: D_jj ×8 when ∂f/∂u_j changes sign between accepted iterates (the
   /// step went past a minimum along u_j, e.g. a V-shaped kink), relaxed ÷2 (floor 1) otherwise.
   bool kink_damping = false;

@@ -45,33 +45,32 @@ struct Plate {
 /// make the usual statically determinate stand.
 struct Tripod {
   /// Default: three feet 120° apart on a 5 cm circle about the body origin, in its z = 0 plane.
-  std::vector<Eigen::Vector3d> feet_body_m{
-      {0.05, 0.0, 0.0}, {-0.025, 0.04330127018922193, 0.0}, {-0.025, -0.04330127018922193, 0.0}};
+  std::vector<Eigen::Vector3d> feet_body_m{{0.05, 0.0, 0.0}, {-0.025, 0.04330127018922193, 0.0}, {-0.025, -0.04330127018922193, 0.0}};
 };
 
 /// The point-contact law (see the file comment).
 struct ContactLaw {
-  double stiffness_n_per_m = 2e5;       ///< K
-  double exponent = 1.0;                ///< p (1: linear)
-  double delta_ref_m = 1e-4;            ///< δ_ref of the power law
-  double damping_n_s_per_m = 0.0;       ///< D
-  bool friction_on_total_normal = true; ///< N' = N (true) or the elastic part only (false)
-  double mu = 0.3;                      ///< Coulomb coefficient
+  double stiffness_n_per_m = 2e5;             ///< K
+  double exponent = 1.0;                      ///< p (1: linear)
+  double delta_ref_m = 1e-4;                  ///< δ_ref of the power law
+  double damping_n_s_per_m = 0.0;             ///< D
+  bool friction_on_total_normal = true;       ///< N' = N (true) or the elastic part only (false)
+  double mu = 0.3;                            ///< Coulomb coefficient
   double slip_regularisation_m_per_s = 1e-4;  ///< ε: below it friction grows linearly with speed
-  double viscous_n_s_per_m = 0.0;       ///< c_v
+  double viscous_n_s_per_m = 0.0;             ///< c_v
 };
 
 /// The tripod's true motion at one instant (all in W).
 struct BodyState {
   Eigen::Isometry3d T_world_body = Eigen::Isometry3d::Identity();
-  Eigen::Vector3d v_world_m_per_s = Eigen::Vector3d::Zero();     ///< velocity of B's origin
-  Eigen::Vector3d w_world_rad_per_s = Eigen::Vector3d::Zero();   ///< angular velocity
+  Eigen::Vector3d v_world_m_per_s = Eigen::Vector3d::Zero();    ///< velocity of B's origin
+  Eigen::Vector3d w_world_rad_per_s = Eigen::Vector3d::Zero();  ///< angular velocity
 };
 
 /// Per foot, what the law computed (for tests and plots).
 struct FootContact {
   double penetration_m = 0.0, penetration_rate_m_per_s = 0.0;
-  double normal_n = 0.0;               ///< N_i
+  double normal_n = 0.0;                                       ///< N_i
   Eigen::Vector3d friction_world_n = Eigen::Vector3d::Zero();  ///< F_i
   Eigen::Vector3d point_world_m = Eigen::Vector3d::Zero();
   bool in_contact = false;
@@ -89,13 +88,13 @@ Vector6d plate_wrench(const Plate& plate, const Tripod& tripod, const ContactLaw
 struct PlateTrajectory {
   double centre_x_m = 0.0, centre_y_m = 0.0;
   double radius_m = 5e-3;
-  double angular_rate_rad_per_s = 0.5;     ///< ω
-  double depth_m = 1e-4;                   ///< d0
-  double depth_amplitude_m = 5e-5;         ///< d1
-  double depth_rate_rad_per_s = 1.3;       ///< ω_d
-  double yaw_rad = 0.0;                    ///< ψ0
-  double yaw_amplitude_rad = 0.05;         ///< ψ1
-  double yaw_rate_rad_per_s = 0.7;         ///< ω_ψ
+  double angular_rate_rad_per_s = 0.5;  ///< ω
+  double depth_m = 1e-4;                ///< d0
+  double depth_amplitude_m = 5e-5;      ///< d1
+  double depth_rate_rad_per_s = 1.3;    ///< ω_d
+  double yaw_rad = 0.0;                 ///< ψ0
+  double yaw_amplitude_rad = 0.05;      ///< ψ1
+  double yaw_rate_rad_per_s = 0.7;      ///< ω_ψ
   /// The body state at time t (W), with its analytic velocities.
   BodyState at(const Plate& plate, double t_s) const;
 };
@@ -111,13 +110,13 @@ struct SlipEvent {
 /// The force plate's sensor chain (see the file comment). Components in the order fx fy fz mx my mz.
 struct SensorChain {
   double rate_hz = 100.0;
-  int adc_subsamples = 10;                    ///< instants the ADC averages per output sample
-  double delay_s = 0.0;                       ///< τ: the wrench stream lags the poses
-  Vector6d gain = Vector6d::Zero();           ///< γ: relative gain error per component
-  Vector6d bias = Vector6d::Zero();           ///< b: constant offset (N, N m)
-  Vector6d drift_per_s = Vector6d::Zero();    ///< ḃ: slowly drifting offset (N/s, N m/s)
-  Vector6d noise_std = Vector6d::Zero();      ///< std of e (N, N m)
-  Vector6d resolution = Vector6d::Zero();     ///< quantisation step (0: none)
+  int adc_subsamples = 10;                  ///< instants the ADC averages per output sample
+  double delay_s = 0.0;                     ///< τ: the wrench stream lags the poses
+  Vector6d gain = Vector6d::Zero();         ///< γ: relative gain error per component
+  Vector6d bias = Vector6d::Zero();         ///< b: constant offset (N, N m)
+  Vector6d drift_per_s = Vector6d::Zero();  ///< ḃ: slowly drifting offset (N/s, N m/s)
+  Vector6d noise_std = Vector6d::Zero();    ///< std of e (N, N m)
+  Vector6d resolution = Vector6d::Zero();   ///< quantisation step (0: none)
   unsigned seed = 1;
 };
 
@@ -125,10 +124,10 @@ struct SensorChain {
 /// truth behind it.
 struct Sample {
   double t_s = 0.0;
-  BodyState reported;            ///< the commanded state the robot reports
+  BodyState reported;                           ///< the commanded state the robot reports
   Vector6d wrench_measured = Vector6d::Zero();  ///< plate frame, about o_P
   Vector6d wrench_true = Vector6d::Zero();      ///< the true wrench at t_s (no sensor chain)
-  int feet_in_contact = 0;       ///< at t_s, true pose
+  int feet_in_contact = 0;                      ///< at t_s, true pose
 };
 
 /// A whole scene: plate, tripod, law, motion, sensor and events.

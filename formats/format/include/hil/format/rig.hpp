@@ -75,18 +75,18 @@ struct UncertaintySpec {
   std::string object;
   std::string feature;
   Kind kind = Kind::translation;
-  Eigen::Vector3d axis = Eigen::Vector3d::UnitX();  ///< unit, object frame
+  Eigen::Vector3d axis = Eigen::Vector3d::UnitX();    ///< unit, object frame
   Eigen::Vector3d point_m = Eigen::Vector3d::Zero();  ///< a point on the rotation axis, object frame
-  double design_value = 0.0;  ///< x_u^d, m or rad
-  double prior_std = 0.0;     ///< expected size of the error (m or rad); 0 = not given
+  double design_value = 0.0;                          ///< x_u^d, m or rad
+  double prior_std = 0.0;                             ///< expected size of the error (m or rad); 0 = not given
 };
 
 struct ContactModelSpec {
-  double stiffness_n_per_m = 0.0;      ///< K > 0
-  double friction_coefficient = 0.0;   ///< μ ≥ 0
+  double stiffness_n_per_m = 0.0;            ///< K > 0
+  double friction_coefficient = 0.0;         ///< μ ≥ 0
   double sticking_threshold_m_per_s = 1e-3;  ///< v_t,m
-  double force_scale_n = 0.0;   ///< F_max for the W_Y weighting; 0 = from data
-  double moment_scale_nm = 0.0; ///< M_max for the W_Y weighting; 0 = from data
+  double force_scale_n = 0.0;                ///< F_max for the W_Y weighting; 0 = from data
+  double moment_scale_nm = 0.0;              ///< M_max for the W_Y weighting; 0 = from data
 };
 
 struct ModelSpec {
@@ -112,19 +112,19 @@ struct ForcePlateDeviceSpec {
   std::string interface = "vcan0";      ///< SocketCAN interface name
   std::uint32_t base_id = 0;            ///< ATI board base id (11-bit id = base << 4 | opcode)
   double rate_hz = 1000.0;
-  Pose T_fp_sensor;                     ///< sensor frame in the force-plate frame
-  std::vector<CanSignalSpec> signals;   ///< declarative protocol only
+  Pose T_fp_sensor;                       ///< sensor frame in the force-plate frame
+  std::vector<CanSignalSpec> signals;     ///< declarative protocol only
   std::vector<double> saturation_limits;  ///< |fx..mz| limits (N, N·m); empty = unknown
 };
 
 /// One quantity read from the robot controller's registers.
 struct RegisterEntrySpec {
-  std::string quantity;          ///< j1..jN (rad), px py pz (m), rx ry rz (rotation vector, rad)
+  std::string quantity;  ///< j1..jN (rad), px py pz (m), rx ry rz (rotation vector, rad)
   unsigned address = 0;
-  std::string table = "holding";  ///< holding | input
-  std::string type = "int16";     ///< int16 uint16 int32 uint32 float32
-  std::string word_order = "big"; ///< for 32-bit types: big = high word first
-  double scale = 1.0;             ///< value = raw * scale + offset
+  std::string table = "holding";   ///< holding | input
+  std::string type = "int16";      ///< int16 uint16 int32 uint32 float32
+  std::string word_order = "big";  ///< for 32-bit types: big = high word first
+  double scale = 1.0;              ///< value = raw * scale + offset
   double offset = 0.0;
 };
 
@@ -140,7 +140,7 @@ struct RobotControllerSpec {
   int stop_bits = 1;
   double rate_hz = 125.0;
   double timeout_s = 0.2;
-  std::string register_map = "ur";  ///< ur | float32 | custom
+  std::string register_map = "ur";           ///< ur | float32 | custom
   std::vector<RegisterEntrySpec> registers;  ///< custom map
 };
 

@@ -11,10 +11,10 @@
 namespace hil::format {
 
 struct SourceSpec {
-  std::string name;   ///< e.g. force_plate, robot
-  std::string kind;   ///< can | modbus | simulation | import | other
+  std::string name;      ///< e.g. force_plate, robot
+  std::string kind;      ///< can | modbus | simulation | import | other
   double rate_hz = 0.0;  ///< nominal device rate; 0 = unknown
-  std::string raw;    ///< file under raw/ holding this source's stream, if recorded
+  std::string raw;       ///< file under raw/ holding this source's stream, if recorded
   /// What the device said about itself when the run started (serial, firmware, counts, server
   /// id, ...), in the order it was recorded. Keys are names; values are text.
   std::vector<std::pair<std::string, std::string>> identity = {};
@@ -53,8 +53,8 @@ struct SampleSummary {
   double median_dt_s = 0.0;
   double rate_hz = 0.0;
   struct Gap {
-    double t_s;      ///< time of the sample after the gap
-    double dt_s;     ///< length of the gap
+    double t_s;   ///< time of the sample after the gap
+    double dt_s;  ///< length of the gap
     std::size_t line;
   };
   std::vector<Gap> gaps;  ///< steps longer than 1.5 median steps

@@ -12,7 +12,7 @@ struct Sample {
   double t_s = 0.0;  ///< seconds since run start
   Eigen::Vector3d p_world_ee_m = Eigen::Vector3d::Zero();
   Eigen::Quaterniond q_world_ee = Eigen::Quaterniond::Identity();
-  Eigen::Vector3d v_world_ee_m_per_s = Eigen::Vector3d::Zero();    ///< at the ee origin
+  Eigen::Vector3d v_world_ee_m_per_s = Eigen::Vector3d::Zero();  ///< at the ee origin
   Eigen::Vector3d w_world_ee_rad_per_s = Eigen::Vector3d::Zero();
   Eigen::Vector3d f_fp_n = Eigen::Vector3d::Zero();   ///< force on the plate, force-plate frame
   Eigen::Vector3d m_fp_nm = Eigen::Vector3d::Zero();  ///< moment about the plate origin, force-plate frame

@@ -53,8 +53,8 @@ struct BodySpec {
 struct WrenchSpec {
   std::array<std::string, 3> force_columns;
   std::array<std::string, 3> moment_columns;
-  double n_per_unit = 1.0;    ///< force unit to N
-  double nm_per_unit = 1.0;   ///< moment unit to N·m
+  double n_per_unit = 1.0;        ///< force unit to N
+  double nm_per_unit = 1.0;       ///< moment unit to N·m
   bool measured_on_body = false;  ///< true: the data is the reaction (wrench on the body); signs flipped
   /// R_fp_data: rotation from the data's axes to the force-plate frame (from `plate_axes`).
   Eigen::Matrix3d R_fp_data = Eigen::Matrix3d::Identity();

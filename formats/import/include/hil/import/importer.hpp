@@ -16,8 +16,7 @@ namespace hil::import {
 /// The options of the one CSV reader (format::parse_csv) for a data file: the config's delimiter,
 /// its header line or its column names, a byte-order mark and blank lines skipped, and every
 /// column kept as text (import_table reads the numbers, an empty or NaN cell being missing).
-format::CsvOptions data_options(char delimiter, bool header, const std::vector<std::string>& names,
-                                const std::string& display_name = "");
+format::CsvOptions data_options(char delimiter, bool header, const std::vector<std::string>& names, const std::string& display_name = "");
 /// format::read_csv with data_options. \throws error::FormatError naming file, line and column.
 format::CsvTable read_delimited(const std::string& path, char delimiter, bool header, const std::vector<std::string>& names);
 
@@ -40,10 +39,10 @@ struct BodyStats {
   std::size_t reduced = 0;              ///< of those, fitted with some markers unseen
   std::size_t no_pose = 0;              ///< rows written without a pose of this body (not the ee)
   double rms_mean_m = 0, rms_median_m = 0, rms_max_m = 0;
-  Eigen::Vector3d p_range_m = Eigen::Vector3d::Zero();     ///< max - min of p_world_body per axis
+  Eigen::Vector3d p_range_m = Eigen::Vector3d::Zero();      ///< max - min of p_world_body per axis
   Eigen::Vector3d rot_range_rad = Eigen::Vector3d::Zero();  ///< max - min of the rotation vector of R0^T R, per axis
-  double max_displacement_m = 0;  ///< max |p - p(first row)|
-  double max_rotation_rad = 0;    ///< max angle of R(first row)^T R
+  double max_displacement_m = 0;                            ///< max |p - p(first row)|
+  double max_rotation_rad = 0;                              ///< max angle of R(first row)^T R
 };
 struct ImportReport {
   std::string data_file, config_file;
@@ -60,7 +59,7 @@ struct ImportReport {
 
 struct ImportedRun {
   format::RunInfo info;
-  format::SampleTable table;            ///< samples, joints, and the source line of each
+  format::SampleTable table;             ///< samples, joints, and the source line of each
   std::vector<std::string> extra_names;  ///< extra samples.csv columns, after the joints
   Eigen::MatrixXd extra_values;          ///< rows = samples; NaN where unknown
   ImportReport report;

@@ -24,8 +24,7 @@ struct FitFailure {
 /// Fits the pose of a body from the markers flagged in `seen` (columns of the 3xN matrices).
 /// Needs >= `min_markers` (>= 3) seen markers whose reference positions are not (nearly) collinear.
 std::optional<RigidFit> fit_rigid_body(const Eigen::Matrix3Xd& markers_body_m, const Eigen::Matrix3Xd& markers_world_m,
-                                       const std::vector<bool>& seen, std::size_t min_markers,
-                                       FitFailure* failure = nullptr);
+                                       const std::vector<bool>& seen, std::size_t min_markers, FitFailure* failure = nullptr);
 
 /// Spread of points across their best line, relative to their spread along it (0 = collinear).
 double planarity_ratio(const Eigen::Matrix3Xd& points);

@@ -19,12 +19,12 @@
 namespace hil::mcap {
 
 namespace topic {
-inline constexpr const char* kWrench = "/hil/wrench";            ///< geometry_msgs/msg/WrenchStamped
-inline constexpr const char* kPose = "/hil/pose";                ///< geometry_msgs/msg/PoseStamped
-inline constexpr const char* kJointStates = "/hil/joint_states"; ///< sensor_msgs/msg/JointState
-inline constexpr const char* kPoseWrench = "/hil/pose_wrench";   ///< hil_msgs/msg/PoseWrenchSample
+inline constexpr const char* kWrench = "/hil/wrench";               ///< geometry_msgs/msg/WrenchStamped
+inline constexpr const char* kPose = "/hil/pose";                   ///< geometry_msgs/msg/PoseStamped
+inline constexpr const char* kJointStates = "/hil/joint_states";    ///< sensor_msgs/msg/JointState
+inline constexpr const char* kPoseWrench = "/hil/pose_wrench";      ///< hil_msgs/msg/PoseWrenchSample
 inline constexpr const char* kDeviceStatus = "/hil/device_status";  ///< hil_msgs/msg/DeviceStatus
-inline constexpr const char* kTfStatic = "/tf_static";           ///< tf2_msgs/msg/TFMessage
+inline constexpr const char* kTfStatic = "/tf_static";              ///< tf2_msgs/msg/TFMessage
 }  // namespace topic
 
 /// The ros2msg schema of `type` ("geometry_msgs/msg/WrenchStamped", ...) as ROS 2 bags store

@@ -42,7 +42,6 @@ struct Truth {
 Truth read_truth(const std::string& path, const format::RigSpec& rig);
 
 /// x_u from name -> value (others at their design value). \throws std::runtime_error on unknown names.
-Eigen::VectorXd uncertainty_vector(const contact_id::Scene& s, const std::map<std::string, double>& values,
-                                   const std::string& where);
+Eigen::VectorXd uncertainty_vector(const contact_id::Scene& s, const std::map<std::string, double>& values, const std::string& where);
 
 }  // namespace hil::models

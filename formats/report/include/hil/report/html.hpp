@@ -12,12 +12,12 @@ struct Series {
   Series() = default;
   Series(std::string name_, std::vector<double> x_, std::vector<double> y_, std::string color_ = "", bool points_ = false,
          bool dashed_ = false, double point_radius_ = 2.0)
-      : name(std::move(name_)), x(std::move(x_)), y(std::move(y_)), color(std::move(color_)), points(points_),
-        dashed(dashed_), point_radius(point_radius_) {}
+      : name(std::move(name_)), x(std::move(x_)), y(std::move(y_)), color(std::move(color_)), points(points_), dashed(dashed_),
+        point_radius(point_radius_) {}
   std::string name;
   std::vector<double> x, y;
-  std::string color;      ///< CSS colour; empty = from the palette
-  bool points = false;    ///< scatter (circles) instead of a line
+  std::string color;    ///< CSS colour; empty = from the palette
+  bool points = false;  ///< scatter (circles) instead of a line
   bool dashed = false;
   double point_radius = 2.0;
 };

@@ -12,10 +12,10 @@ namespace hil::services::contact {
 
 struct IdentifyOptions {
   bool geometric = false;
-  std::string lambda = "auto";  ///< a number or "auto" (L-curve corner)
-  std::string solver = "lm";    ///< lm | nm
+  std::string lambda = "auto";             ///< a number or "auto" (L-curve corner)
+  std::string solver = "lm";               ///< lm | nm
   std::string jacobian = "golub-pereyra";  ///< golub-pereyra | kaufman
-  int window = 25;              ///< sliding window (used samples) for the smoothed instantaneous estimates
+  int window = 25;                         ///< sliding window (used samples) for the smoothed instantaneous estimates
   int lcurve_points = 30;
   /// Also fit the weakly observable uncertainties (by default they stay at their design value:
   /// the paper's Ockham's razor, and the regularisation cannot make them informative).
@@ -40,11 +40,10 @@ contact_id::ContactProblem problem_from_run(const format::Run& run);
 /// The model's plate wrench (Φ θ at geometry x, mapped to the force-plate frame; N, N m) for every
 /// sample the problem uses, with each sample's contact count in `counts`.
 std::vector<contact_id::Vector6d> model_plate_wrenches(const contact_id::ContactProblem& p, const Eigen::VectorXd& x,
-                                                   const Eigen::Vector2d& theta, std::vector<int>& counts);
+                                                       const Eigen::Vector2d& theta, std::vector<int>& counts);
 void print(std::ostream& out, const contact_id::ContactProblem& p, const IdentifyResult& r);
 nlohmann::json to_json(const contact_id::ContactProblem& p, const IdentifyResult& r);
 /// Writes DIR/index.html with the paper-like figures.
-void write_report(const std::string& dir, const std::string& run_name, const contact_id::ContactProblem& p,
-                  const IdentifyResult& r);
+void write_report(const std::string& dir, const std::string& run_name, const contact_id::ContactProblem& p, const IdentifyResult& r);
 
 }  // namespace hil::services::contact

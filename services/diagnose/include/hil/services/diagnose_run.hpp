@@ -37,9 +37,7 @@ struct RunDiagnosis {
   hil::diagnose::ModelFactory make;
   hil::diagnose::Diagnosis result;
   std::vector<std::string> notes;
-  const hil::diagnose::Observations& obs() const {
-    return contact ? contact->obs : deflection ? deflection->obs : stiffness->obs;
-  }
+  const hil::diagnose::Observations& obs() const { return contact ? contact->obs : deflection ? deflection->obs : stiffness->obs; }
 };
 
 /// \throws error::FormatError / std::runtime_error naming the run on bad input.

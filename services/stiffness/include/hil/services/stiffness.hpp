@@ -38,7 +38,8 @@ void print_table1(std::ostream& os, const calibration::VjmModel& model, int conf
 
 /// The online identifier of the stiffness worker: the reduced model of an identify --json file
 /// (`reduced_model_path`), or the physical reduction of `model` done online when it is empty.
-std::unique_ptr<calibration::OnlineIdentifier> make_online_identifier(const calibration::VjmModel& model, const std::string& reduced_model_path,
+std::unique_ptr<calibration::OnlineIdentifier> make_online_identifier(const calibration::VjmModel& model,
+                                                                      const std::string& reduced_model_path,
                                                                       const calibration::NoiseModel& noise,
                                                                       const calibration::PipelineOptions& options);
 

@@ -46,8 +46,8 @@ class StiffnessWorker {
 /// `hil stiffness replay`: publishes `table`'s rows (read from `path`, named in errors) on the
 /// measurement topic, `rate_hz` a second (0: as fast as possible), after waiting up to `wait_s`
 /// for a reader. Returns how many were published.
-std::size_t replay_measurements(dds::Participant& participant, const models::StiffnessTable& table, const std::string& path,
-                                double rate_hz, double wait_s);
+std::size_t replay_measurements(dds::Participant& participant, const models::StiffnessTable& table, const std::string& path, double rate_hz,
+                                double wait_s);
 
 /// What a worker run did.
 struct WorkerRun {

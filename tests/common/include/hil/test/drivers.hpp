@@ -16,8 +16,8 @@ namespace hil::test {
 inline ::testing::AssertionResult near6(const drivers::Vector6d& a, const drivers::Vector6d& b, const drivers::Vector6d& tol) {
   for (int i = 0; i < 6; ++i)
     if (!(std::abs(a[i] - b[i]) <= tol[i]))
-      return ::testing::AssertionFailure() << "component " << i << ": " << a.transpose() << " vs " << b.transpose()
-                                           << " (tol " << tol.transpose() << ")";
+      return ::testing::AssertionFailure() << "component " << i << ": " << a.transpose() << " vs " << b.transpose() << " (tol "
+                                           << tol.transpose() << ")";
   return ::testing::AssertionSuccess();
 }
 

@@ -44,8 +44,7 @@ inline ::testing::AssertionResult fails_with(const std::function<void()>& f, std
       return ::testing::AssertionFailure() << "line " << e.where().line << " != " << line << " in: " << msg;
     if (!field.empty() && e.where().field != field)
       return ::testing::AssertionFailure() << "field '" << e.where().field << "' != '" << field << "' in: " << msg;
-    if (msg.find(what) == std::string::npos)
-      return ::testing::AssertionFailure() << "'" << what << "' not in: " << msg;
+    if (msg.find(what) == std::string::npos) return ::testing::AssertionFailure() << "'" << what << "' not in: " << msg;
     if (e.where().file.empty()) return ::testing::AssertionFailure() << "no file named in: " << msg;
     return ::testing::AssertionSuccess() << msg;
   } catch (const std::exception& e) {
