@@ -1,5 +1,6 @@
 #include <hil/services/stiffness.hpp>
 
+#include <Eigen/SVD>
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
@@ -70,7 +71,9 @@ void print_report(std::ostream& os, const hc::VjmModel& model, const hc::Calibra
   }
 }
 
-void write_predictions(std::ostream& os, const models::ModelFile& mf, const models::StiffnessTable& table, bool compensate) {
+std::vector<CompensationFailure> write_predictions(std::ostream& os, const models::ModelFile& mf, const models::StiffnessTable& table,
+                                                   bool compensate) {
+  std::vector<CompensationFailure> failures;
   const int n = mf.model.dof();
   const auto& first = table.rows.front();
   const bool markers = first.kind == hc::MeasurementKind::markers;
@@ -103,7 +106,15 @@ void write_predictions(std::ostream& os, const models::ModelFile& mf, const mode
       Tc.translation() -= t.head<3>();
       Tc.linear() = so3::exp(-t.tail<3>()) * T.linear();
       const Eigen::Vector3d rv = so3::log(Eigen::Matrix3d(T.linear())), rvc = so3::log(Eigen::Matrix3d(Tc.linear()));
-      const Eigen::VectorXd qc = mf.model.compensate(mf.k, m.q_rad, m.w_world);
+      double residual = 0.0;
+      const Eigen::VectorXd qc = mf.model.compensate(mf.k, m.q_rad, m.w_world, 8, &residual);
+      if (!(residual <= kCompensationResidual)) {
+        const Eigen::JacobiSVD<Eigen::MatrixXd> svd(hc::tool_jacobian(mf.model.robot(), m.q_rad));
+        failures.push_back({m.config, residual, svd.singularValues().minCoeff()});
+        spdlog::warn("configuration {}: compensation did not converge (pose error {:.3g} left; smallest singular value of the tool "
+                     "Jacobian {:.3g}; near a singular configuration the joint-space compensation is ill-posed)",
+                     m.config, residual, failures.back().smallest_singular_value);
+      }
       os << fmt::format(",{:.9f},{:.9f},{:.9f},{:.9f},{:.9f},{:.9f}", T.translation().x(), T.translation().y(), T.translation().z(), rv.x(),
                         rv.y(), rv.z());
       os << fmt::format(",{:.9f},{:.9f},{:.9f},{:.9f},{:.9f},{:.9f}", Tc.translation().x(), Tc.translation().y(), Tc.translation().z(),
@@ -112,6 +123,7 @@ void write_predictions(std::ostream& os, const models::ModelFile& mf, const mode
     }
     os << '\n';
   }
+  return failures;
 }
 
 void write_simulated_table(std::ostream& os, const hc::VjmModel& model, const hc::ComplianceSet& truth, const hc::ExperimentPlan& plan,

@@ -22,9 +22,22 @@ void print_report(std::ostream& os, const calibration::VjmModel& model, const ca
 /// The reduction table beside Table I of the paper.
 void print_reduction_table(std::ostream& os, const std::vector<calibration::ReductionLine>& lines);
 
+/// Rows whose joint-space compensation did not converge: near a singular configuration the
+/// Newton steps on the rigid Jacobian's pseudo-inverse do not settle (VjmModel::compensate).
+struct CompensationFailure {
+  int config = 0;
+  double residual = 0.0;                 ///< the pose error left, m and rad mixed as compensate reports it
+  double smallest_singular_value = 0.0;  ///< of the rigid tool Jacobian at the target joints
+};
+
+/// The largest pose error (m, rad) a compensated row may keep; converged rows keep ~1e-15.
+inline constexpr double kCompensationResidual = 1e-8;
+
 /// The predicted deflection of every row of `table` as CSV (docs/calibration.md); with
-/// `compensate`, also the target pose, the compensated pose and the compensated joints.
-void write_predictions(std::ostream& os, const models::ModelFile& mf, const models::StiffnessTable& table, bool compensate);
+/// `compensate`, also the target pose, the compensated pose and the compensated joints. Returns
+/// the rows whose compensation left more than kCompensationResidual (each also logged as a warning).
+std::vector<CompensationFailure> write_predictions(std::ostream& os, const models::ModelFile& mf, const models::StiffnessTable& table,
+                                                   bool compensate);
 
 /// A simulated stiffness-experiment table (CSV with a comment line naming `origin`).
 void write_simulated_table(std::ostream& os, const calibration::VjmModel& model, const calibration::ComplianceSet& truth,
