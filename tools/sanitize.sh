@@ -2,7 +2,8 @@
 # Sanitizer runs (docs/sanitizers.md), on a machine set up by tools/setup.sh (run as root):
 #   bash tools/sanitize.sh asan   ASan + UBSan build in build-asan/ and the whole suite under it
 #   bash tools/sanitize.sh tsan   TSan build in build-tsan/ of the threaded tests (ctest label
-#                                 `threads`: drivers, acquisition, the DDS bus) and those tests
+#                                 `threads`: drivers, acquisition, the DDS bus, the diagnosis'
+#                                 folds) and those tests
 # Both use CMakePresets.json (cmake --preset / ctest --preset asan|tsan); any sanitizer report
 # fails its test. Extra arguments go to ctest (e.g. -R EndToEnd).
 set -euo pipefail
@@ -11,8 +12,8 @@ jobs="${HIL_JOBS:-$(nproc)}"
 kind="${1:-}"
 shift || true
 
-# The targets behind label `threads` (tests/{drivers,acquisition,idl,benchmarks}/CMakeLists.txt).
-tsan_targets=(test_drivers test_rig_service test_acquisition test_acquisition_e2e test_idl bench_rig)
+# The targets behind label `threads` (tests/{drivers,acquisition,idl,benchmarks,diagnosis}/CMakeLists.txt).
+tsan_targets=(test_drivers test_rig_service test_acquisition test_acquisition_e2e test_idl bench_rig test_diagnose_engine)
 
 case "$kind" in
   asan | tsan) ;;

@@ -11,6 +11,9 @@
 #include <random>
 #include <stdexcept>
 
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+
 namespace hil::diagnose {
 
 namespace {
@@ -246,7 +249,6 @@ std::vector<ModelFamily::ModelForm> ContactFamily::model_forms() const {
   for (const double kappa : {-0.75, 0.75}) {
     auto m = std::make_unique<ContactFamily>(*this);
     m->friction_lever_ = kappa;
-    m->base_ = Base{};  // contacts are the same, but the cached design columns are not
     out.push_back({std::string("the friction's line of action 3/4 of the interference's depth from its centroid ") +
                        (kappa < 0 ? "against" : "along") + " the normal",
                    std::move(m)});
@@ -463,7 +465,7 @@ std::shared_ptr<const ContactFamily::PairTable> ContactFamily::make_pairs(const 
   return t;
 }
 
-ContactFamily::Geometry ContactFamily::geometry_at(const Eigen::VectorXd& x) const {
+ContactFamily::Geometry ContactFamily::geometry_at(const Eigen::VectorXd& x, const Base& base) const {
   Geometry g;
   g.x = x;
   const Eigen::VectorXd xd = d_.scene.design();
@@ -481,17 +483,16 @@ ContactFamily::Geometry ContactFamily::geometry_at(const Eigen::VectorXd& x) con
       g.moved_m[bi].push_back(m);
     }
     g.changed[bi].assign(body.features.size(), true);
-    if (base_.valid)
+    if (base.valid)
       for (std::size_t f = 0; f < body.features.size(); ++f)
-        g.changed[bi][f] = !(g.T_body_feature[bi][f].matrix().array() == base_.T_body_feature[bi][f].matrix().array()).all();
+        g.changed[bi][f] = !(g.T_body_feature[bi][f].matrix().array() == base.T_body_feature[bi][f].matrix().array()).all();
   }
   return g;
 }
 
 bool ContactFamily::sample_contacts(std::size_t k, const cid::Kinematics& kin, const Geometry& g,
-                                    const std::vector<cid::ContactPoint>* base, std::vector<cid::ContactPoint>& out) const {
+                                    const std::vector<cid::ContactPoint>* base, std::vector<cid::ContactPoint>& out, Scratch& w) const {
   const auto& sc = d_.scene;
-  auto& w = scratch_;
   // How far each body moved from its measured pose: translation of its origin and turn angle.
   std::array<Eigen::Isometry3d, 2> T;
   std::array<double, 2> shift_m{}, turn_rad{}, reach_m{};
@@ -546,7 +547,11 @@ bool ContactFamily::sample_contacts(std::size_t k, const cid::Kinematics& kin, c
   return true;
 }
 
-void ContactFamily::design(const Eigen::VectorXd& phi, Eigen::MatrixXd& A) const {
+std::unique_ptr<FamilyData> ContactFamily::make_data() const { return std::make_unique<Data>(); }
+
+void ContactFamily::design(const Eigen::VectorXd& phi, Eigen::MatrixXd& A, FamilyData& data) const {
+  auto& own = dynamic_cast<Data&>(data);  // a std::bad_cast on another family's data
+  Base& base = own.base;
   const std::size_t n = d_.obs.size();
   const Eigen::Index p = static_cast<Eigen::Index>(linear_.size());
   A.setZero(static_cast<Eigen::Index>(6 * n), p);
@@ -562,15 +567,15 @@ void ContactFamily::design(const Eigen::VectorXd& phi, Eigen::MatrixXd& A) const
     for (std::size_t k = 0; k < n; ++k)
       columns(d_.contacts[k], d_.kin[k], d_.v_rate_world[k], expo, A.block(static_cast<Eigen::Index>(6 * k), 0, 6, p));
   } else {
-    if (!base_.valid) {
+    if (!base.valid) {
       // The first base: the contacts at the design geometry and the measured poses.
-      base_.contacts = d_.contacts;  // every interfering pair is in the table (gap -inf)
-      base_.full.assign(n, false);
-      base_.T_body_feature = geometry_at(d_.scene.design()).T_body_feature;
-      base_.valid = true;
+      base.contacts = d_.contacts;  // every interfering pair is in the table (gap -inf)
+      base.full.assign(n, false);
+      base.T_body_feature = geometry_at(d_.scene.design(), base).T_body_feature;
+      base.valid = true;
     }
-    const Geometry g = geometry_at(x);
-    const bool same_poses = tau == base_.tau_s && C == base_.C;
+    const Geometry g = geometry_at(x, base);
+    const bool same_poses = tau == base.tau_s && C == base.C;
     int changed = 0;
     for (const auto& b : g.changed) changed += static_cast<int>(std::count(b.begin(), b.end(), true));
     std::vector<std::vector<cid::ContactPoint>> cs(n);
@@ -586,17 +591,17 @@ void ContactFamily::design(const Eigen::VectorXd& phi, Eigen::MatrixXd& A) const
                                                     kin.T_world_ee);
         kin.T_world_ee = deflect(kin.T_world_ee, C * w_ee);
       }
-      const bool reuse = same_poses && !base_.full[k];
-      full[k] = !sample_contacts(k, kin, g, reuse ? &base_.contacts[k] : nullptr, cs[k]);
+      const bool reuse = same_poses && !base.full[k];
+      full[k] = !sample_contacts(k, kin, g, reuse ? &base.contacts[k] : nullptr, cs[k], own.scratch);
       columns(cs[k], kin, v_rate, expo, A.block(static_cast<Eigen::Index>(6 * k), 0, 6, p));
     }
     // A finite-difference step moves one feature: the point it steps from stays the base.
     if (!same_poses || changed > 1) {
-      base_.tau_s = tau;
-      base_.C = C;
-      base_.T_body_feature = g.T_body_feature;
-      base_.contacts = std::move(cs);
-      base_.full = std::move(full);
+      base.tau_s = tau;
+      base.C = C;
+      base.T_body_feature = g.T_body_feature;
+      base.contacts = std::move(cs);
+      base.full = std::move(full);
     }
   }
   // Row scalings (sensor_gain) before constant columns (sensor_bias): the layout order.
@@ -661,22 +666,114 @@ std::string ContactFamily::check(const Fit& f) const {
 
 // ---------------------------------------------------------------------------------------------
 
-void ContactEffect::draw(unsigned, const cid::Scene&, Effects&) const {
+std::shared_ptr<const Injection> ContactEffect::draw(unsigned, const cid::Scene&) const {
   throw std::invalid_argument("'" + name() + "' cannot be injected into a simulation");
 }
+
+std::shared_ptr<const Injection> ContactEffect::inject(const TruthValues&) const {
+  throw std::invalid_argument("'" + name() + "' cannot be injected into a simulation");
+}
+
+double truth_value(const TruthValues& values, const std::string& key, double fallback) {
+  const auto it = values.find(key);
+  return it == values.end() ? fallback : it->second;
+}
+
+void check_truth_keys(const std::string& effect, const TruthValues& values, const std::vector<std::string>& known) {
+  for (const auto& [key, value] : values)
+    if (std::find(known.begin(), known.end(), key) == known.end())
+      throw std::invalid_argument(effect + ": no true value '" + key + "' (expected " + fmt::format("{}", fmt::join(known, ", ")) + ")");
+}
+
+hil::Vector6d per_component(const std::string& effect, const std::string& prefix, const TruthValues& values) {
+  std::vector<std::string> keys;
+  for (const char* c : kWrenchComponents) keys.push_back(prefix + c);
+  check_truth_keys(effect, values, keys);
+  Vector6d w;
+  for (int c = 0; c < 6; ++c) w(c) = truth_value(values, keys[static_cast<std::size_t>(c)]);
+  return w;
+}
+
+TruthValues by_component(const std::string& prefix, const hil::Vector6d& w) {
+  TruthValues t;
+  for (int c = 0; c < 6; ++c) t[prefix + kWrenchComponents[static_cast<std::size_t>(c)]] = w(c);
+  return t;
+}
+
+void set_uncertainties(const cid::Scene& scene, const TruthValues& by_name, Eigen::VectorXd& x) {
+  for (const auto& [name, v] : by_name) {
+    bool found = false;
+    for (std::size_t j = 0; j < scene.uncertainties.size(); ++j)
+      if (scene.uncertainties[j].name == name) {
+        x(static_cast<Eigen::Index>(j)) = v;
+        found = true;
+      }
+    if (!found) throw std::invalid_argument("unknown geometric uncertainty '" + name + "'");
+  }
+}
+
+namespace {
+
+/// The registered injectable contact effect of that name. \throws std::invalid_argument if none.
+const ContactEffect& injectable_effect(const std::string& name) {
+  const Effect* effect = find_effect(name);
+  if (!effect || !effect->contact() || !effect->contact()->injectable())
+    throw std::invalid_argument("unknown effect '" + name + "' (expected one of the diagnosis' candidates)");
+  return *effect->contact();
+}
+
+/// The injected effects in their layout order (ContactEffect::layout_order, then the registry's):
+/// the order their parts of the forward simulation are applied in.
+std::vector<const Injection*> in_layout_order(const Effects& e) {
+  std::vector<std::pair<int, const Injection*>> order;
+  for (const Effect* x : registered_effects())
+    if (const auto it = e.injected.find(x->name()); it != e.injected.end() && x->contact())
+      order.emplace_back(x->contact()->layout_order(), it->second.get());
+  std::stable_sort(order.begin(), order.end(), [](const auto& l, const auto& r) { return l.first < r.first; });
+  std::vector<const Injection*> out;
+  for (const auto& [rank, inj] : order) out.push_back(inj);
+  return out;
+}
+
+}  // namespace
 
 std::vector<std::string> Effects::names() const {
   std::vector<std::string> n;
   for (const Effect* e : registered_effects())
-    if (e->contact() && e->contact()->present(*this)) n.push_back(e->name());
+    if (injected.count(e->name())) n.push_back(e->name());
   return n;
 }
 
+std::optional<double> Effects::truth_of(const std::string& name, const cid::Scene& scene) const {
+  for (const auto& [effect, inj] : injected) {
+    const TruthValues t = inj->truth();
+    if (const auto it = t.find(name); it != t.end()) return it->second;
+  }
+  for (const auto& u : scene.uncertainties)
+    if (u.name == name) {
+      const auto it = geometric.find(name);
+      return it != geometric.end() ? it->second : u.design_value;
+    }
+  return std::nullopt;
+}
+
 void draw_effect(const std::string& name, unsigned seed, const cid::Scene& scene, Effects& e) {
-  const Effect* effect = find_effect(name);
-  if (!effect || !effect->contact() || !effect->contact()->injectable())
-    throw std::invalid_argument("unknown effect '" + name + "' (expected one of the diagnosis' candidates)");
-  effect->contact()->draw(seed, scene, e);
+  e.injected[name] = injectable_effect(name).draw(seed, scene);
+}
+
+void inject_effect(const std::string& name, const TruthValues& values, Effects& e) {
+  e.injected[name] = injectable_effect(name).inject(values);
+}
+
+std::vector<TruthField> truth_file_fields(const Effects& e) {
+  std::vector<TruthField> out;
+  for (const Effect* x : registered_effects()) {
+    if (!x->contact() || !x->contact()->injectable()) continue;
+    const auto it = e.injected.find(x->name());
+    const auto inj = it != e.injected.end() ? it->second : x->contact()->inject({});
+    for (auto& f : inj->file_fields()) out.push_back(std::move(f));
+  }
+  return out;
 }
 
 std::vector<cid::SimulatedSample> simulate_with_effects(const cid::Scene& s, const cid::ContactModel& m, const Effects& e,
@@ -684,16 +781,12 @@ std::vector<cid::SimulatedSample> simulate_with_effects(const cid::Scene& s, con
                                                         const cid::SensorModel& sensor) {
   m.check();
   if (t_s.size() != truth.size()) throw std::invalid_argument("simulate_with_effects: times and kinematics differ in length");
-  Eigen::VectorXd x = s.design();
-  for (const auto& [name, v] : e.geometric) {
-    bool found = false;
-    for (std::size_t j = 0; j < s.uncertainties.size(); ++j)
-      if (s.uncertainties[j].name == name) {
-        x(static_cast<Eigen::Index>(j)) = v;
-        found = true;
-      }
-    if (!found) throw std::invalid_argument("unknown geometric uncertainty '" + name + "'");
-  }
+  SimulationChannels ch;
+  ch.x = s.design();
+  set_uncertainties(s, e.geometric, ch.x);
+  const std::vector<const Injection*> effects = in_layout_order(e);
+  for (const Injection* inj : effects) inj->channels(s, ch);
+  const Eigen::VectorXd& x = ch.x;
   cid::MindistWorkspace ws;
   std::vector<cid::ContactPoint> cs;
   const std::size_t n = truth.size();
@@ -703,11 +796,13 @@ std::vector<cid::SimulatedSample> simulate_with_effects(const cid::Scene& s, con
     cid::mindist(s, k, x, m.v_tm, cs, ws);
     Vector6d out = Vector6d::Zero();
     for (const auto& c : cs) {
-      const double de = e.stiffness_exponent == 1.0 ? c.delta : e.delta_ref_m * std::pow(c.delta / e.delta_ref_m, e.stiffness_exponent);
-      const double rate = -cid::relative_velocity(s, k, c.point).dot(c.normal);
-      const double damping_n = e.damping_n_s_per_m * rate;
-      const double friction_n = m.mu * (m.K * de + (e.damping_friction ? damping_n : 0.0));
-      const Vec3 f = (m.K * de + damping_n) * c.normal + (friction_n + e.viscous_n_s_per_m * c.slip_speed) * c.tangent;
+      ContactForce cf;
+      cf.delta_m = c.delta;
+      const SimulatedContact at{s, k, c};
+      for (const Injection* inj : effects) inj->contact_force(at, cf);
+      const double elastic_n = m.K * cf.delta_m;
+      const double friction_n = m.mu * (elastic_n + cf.friction_normal_n);
+      const Vec3 f = (elastic_n + cf.normal_n) * c.normal + (friction_n + cf.tangential_n) * c.tangent;
       out += plate_wrench_of(s.T_world_fp, f, c.point);
     }
     return out;
@@ -715,11 +810,11 @@ std::vector<cid::SimulatedSample> simulate_with_effects(const cid::Scene& s, con
   for (std::size_t k = 0; k < n; ++k) {
     cid::Kinematics kin = truth[k];
     w[k] = wrench(kin);
-    if (!e.compliance.isZero()) {
+    if (!ch.compliance.isZero()) {
       // The deflected pose and its load agree: fixed point T = T_cmd Exp(C w_ee(T)).
       for (int it = 0; it < 50; ++it) {
         const Vector6d w_ee = cid::plate_to_object1(w[k], s.T_world_fp, kin.T_world_ee);
-        const Eigen::Isometry3d T = deflect(truth[k].T_world_ee, e.compliance * w_ee);
+        const Eigen::Isometry3d T = deflect(truth[k].T_world_ee, ch.compliance * w_ee);
         const double change = (T.matrix() - kin.T_world_ee.matrix()).norm();
         kin.T_world_ee = T;
         w[k] = wrench(kin);
@@ -735,9 +830,9 @@ std::vector<cid::SimulatedSample> simulate_with_effects(const cid::Scene& s, con
     auto& smp = out[k];
     smp.contacts = count[k];
     Vector6d wt = w[k];
-    if (e.time_offset_s != 0)
-      interpolate(t_s, t_s[k] - e.time_offset_s, [&](std::size_t j0, std::size_t j1, double a) { wt = (1 - a) * w[j0] + a * w[j1]; });
-    wt = wt.cwiseProduct(Vector6d::Ones() + e.sensor_gain) + e.sensor_bias;
+    if (ch.delay_s != 0)
+      interpolate(t_s, t_s[k] - ch.delay_s, [&](std::size_t j0, std::size_t j1, double a) { wt = (1 - a) * w[j0] + a * w[j1]; });
+    for (const Injection* inj : effects) inj->sensor(wt);
     smp.w_fp_true = wt;
     smp.kin = truth[k];
     for (int i = 0; i < 3; ++i) {

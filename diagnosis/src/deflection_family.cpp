@@ -385,7 +385,7 @@ std::vector<Eigen::VectorXd> DeflectionFamily::starts() const {
   return out;
 }
 
-void DeflectionFamily::design(const Eigen::VectorXd& phi, Eigen::MatrixXd& A) const {
+void DeflectionFamily::design(const Eigen::VectorXd& phi, Eigen::MatrixXd& A, FamilyData&) const {
   const std::size_t n = d_.obs.size();
   A.setZero(static_cast<Eigen::Index>(6 * n), static_cast<Eigen::Index>(linear_.size()));
   const double tau = i_tau_ >= 0 ? phi(i_tau_) : 0.0;

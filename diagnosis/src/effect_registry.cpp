@@ -4,21 +4,9 @@
 #include <array>
 #include <mutex>
 #include <stdexcept>
+#include <utility>
 
 namespace hil::diagnose {
-
-// The built-in effects, one file each in src/effects/, in the order they are listed and reported.
-std::shared_ptr<const Effect> make_geometric_offset();
-std::shared_ptr<const Effect> make_robot_compliance();
-std::shared_ptr<const Effect> make_time_offset();
-std::shared_ptr<const Effect> make_sensor_bias();
-std::shared_ptr<const Effect> make_sensor_gain();
-std::shared_ptr<const Effect> make_viscous_friction();
-std::shared_ptr<const Effect> make_contact_damping();
-std::shared_ptr<const Effect> make_nonlinear_stiffness();
-std::shared_ptr<const Effect> make_rest_change();
-std::shared_ptr<const Effect> make_link_compliance();
-std::shared_ptr<const Effect> make_load_offset();
 
 namespace {
 
@@ -28,10 +16,12 @@ struct Registry {
   std::array<std::vector<std::string>, 3> names;  ///< per FamilyKind
 
   Registry() {
-    for (auto& e : {make_geometric_offset(), make_robot_compliance(), make_time_offset(), make_sensor_bias(), make_sensor_gain(),
-                    make_viscous_friction(), make_contact_damping(), make_nonlinear_stiffness(), make_rest_change(), make_link_compliance(),
-                    make_load_offset()})
-      add(e);
+    auto builtin = builtin_effects();
+    std::sort(builtin.begin(), builtin.end(), [](const auto& a, const auto& b) {
+      if (!a || !b) return static_cast<bool>(b);  // add() refuses the null one
+      return std::make_pair(a->list_order(), a->name()) < std::make_pair(b->list_order(), b->name());
+    });
+    for (auto& e : builtin) add(std::move(e));
   }
 
   void add(std::shared_ptr<const Effect> e) {

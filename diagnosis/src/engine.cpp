@@ -10,7 +10,9 @@
 #include <list>
 #include <map>
 #include <optional>
+#include <exception>
 #include <stdexcept>
+#include <thread>
 
 #include <fmt/format.h>
 #include <fmt/ranges.h>
@@ -71,7 +73,7 @@ struct Projected {
 /// A(φ) is deterministic, so a cached design is the one a new evaluation would give.
 class DesignCache {
  public:
-  DesignCache(const ModelFamily& m, std::size_t samples) : m_(m), rows_(static_cast<Eigen::Index>(6 * samples)) {}
+  DesignCache(const ModelFamily& m, std::size_t samples) : m_(m), data_(m.make_data()), rows_(static_cast<Eigen::Index>(6 * samples)) {}
   /// A(φ); `keep`: hold it for the rest of the cache's life.
   const Eigen::MatrixXd& get(const Eigen::VectorXd& phi, bool keep = false) {
     const Key key(phi.data(), phi.data() + phi.size());
@@ -87,7 +89,7 @@ class DesignCache {
         return it->second;
       }
     Eigen::MatrixXd A;
-    m_.design(phi, A);
+    m_.design(phi, A, *data_);
     ++computed;
     if (A.rows() != rows_) throw std::logic_error(m_.name() + ": design has the wrong number of rows");
     if (keep) return kept_[key] = std::move(A);
@@ -101,6 +103,7 @@ class DesignCache {
   using Key = std::vector<double>;
   static constexpr std::size_t kRecent = 24;  // an LM iteration: q columns and up to 12 trials
   const ModelFamily& m_;
+  std::unique_ptr<FamilyData> data_;  ///< this cache's evaluator's: a cache is used by one thread
   Eigen::Index rows_;
   std::map<Key, Eigen::MatrixXd> kept_;
   std::list<std::pair<Key, Eigen::MatrixXd>> recent_;
@@ -635,13 +638,18 @@ Score score(const ModelFamily& m, const Observations& obs, const CvOptions& o, c
   }
   FitOptions fold_fit = o.fit;
   fold_fit.noise_tolerance = std::max(fold_fit.noise_tolerance, o.fold_noise_tolerance);
-  std::size_t fold = 0, folds_unshifted = 0;
-  std::map<std::string, std::vector<double>> by_name;
   const int offsets = std::max(1, o.offsets);
-  double pooled_sq = 0.0;
-  for (int shift = 0; shift < offsets; ++shift) {
-    Eigen::MatrixXd held_out = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(n), 6);
-    for (const auto& block : time_blocks(n, o.folds, static_cast<double>(shift) / offsets)) {
+  // The folds, offset after offset, in a fixed order: fold i's warm start is the model it extends' fold i.
+  struct Fold {
+    int shift = 0;
+    std::vector<int> block, train;
+    std::unique_ptr<ModelFamily> own;  ///< the fold's own model (ModelFamily::restricted), if any
+    Fit fit;
+    Eigen::MatrixXd prediction;
+  };
+  std::vector<Fold> folds;
+  for (int shift = 0; shift < offsets; ++shift)
+    for (auto& block : time_blocks(n, o.folds, static_cast<double>(shift) / offsets)) {
       if (block.empty()) continue;
       // Training: every sample farther than gap_samples from each held-out one (a shifted grid's
       // block 0 is two runs of samples, at the end and at the start).
@@ -654,26 +662,66 @@ Score score(const ModelFamily& m, const Observations& obs, const CvOptions& o, c
       for (int k : all)
         if ((covered += near[static_cast<std::size_t>(k)]) == 0) train.push_back(k);
       if (train.empty()) continue;
-      // Leak-free: the family's data-derived choices and every start come from `train` alone.
-      const std::unique_ptr<ModelFamily> own = m.restricted(train);
-      const ModelFamily& fm = own ? *own : m;
-      std::optional<DesignCache> own_cache;
-      if (own) own_cache.emplace(fm, n);
-      DesignCache& fc = own ? *own_cache : cache;
-      // The fold's model may differ from the full one in its parameters: warm start and fixed flags by name.
-      std::optional<Eigen::VectorXd> warm;
-      if (extends && fold < extends->fold_phi.size()) warm = mapped(fm.nonlinear(), extends->fold_phi_names[fold], extends->fold_phi[fold]);
-      const std::vector<bool> fixed = fixed_by_name(m, s.full.fixed, fm);
-      Fit f = fit_with(fm, obs, train, fold_fit, fc, warm ? &*warm : nullptr, false, &fixed);
-      const Eigen::MatrixXd pr = predict_with(fc.get(f.phi), f, n);
-      for (int k : block) held_out.row(k) = pr.row(k);
-      s.fold_phi.push_back(f.phi);
-      s.fold_phi_names.push_back(f.phi_names);
-      ++fold;
+      Fold f;
+      f.shift = shift;
+      f.block = std::move(block);
+      f.train = std::move(train);
+      folds.push_back(std::move(f));
+    }
+  // One fold: its fit on its training samples and its prediction of every sample. `shared`: the
+  // full fit's design cache (its kept starts), or another one for the family `m` on another thread.
+  auto run_fold = [&](std::size_t i, DesignCache& shared) {
+    Fold& fd = folds[i];
+    // Leak-free: the family's data-derived choices and every start come from `train` alone.
+    fd.own = m.restricted(fd.train);
+    const ModelFamily& fm = fd.own ? *fd.own : m;
+    std::optional<DesignCache> own_cache;
+    if (fd.own) own_cache.emplace(fm, n);
+    DesignCache& fc = fd.own ? *own_cache : shared;
+    // The fold's model may differ from the full one in its parameters: warm start and fixed flags by name.
+    std::optional<Eigen::VectorXd> warm;
+    if (extends && i < extends->fold_phi.size()) warm = mapped(fm.nonlinear(), extends->fold_phi_names[i], extends->fold_phi[i]);
+    const std::vector<bool> fixed = fixed_by_name(m, s.full.fixed, fm);
+    fd.fit = fit_with(fm, obs, fd.train, fold_fit, fc, warm ? &*warm : nullptr, false, &fixed);
+    fd.prediction = predict_with(fc.get(fd.fit.phi), fd.fit, n);
+  };
+  // Folds are independent: worker w takes folds w, w + workers, ... (each with its own data and
+  // cache; worker 0 the full fit's). Results go to their fold's slot, so the order is the serial one.
+  const std::size_t workers = std::min<std::size_t>(folds.size(), o.threads > 0 ? static_cast<std::size_t>(o.threads)
+                                                                                : std::max(1U, std::thread::hardware_concurrency()));
+  {
+    std::vector<std::exception_ptr> failed(std::max<std::size_t>(workers, 1));
+    auto work = [&](std::size_t w) {
+      try {
+        std::optional<DesignCache> other;
+        if (w > 0) other.emplace(m, n);
+        for (std::size_t i = w; i < folds.size(); i += workers) run_fold(i, w > 0 ? *other : cache);
+      } catch (...) {
+        failed[w] = std::current_exception();
+      }
+    };
+    std::vector<std::thread> pool;
+    for (std::size_t w = 1; w < workers; ++w) pool.emplace_back(work, w);
+    if (workers > 0) work(0);
+    for (auto& t : pool) t.join();
+    for (const auto& e : failed)
+      if (e) std::rethrow_exception(e);
+  }
+  std::map<std::string, std::vector<double>> by_name;
+  std::size_t folds_unshifted = 0;
+  double pooled_sq = 0.0;
+  std::size_t next = 0;
+  for (int shift = 0; shift < offsets; ++shift) {
+    Eigen::MatrixXd held_out = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(n), 6);
+    for (; next < folds.size() && folds[next].shift == shift; ++next) {
+      const Fold& fd = folds[next];
+      for (int k : fd.block) held_out.row(k) = fd.prediction.row(k);
+      s.fold_phi.push_back(fd.fit.phi);
+      s.fold_phi_names.push_back(fd.fit.phi_names);
       if (shift > 0) continue;
       // The fold's estimates of what the full fit reports (derived quantities included): the
       // intervals' spread is that of the plain grid's folds (a shifted grid's overlap them).
-      for (const auto& r : values_reported(fm, f, s.full)) by_name[r.name].push_back(r.value);
+      for (const auto& r : values_reported(fd.own ? *fd.own : m, fd.fit, s.full)) by_name[r.name].push_back(r.value);
       ++folds_unshifted;
     }
     const double e = relative_error(obs, held_out, all);

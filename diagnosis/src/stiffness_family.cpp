@@ -154,7 +154,7 @@ std::string StiffnessFamily::name() const {
   return s;
 }
 
-void StiffnessFamily::design(const Eigen::VectorXd& phi, Eigen::MatrixXd& A) const {
+void StiffnessFamily::design(const Eigen::VectorXd& phi, Eigen::MatrixXd& A, FamilyData&) const {
   const std::size_t n = d_.obs.size();
   A.setZero(static_cast<Eigen::Index>(6 * n), static_cast<Eigen::Index>(linear_.size()));
   Vector6d gain = Vector6d::Ones(), offset = Vector6d::Zero();

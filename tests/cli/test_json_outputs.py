@@ -166,6 +166,21 @@ class JsonOutputs(unittest.TestCase):
         d = self.check("hidden_effects", self.stdout_json(r))
         self.assertEqual(d["effects"], ["sensor_bias"])
         self.assertIn("wrote run", r.stderr)
+        # Every injectable effect at once: each writes its own fields, all in the schema.
+        effects = schema("hidden_effects")["properties"]["effects"]["items"]["enum"]
+        r = hil("contact", "simulate", "--rig", RIG, "--trajectory", TRAJ, "--out", os.path.join(self.dir, "all"),
+                "--inject", ",".join(effects), "--effect-seed", "4", "--truth-out", "-")
+        d = self.check("hidden_effects", self.stdout_json(r))
+        self.assertEqual(d["effects"], effects)
+        self.assertNotEqual(d["time_offset_s"], 0)
+        self.assertNotEqual(d["compliance"][0][0], 0)
+
+    def test_the_hidden_effects_schema_is_the_effect_registrys(self):
+        # docs/schemas/hil.hidden_effects.schema.json is what `hil contact truth-schema` makes from the
+        # effect registry (regenerate: hil contact truth-schema --out docs/schemas/hil.hidden_effects.schema.json).
+        r = hil("contact", "truth-schema")
+        self.assertEqual(r.returncode, 0, r.stderr)
+        self.assertEqual(json.loads(r.stdout), schema("hidden_effects"))
 
     def test_stiffness_model_round_trip_and_wrong_kinds(self):
         r = hil("stiffness", "identify", TABLE, "--rig", KR_RIG, "--noise-pos-m", "1e-5", "--noise-rot-rad", "1e-5",

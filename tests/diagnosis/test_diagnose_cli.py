@@ -40,7 +40,7 @@ class Diagnose(unittest.TestCase):
     def test_help(self):
         r = hil("diagnose", "--help")
         self.assertEqual(r.returncode, 0)
-        for opt in ("RUN", "--rig", "--json", "--report", "--candidates", "--folds", "--damping-rates"):
+        for opt in ("RUN", "--rig", "--json", "--report", "--candidates", "--folds", "--damping-rates", "--threads"):
             self.assertIn(opt, r.stdout)
 
     def test_hidden_sensor_bias_is_named_with_its_magnitude(self):
@@ -146,6 +146,20 @@ class Diagnose(unittest.TestCase):
         self.assertGreater(d["gain_percent"], 5)
         self.assertTrue(os.path.exists(os.path.join(rep, "index.html")))
         self.assertTrue(os.listdir(os.path.join(rep, "figures")))
+        # The folds on one thread or on two: the same diagnosis, number for number (times aside).
+        def without_times(x):
+            if isinstance(x, dict):
+                return {k: without_times(v) for k, v in x.items() if k != "seconds"}
+            if isinstance(x, list):
+                return [without_times(v) for v in x]
+            return x
+        runs = []
+        for threads in ("1", "2"):
+            r = hil("diagnose", table, "--rig", rig, "--json", "-", "--threads", threads, "--quiet")
+            self.assertEqual(r.returncode, 0, r.stderr)
+            runs.append(without_times(json.loads(r.stdout)))
+        self.assertEqual(runs[0], runs[1])
+        self.assertEqual(runs[0]["cause"]["name"], "link_compliance")
         # Without --rig, and with a candidate of the other families: clear errors.
         r = hil("diagnose", table, "--quiet")
         self.assertEqual(r.returncode, 2, r.stderr)

@@ -1,10 +1,13 @@
 // The effect registry (issue 26, item 2): an effect is one file. This fixture defines a toy effect
 // here and nowhere else — a constant offset of the plate's fz — and shows it registered, listed,
-// fitted, reported and checked by the contact family and named by the diagnosis; and that the
-// built-in effects' lists (the CLI's, the hidden-effects schema's) are the registry's.
+// injected into a simulation, fitted, reported and checked by the contact family and named by the
+// diagnosis; and that the built-in effects' lists (the CLI's, the hidden-effects schema's) and
+// their injections are the registry's.
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
 
@@ -36,11 +39,27 @@ class ToyFzOffsetTerm : public ContactTerm {
   }
 };
 
+/// Its part of the hidden-effect generator: the plate's fz reads b too much.
+class ToyFzOffsetInjection : public ScalarInjection {
+ public:
+  explicit ToyFzOffsetInjection(double b) : ScalarInjection("toy_offset_fz_n", b, "the toy's fz offset, N") {}
+  void sensor(hil::Vector6d& w) const override { w(2) += value(); }
+};
+
 class ToyFzOffset : public ContactEffect {
  public:
   std::string name() const override { return "toy_fz_offset"; }
   std::string description() const override { return "the plate's fz reads a constant too much (a toy)"; }
   std::shared_ptr<const ContactTerm> bind(const ContactBinding&) const override { return std::make_shared<ToyFzOffsetTerm>(); }
+  bool injectable() const override { return true; }
+  std::shared_ptr<const Injection> draw(unsigned seed, const contact_id::Scene&) const override {
+    EffectDraw r(seed, name());
+    return inject({{"toy_offset_fz_n", r.magnitude(4.0, 8.0)}});
+  }
+  std::shared_ptr<const Injection> inject(const TruthValues& v) const override {
+    check_truth_keys(name(), v, {"toy_offset_fz_n"});
+    return std::make_shared<ToyFzOffsetInjection>(truth_value(v, "toy_offset_fz_n"));
+  }
 };
 
 const bool toy_registered = register_effect(std::make_shared<ToyFzOffset>());
@@ -60,10 +79,15 @@ TEST(EffectRegistry, ATestFixtureEffectIsRegisteredAndListedAfterTheBuiltInOnes)
   EXPECT_EQ(find_effect("toy_fz_offset")->cv_offsets(), 1);
   EXPECT_THAT([] { register_effect(std::make_shared<ToyFzOffset>()); },
               ::testing::ThrowsMessage<std::invalid_argument>(HasSubstr("'toy_fz_offset' is registered already")));
-  // Not injectable: the generator refuses it as it refuses an unknown name.
+  // Injectable from its file alone: drawn by seed, its truth by the name the fit reports.
   Effects e;
-  EXPECT_THROW(draw_effect("toy_fz_offset", 1, {}, e), std::invalid_argument);
-  EXPECT_TRUE(e.names().empty());
+  draw_effect("toy_fz_offset", 1, {}, e);
+  EXPECT_EQ(e.names(), std::vector<std::string>{"toy_fz_offset"});
+  const auto b = e.truth_of("toy_offset_fz_n", {});
+  ASSERT_TRUE(b);
+  EXPECT_GE(std::abs(*b), 4.0);
+  EXPECT_LT(std::abs(*b), 8.0);
+  EXPECT_THROW(draw_effect("gravity", 1, {}, e), std::invalid_argument);
 }
 
 TEST(EffectRegistry, TheBuiltInListsAreTheRegistrys) {
@@ -79,15 +103,82 @@ TEST(EffectRegistry, TheBuiltInListsAreTheRegistrys) {
   EXPECT_EQ(describe_extension("gravity"), "");
 }
 
-TEST(EffectRegistry, TheHiddenEffectsSchemaListsTheInjectableEffects) {
+TEST(EffectRegistry, EveryFileOfTheEffectsFolderIsABuiltInEffectOfItsName) {
+  // A built-in effect is its file: the build lists diagnosis/src/effects/ and generates the
+  // built-ins from it, so the registry holds exactly one effect per file, named after it, in the
+  // effects' own list order.
+  std::vector<std::string> files;
+  for (const auto& f : std::filesystem::directory_iterator(std::string(HIL_SOURCE_DIR) + "/diagnosis/src/effects"))
+    if (f.path().extension() == ".cpp") files.push_back(f.path().stem().string());
+  std::sort(files.begin(), files.end());
+  ASSERT_GE(files.size(), 11u);
+  std::vector<std::string> built_in;
+  for (const auto& e : builtin_effects()) built_in.push_back(e->name());
+  std::sort(built_in.begin(), built_in.end());
+  EXPECT_EQ(built_in, files);
+  const auto all = registered_effects();
+  ASSERT_GE(all.size(), files.size());
+  for (std::size_t i = 0; i + 1 < files.size(); ++i)
+    EXPECT_LT(std::make_pair(all[i]->list_order(), all[i]->name()), std::make_pair(all[i + 1]->list_order(), all[i + 1]->name()))
+        << all[i]->name() << " before " << all[i + 1]->name();
+}
+
+TEST(EffectRegistry, TheHiddenEffectsSchemaListsTheInjectableEffectsAndTheirFields) {
   std::ifstream in(std::string(HIL_SOURCE_DIR) + "/docs/schemas/hil.hidden_effects.schema.json");
   ASSERT_TRUE(in) << "docs/schemas/hil.hidden_effects.schema.json";
   const auto schema = nlohmann::json::parse(in);
   const auto listed = schema["properties"]["effects"]["items"]["enum"].get<std::vector<std::string>>();
-  std::vector<std::string> injectable;
+  std::vector<std::string> injectable;  // the built-in ones (this file's toy is not in the schema)
   for (const Effect* e : registered_effects())
-    if (e->contact() && e->contact()->injectable()) injectable.push_back(e->name());
+    if (e->contact() && e->contact()->injectable() && e->name() != "toy_fz_offset") injectable.push_back(e->name());
   EXPECT_EQ(listed, injectable);
+  // Every field an effect writes, drawn or absent, is a required property of the schema.
+  const auto required = schema["required"].get<std::vector<std::string>>();
+  auto check = [&](const Effects& e) {
+    for (const auto& f : truth_file_fields(e)) {
+      if (f.key == "toy_offset_fz_n") continue;
+      EXPECT_TRUE(schema["properties"].contains(f.key)) << f.key;
+      EXPECT_NE(std::find(required.begin(), required.end(), f.key), required.end()) << f.key;
+    }
+  };
+  check(Effects{});
+  Effects all;
+  const auto r = test::scene_run("acu_2a");
+  for (const auto& n : injectable) draw_effect(n, 3, r.scene, all);
+  check(all);
+  EXPECT_EQ(all.names(), injectable);
+}
+
+TEST(EffectRegistry, AnEffectInjectedAtZeroMagnitudeChangesNoSimulatedSample) {
+  // Each injection's hooks are its own: at zero magnitude (inject({})) every effect leaves the
+  // generator's output as it is without it, bit for bit; drawn, each changes it.
+  const auto r = test::scene_run("acu_2a");
+  const auto none = test::measure(r, {}, 5);
+  Effects zero;
+  for (const Effect* x : registered_effects())
+    if (x->contact() && x->contact()->injectable()) inject_effect(x->name(), {}, zero);
+  const auto same = test::measure(r, zero, 5);
+  ASSERT_EQ(same.size(), none.size());
+  for (std::size_t k = 0; k < none.size(); ++k) {
+    ASSERT_EQ(same[k].w_fp, none[k].w_fp) << "sample " << k;
+    ASSERT_EQ(same[k].kin.T_world_ee.matrix(), none[k].kin.T_world_ee.matrix()) << "sample " << k;
+  }
+  for (const Effect* x : registered_effects()) {
+    if (!x->contact() || !x->contact()->injectable()) continue;
+    Effects one;
+    draw_effect(x->name(), 9, r.scene, one);
+    const auto drawn = test::measure(r, one, 5);
+    double moved = 0.0;
+    for (std::size_t k = 0; k < none.size(); ++k) moved = std::max(moved, (drawn[k].w_fp - none[k].w_fp).cwiseAbs().maxCoeff());
+    EXPECT_GT(moved, 0.0) << x->name();
+  }
+  // A true value it does not know is refused with its name.
+  Effects e;
+  EXPECT_THAT(
+      [&] {
+        inject_effect("time_offset", {{"time_ofset_s", 0.01}}, e);
+      },
+      ::testing::ThrowsMessage<std::invalid_argument>(HasSubstr("time_offset: no true value 'time_ofset_s'")));
 }
 
 // --- fitted, reported, checked, named ------------------------------------------------------------
@@ -95,7 +186,7 @@ TEST(EffectRegistry, TheHiddenEffectsSchemaListsTheInjectableEffects) {
 TEST(EffectRegistry, AToyEffectIsFittedReportedCheckedAndNamed) {
   const auto r = test::scene_run("press_slide");
   Effects e;
-  e.sensor_bias(2) = 6.0;  // what the toy models: fz reads 6 N too much
+  inject_effect("toy_fz_offset", {{"toy_offset_fz_n", 6.0}}, e);  // fz reads 6 N too much: its own injection
   const auto data = make_contact_data(r.scene, r.model.v_tm, test::measure(r, e, 7), r.force_scale_n, r.moment_scale_nm);
 
   const ContactFamily fam(data, {"toy_fz_offset"});

@@ -3,11 +3,14 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <memory>
 #include <random>
 #include <set>
+#include <thread>
+#include <typeinfo>
 
 #include <hil/diagnose/contact_family.hpp>
 #include <hil/diagnose/deflection_family.hpp>
@@ -29,7 +32,7 @@ class SineFamily : public ModelFamily {
   std::vector<Param> linear() const override { return {{"amplitude", "", 1, false}, {"offset", "", 1, true}}; }
   std::vector<Param> nonlinear() const override { return {{"frequency", "Hz", 0.1, true, 0.1, 5}}; }
   std::vector<Eigen::VectorXd> starts() const override { return {Eigen::VectorXd::Constant(1, 1.2)}; }
-  void design(const Eigen::VectorXd& phi, Eigen::MatrixXd& A) const override {
+  void design(const Eigen::VectorXd& phi, Eigen::MatrixXd& A, FamilyData&) const override {
     A.setZero(static_cast<Eigen::Index>(6 * o_.size()), 2);
     for (std::size_t k = 0; k < o_.size(); ++k)
       for (int c = 0; c < 6; ++c) {
@@ -93,8 +96,8 @@ class JumpingSine : public SineFamily {
  public:
   JumpingSine(const Observations& o, double start, double edge, double jump) : SineFamily(o), start_(start), edge_(edge), jump_(jump) {}
   std::vector<Eigen::VectorXd> starts() const override { return {Eigen::VectorXd::Constant(1, start_)}; }
-  void design(const Eigen::VectorXd& phi, Eigen::MatrixXd& A) const override {
-    SineFamily::design(phi, A);
+  void design(const Eigen::VectorXd& phi, Eigen::MatrixXd& A, FamilyData& data) const override {
+    SineFamily::design(phi, A, data);
     if (phi(0) >= edge_) A(6 * 17 + 2, 0) += jump_;
   }
 
@@ -133,7 +136,7 @@ class CollinearFamily : public ModelFamily {
     return {{"frequency", "Hz", 0.1, false, 0.1, 5}, {"ghost_gain", "", 0.01, true, -0.5, 0.5}};
   }
   std::vector<Eigen::VectorXd> starts() const override { return {(Eigen::VectorXd(2) << 1.2, 0.0).finished()}; }
-  void design(const Eigen::VectorXd& phi, Eigen::MatrixXd& A) const override {
+  void design(const Eigen::VectorXd& phi, Eigen::MatrixXd& A, FamilyData&) const override {
     A.setZero(static_cast<Eigen::Index>(6 * o_.size()), 3);
     for (std::size_t k = 0; k < o_.size(); ++k)
       for (int c = 0; c < 6; ++c) {
@@ -206,7 +209,7 @@ class BoundedSlope : public ModelFamily {
   std::string name() const override { return "bounded"; }
   std::vector<Param> linear() const override { return {{"level", "", 1, false}}; }
   std::vector<Param> nonlinear() const override { return {{"slope", "1/s", 0.01, true, -0.05, 0.05}}; }
-  void design(const Eigen::VectorXd& phi, Eigen::MatrixXd& A) const override {
+  void design(const Eigen::VectorXd& phi, Eigen::MatrixXd& A, FamilyData&) const override {
     A.setZero(static_cast<Eigen::Index>(6 * o_.size()), 1);
     for (std::size_t k = 0; k < o_.size(); ++k)
       for (int c = 0; c < 6; ++c) A(static_cast<Eigen::Index>(6 * k) + c, 0) = 1.0 + phi(0) * o_.t_s[k];
@@ -242,7 +245,7 @@ class Line : public ModelFamily {
   explicit Line(const Observations& o, double shift = 0.0) : o_(o), shift_(shift) {}
   std::string name() const override { return "line"; }
   std::vector<Param> linear() const override { return {{"a", "", 1, false}, {"b", "", 1, true}}; }
-  void design(const Eigen::VectorXd&, Eigen::MatrixXd& A) const override {
+  void design(const Eigen::VectorXd&, Eigen::MatrixXd& A, FamilyData&) const override {
     A.setZero(static_cast<Eigen::Index>(6 * o_.size()), 2);
     for (std::size_t k = 0; k < o_.size(); ++k)
       for (int c = 0; c < 6; ++c) {
@@ -381,7 +384,7 @@ class DecayFamily : public ModelFamily {
   std::vector<Param> linear() const override { return {{"amplitude", "", 1, false}, {"offset", "", 1, true}}; }
   std::vector<Param> nonlinear() const override { return {{"rate", "1/s", 0.1, true, 0, 10}, {"frequency", "Hz", 0.1, true, 0.1, 5}}; }
   std::vector<Eigen::VectorXd> starts() const override { return {Eigen::Vector2d(0.2, 1.15)}; }
-  void design(const Eigen::VectorXd& phi, Eigen::MatrixXd& A) const override {
+  void design(const Eigen::VectorXd& phi, Eigen::MatrixXd& A, FamilyData&) const override {
     A.setZero(static_cast<Eigen::Index>(6 * o_.size()), 2);
     for (std::size_t k = 0; k < o_.size(); ++k)
       for (int c = 0; c < 6; ++c) {
@@ -446,7 +449,7 @@ class SineStepFamily : public ModelFamily {
     if (step_) s(1) = 2.0;
     return {s};
   }
-  void design(const Eigen::VectorXd& phi, Eigen::MatrixXd& A) const override {
+  void design(const Eigen::VectorXd& phi, Eigen::MatrixXd& A, FamilyData&) const override {
     A.setZero(static_cast<Eigen::Index>(6 * o_.size()), step_ ? 3 : 2);
     for (std::size_t k = 0; k < o_.size(); ++k)
       for (int c = 0; c < 6; ++c) {
@@ -522,7 +525,7 @@ class MeanFamily : public ModelFamily {
     for (int c = 0; c < 6; ++c) p.push_back({"mean_" + std::to_string(c), "", 1, false});
     return p;
   }
-  void design(const Eigen::VectorXd&, Eigen::MatrixXd& A) const override {
+  void design(const Eigen::VectorXd&, Eigen::MatrixXd& A, FamilyData&) const override {
     A.setZero(static_cast<Eigen::Index>(6 * o_.size()), 6);
     for (std::size_t k = 0; k < o_.size(); ++k)
       for (int c = 0; c < 6; ++c) A(static_cast<Eigen::Index>(6 * k) + c, c) = 1.0;
@@ -671,9 +674,10 @@ TEST(ContactFamily, PrunedAndIncrementalContactsAreMindistsOnEveryPair) {
   phis.back()(q - 1) = 0.3;  // a delay of 0.3 s moves the ee by more than the pair table covers
   cid::MindistWorkspace ws;
   std::vector<cid::ContactPoint> cs;
+  const auto data = m.make_data();  // one evaluator's: each design steps from the last one's contacts
   for (const auto& ph : phis) {
     Eigen::MatrixXd A;
-    m.design(ph, A);
+    m.design(ph, A, *data);
     Eigen::VectorXd x = r.scene.design();
     for (std::size_t j = 0; j < d.fit_uncertainties.size(); ++j) x(d.fit_uncertainties[j]) += ph(static_cast<Eigen::Index>(j));
     for (std::size_t k = 0; k < d.obs.size(); ++k) {
@@ -688,6 +692,89 @@ TEST(ContactFamily, PrunedAndIncrementalContactsAreMindistsOnEveryPair) {
       }
       ASSERT_EQ(Eigen::MatrixXd(A.block(static_cast<Eigen::Index>(6 * k), 0, 6, 2)), Eigen::MatrixXd(expected))
           << "sample " << k << ", phi " << ph.transpose();
+    }
+  }
+}
+
+/// φ values a fit visits: the start, a point, one finite-difference step per entry, and a delay
+/// beyond the pair table.
+std::vector<Eigen::VectorXd> visited_phis(const ContactFamily& m) {
+  const auto nl = m.nonlinear();
+  const Eigen::Index q = static_cast<Eigen::Index>(nl.size());
+  std::vector<Eigen::VectorXd> phis{Eigen::VectorXd::Zero(q)};
+  Eigen::VectorXd phi(q);
+  for (Eigen::Index j = 0; j < q; ++j) phi(j) = (j % 2 ? 2.0 : -1.5) * nl[static_cast<std::size_t>(j)].scale;
+  for (Eigen::Index j = 0; j < q; ++j) {
+    phis.push_back(phi);
+    phis.back()(j) += 1e-4 * nl[static_cast<std::size_t>(j)].scale;
+  }
+  phis.push_back(Eigen::VectorXd::Zero(q));
+  phis.back()(q - 1) = 0.3;
+  return phis;
+}
+
+TEST(ContactFamily, OneFamilyDesignsOnTwoThreadsEachWithItsOwnDataAsOnOne) {
+  // The family is the model, shared; its scratch and the base a design steps from are each
+  // evaluator's (FamilyData). Two threads walk the same φ in opposite orders on one family: every
+  // design must equal the one-off design (fresh data) bit for bit. TSan (tools/sanitize.sh) sees a
+  // shared write here if the family kept any.
+  const auto r = test::scene_run("acu_2a");
+  Effects e;
+  draw_effect("geometric_offset", 23, r.scene, e);
+  const auto d = make_contact_data(r.scene, r.model.v_tm, test::measure(r, e, 23), r.force_scale_n, r.moment_scale_nm);
+  const ContactFamily m(d, {"geometric_offset", "time_offset"});
+  const auto phis = visited_phis(m);
+  std::vector<Eigen::MatrixXd> expected(phis.size());
+  for (std::size_t i = 0; i < phis.size(); ++i) m.design(phis[i], expected[i]);
+  std::array<std::vector<Eigen::MatrixXd>, 2> got;
+  auto walk = [&](int t) {
+    const auto data = m.make_data();
+    got[static_cast<std::size_t>(t)].resize(phis.size());
+    for (std::size_t a = 0; a < phis.size(); ++a) {
+      const std::size_t i = t == 0 ? a : phis.size() - 1 - a;
+      m.design(phis[i], got[static_cast<std::size_t>(t)][i], *data);
+    }
+  };
+  std::thread other(walk, 1);
+  walk(0);
+  other.join();
+  for (int t = 0; t < 2; ++t)
+    for (std::size_t i = 0; i < phis.size(); ++i)
+      ASSERT_EQ(got[static_cast<std::size_t>(t)][i], expected[i]) << "thread " << t << ", phi " << i;
+  // Another family's data is refused, not misread.
+  Eigen::MatrixXd A;
+  auto foreign = std::make_unique<FamilyData>();
+  EXPECT_THROW(m.design(phis[1], A, *foreign), std::bad_cast);
+}
+
+TEST(Engine, FoldsOnTwoThreadsScoreExactlyAsOnOne) {
+  // CvOptions::threads spreads the folds over the cores; each result goes to its fold's slot, so
+  // the score (held-out predictions, fold estimates, intervals) is the serial one bit for bit. A
+  // family that derives choices from its folds' data (sensor_gain's reference) and one whose
+  // contacts move with φ (time_offset) are both run.
+  const auto r = test::scene_run("press_slide");
+  Effects e;
+  draw_effect("time_offset", 31, r.scene, e);
+  const auto d = make_contact_data(r.scene, r.model.v_tm, test::measure(r, e, 31), r.force_scale_n, r.moment_scale_nm);
+  for (const auto& ext : {std::set<std::string>{"time_offset"}, std::set<std::string>{"sensor_gain"}}) {
+    const ContactFamily m(d, ext);
+    CvOptions one, two;
+    one.threads = 1;
+    two.threads = 2;
+    one.offsets = two.offsets = 2;  // the shifted grid's folds too
+    const Score a = score(m, d.obs, one), b = score(m, d.obs, two);
+    ASSERT_EQ(a.fold_phi.size(), 10u) << *ext.begin();
+    ASSERT_EQ(b.fold_phi.size(), a.fold_phi.size());
+    for (std::size_t i = 0; i < a.fold_phi.size(); ++i) EXPECT_EQ(a.fold_phi[i], b.fold_phi[i]) << *ext.begin() << " fold " << i;
+    EXPECT_EQ(a.cv_prediction, b.cv_prediction) << *ext.begin();
+    ASSERT_EQ(a.cv_shifted.size(), 1u);
+    EXPECT_EQ(a.cv_shifted[0], b.cv_shifted[0]) << *ext.begin();
+    EXPECT_EQ(a.cv_error, b.cv_error) << *ext.begin();
+    ASSERT_EQ(a.full.reported.size(), b.full.reported.size());
+    for (std::size_t j = 0; j < a.full.reported.size(); ++j) {
+      EXPECT_EQ(a.full.reported[j].value, b.full.reported[j].value) << a.full.reported[j].name;
+      EXPECT_EQ(a.full.reported[j].std, b.full.reported[j].std) << a.full.reported[j].name;
+      EXPECT_EQ(a.full.reported[j].std_folds, b.full.reported[j].std_folds) << a.full.reported[j].name;
     }
   }
 }
@@ -708,19 +795,12 @@ TEST_P(ExactRecovery, OfTheInjectedParameter) {
   const auto r = test::scene_run(c.scene);
   Effects e;
   const std::string eff = c.effect;
-  if (eff == "viscous_friction") e.viscous_n_s_per_m = c.truth;
-  if (eff == "contact_damping") {
-    e.damping_n_s_per_m = c.truth;
-    e.damping_friction = std::string(c.param) == "damping_friction_n_s_per_m";
-  }
-  if (eff == "sensor_bias") e.sensor_bias(0) = c.truth;
-  if (eff == "sensor_gain") e.sensor_gain(0) = c.truth;
-  if (eff == "nonlinear_stiffness") {
-    e.stiffness_exponent = c.truth;
-    e.delta_ref_m = data_of(r, {}).delta_ref_m;  // the family's reference interference
-  }
-  if (eff == "time_offset") e.time_offset_s = c.truth;
-  if (eff == "geometric_offset") e.geometric["block_top_z"] = c.truth;
+  // The injected effect's true value under the name the fit reports it (ContactEffect::inject).
+  TruthValues injected{{c.param, c.truth}};
+  if (eff == "contact_damping" && std::string(c.param) == "damping_friction_n_s_per_m")
+    injected = {{"damping_n_s_per_m", c.truth}, {"damping_friction", 1.0}};
+  if (eff == "nonlinear_stiffness") injected["delta_ref_m"] = data_of(r, {}).delta_ref_m;  // the family's reference interference
+  inject_effect(eff, injected, e);
   const auto d = data_of(r, e);
   ContactFamily m(d, {eff});
   const Fit f = fit(m, d.obs, all(d.obs.size()));
@@ -979,7 +1059,7 @@ TEST(ContactFamily, ComplianceOfTheGeneratorIsSelfConsistent) {
   // robot pushes less hard than a rigid one into the same commanded pose.
   const auto r = test::scene_run("press_slide");
   Effects e;
-  e.compliance(2, 2) = 2e-6;
+  inject_effect("robot_compliance", {{"C_z_z", 2e-6}}, e);
   const auto rigid = test::measure(r, {}, 1, false);
   const auto soft = test::measure(r, e, 1, false);
   double fz_rigid = 0, fz_soft = 0;
@@ -1058,8 +1138,8 @@ TEST(Generator, DrawsSeededEffectsAndRefusesUnknownOnes) {
   draw_effect("viscous_friction", 5, r.scene, a);
   draw_effect("viscous_friction", 5, r.scene, b);
   draw_effect("viscous_friction", 6, r.scene, c);
-  EXPECT_EQ(a.viscous_n_s_per_m, b.viscous_n_s_per_m);
-  EXPECT_NE(a.viscous_n_s_per_m, c.viscous_n_s_per_m);
+  EXPECT_EQ(a.truth_of("viscous_n_s_per_m", r.scene), b.truth_of("viscous_n_s_per_m", r.scene));
+  EXPECT_NE(a.truth_of("viscous_n_s_per_m", r.scene), c.truth_of("viscous_n_s_per_m", r.scene));
   EXPECT_EQ(a.names(), std::vector<std::string>{"viscous_friction"});
   EXPECT_THAT([&] { draw_effect("magnetism", 1, r.scene, a); },
               ThrowsMessage<std::invalid_argument>(HasSubstr("unknown effect 'magnetism' (expected one of the diagnosis' candidates)")));
@@ -1109,7 +1189,7 @@ class ConfoundedFamily : public ModelFamily {
     if (ext_.count("b")) p.push_back({"beta", "", 1, true});
     return p;
   }
-  void design(const Eigen::VectorXd&, Eigen::MatrixXd& A) const override {
+  void design(const Eigen::VectorXd&, Eigen::MatrixXd& A, FamilyData&) const override {
     A.setZero(static_cast<Eigen::Index>(6 * o_.size()), static_cast<Eigen::Index>(linear().size()));
     for (std::size_t k = 0; k < o_.size(); ++k)
       for (int c = 0; c < 6; ++c) {

@@ -30,27 +30,6 @@ std::string case_name(const ::testing::TestParamInfo<Case>& i) { return label(i.
 // Readable test names in ctest (instead of the parameter's bytes).
 void PrintTo(const Case& c, std::ostream* os) { *os << label(c); }
 
-/// The true value of a reported parameter, if the test knows it.
-std::optional<double> truth_of(const std::string& name, const Effects& e, const cid::Scene& s) {
-  const char* comp[6] = {"fx", "fy", "fz", "mx", "my", "mz"};
-  for (int c = 0; c < 6; ++c) {
-    if (name == std::string("bias_") + comp[c]) return e.sensor_bias(c);
-    if (name == std::string("gain_") + comp[c]) return e.sensor_gain(c);
-  }
-  if (name == "viscous_n_s_per_m") return e.viscous_n_s_per_m;
-  if (name == "damping_n_s_per_m") return e.damping_n_s_per_m;
-  if (name == "stiffness_exponent") return e.stiffness_exponent;
-  if (name == "time_offset_s") return e.time_offset_s;
-  if (name == "C_x_x") return e.compliance(0, 0);
-  if (name == "C_y_y") return e.compliance(1, 1);
-  for (const auto& u : s.uncertainties)
-    if (u.name == name) {
-      const auto it = e.geometric.find(name);
-      return it != e.geometric.end() ? it->second : u.design_value;
-    }
-  return std::nullopt;
-}
-
 class HiddenEffect : public ::testing::TestWithParam<Case> {};
 
 TEST_P(HiddenEffect, IsNamedWithItsMagnitudeAndAGain) {
@@ -91,7 +70,7 @@ TEST_P(HiddenEffect, IsNamedWithItsMagnitudeAndAGain) {
   const double rel = c.scene.rfind("acu_", 0) == 0 ? 0.15 : 0.0;
   int checked = 0;
   for (const auto& q : d.extended->full.reported) {
-    const auto t = truth_of(q.name, e, r.scene);
+    const auto t = e.truth_of(q.name, r.scene);
     if (!t || !(q.extension || q.name.rfind("C_", 0) == 0) || q.pnr() < 5.0) continue;
     if (std::find(c.effects.begin(), c.effects.end(), d.cause) == c.effects.end()) continue;
     ++checked;

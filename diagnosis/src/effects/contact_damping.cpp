@@ -27,19 +27,44 @@ class Term : public ContactTerm {
   }
 };
 
+/// D times the penetration rate on the normal, and on the friction bound when it follows the total normal force.
+class Damping : public Injection {
+ public:
+  Damping(double d, bool friction) : d_(d), friction_(friction) {}
+  TruthValues truth() const override { return {{"damping_n_s_per_m", d_}, {"damping_friction", friction_ ? 1.0 : 0.0}}; }
+  std::vector<TruthField> file_fields() const override {
+    return {{"damping_n_s_per_m", Eigen::MatrixXd::Constant(1, 1, d_), {}, "contact damping, N s/m"}};
+  }
+  void contact_force(const SimulatedContact& at, ContactForce& f) const override {
+    const double rate = -contact_id::relative_velocity(at.scene, at.kin, at.contact.point).dot(at.contact.normal);
+    const double damping_n = d_ * rate;
+    f.normal_n += damping_n;
+    if (friction_) f.friction_normal_n += damping_n;
+  }
+
+ private:
+  double d_;
+  bool friction_;
+};
+
 class ContactDamping : public ContactEffect {
  public:
   std::string name() const override { return "contact_damping"; }
+  int list_order() const override { return 70; }
   std::string description() const override {
     return "the normal force grows with the penetration rate (and the friction of sliding contacts with it)";
   }
   int layout_order() const override { return 70; }
   std::shared_ptr<const ContactTerm> bind(const ContactBinding&) const override { return std::make_shared<Term>(); }
   bool injectable() const override { return true; }
-  bool present(const Effects& e) const override { return e.damping_n_s_per_m != 0; }
-  void draw(unsigned seed, const contact_id::Scene&, Effects& e) const override {
+  std::shared_ptr<const Injection> draw(unsigned seed, const contact_id::Scene&) const override {
     EffectDraw r(seed, name());
-    e.damping_n_s_per_m = std::abs(r.magnitude(3000, 6000));
+    return inject({{"damping_n_s_per_m", std::abs(r.magnitude(3000, 6000))}});
+  }
+  /// damping_friction: 1 when the friction bound follows the total normal force (damping included).
+  std::shared_ptr<const Injection> inject(const TruthValues& v) const override {
+    check_truth_keys(name(), v, {"damping_n_s_per_m", "damping_friction"});
+    return std::make_shared<Damping>(truth_value(v, "damping_n_s_per_m"), truth_value(v, "damping_friction") != 0.0);
   }
 };
 

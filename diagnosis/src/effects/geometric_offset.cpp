@@ -38,24 +38,52 @@ class Term : public ContactTerm {
   std::vector<Param> params_;
 };
 
+/// The features at true values of their uncertainties (by name; the others as the scene's truth has them).
+class Features : public Injection {
+ public:
+  explicit Features(TruthValues x) : x_(std::move(x)) {}
+  TruthValues truth() const override { return x_; }
+  /// The file's "geometric": every uncertainty's true value (none when absent: the scene's truth stays).
+  std::vector<TruthField> file_fields() const override {
+    if (x_.empty()) return {};
+    TruthField f{"geometric",
+                 Eigen::MatrixXd(static_cast<Eigen::Index>(x_.size()), 1),
+                 {},
+                 "true value of each geometric uncertainty by name (those absent stay at their design value), m or rad"};
+    for (const auto& [name, value] : x_) {
+      f.value(static_cast<Eigen::Index>(f.labels.size()), 0) = value;
+      f.labels.push_back(name);
+    }
+    return {f};
+  }
+  void channels(const contact_id::Scene& scene, SimulationChannels& c) const override { set_uncertainties(scene, x_, c.x); }
+
+ private:
+  TruthValues x_;
+};
+
 class GeometricOffset : public ContactEffect {
  public:
   std::string name() const override { return "geometric_offset"; }
+  int list_order() const override { return 10; }
   std::string description() const override { return "the contact features are shifted or turned from their design (x_u)"; }
   int layout_order() const override { return 10; }
   std::shared_ptr<const ContactTerm> bind(const ContactBinding& b) const override { return std::make_shared<Term>(b.data); }
   bool injectable() const override { return true; }
-  bool present(const Effects& e) const override { return !e.geometric.empty(); }
-  void draw(unsigned seed, const contact_id::Scene& scene, Effects& e) const override {
+  std::shared_ptr<const Injection> draw(unsigned seed, const contact_id::Scene& scene) const override {
     EffectDraw r(seed, name());
+    if (scene.uncertainties.empty()) throw std::invalid_argument("geometric_offset: the rig declares no uncertainties");
     // Like the contact paper's hidden truth: shifts of 1-2 prior std, rotations of 1-2e-4 rad.
+    TruthValues v;
     for (const auto& q : scene.uncertainties) {
       const bool rot = q.kind == contact_id::Uncertainty::Kind::rotation;
       const double s = rot ? 1e-4 : (q.prior_std > 0 ? q.prior_std : 1e-4);
-      e.geometric[q.name] = q.design_value + r.magnitude(1.0, 2.0) * s;
+      v[q.name] = q.design_value + r.magnitude(1.0, 2.0) * s;
     }
-    if (scene.uncertainties.empty()) throw std::invalid_argument("geometric_offset: the rig declares no uncertainties");
+    return inject(v);
   }
+  /// Keys: the scene's uncertainties by name, their true values (checked against the scene when simulated).
+  std::shared_ptr<const Injection> inject(const TruthValues& v) const override { return std::make_shared<Features>(v); }
 };
 
 }  // namespace

@@ -31,17 +31,38 @@ class Term : public ContactTerm {
   }
 };
 
+/// The normal force K δ_ref (δ/δ_ref)^p.
+class Law : public Injection {
+ public:
+  Law(double p, double delta_ref_m) : p_(p), ref_(delta_ref_m) {}
+  TruthValues truth() const override { return {{"stiffness_exponent", p_}, {"delta_ref_m", ref_}}; }
+  std::vector<TruthField> file_fields() const override {
+    return {{"stiffness_exponent", Eigen::MatrixXd::Constant(1, 1, p_), {}, "exponent p of the nonlinear contact stiffness (1 = linear)"}};
+  }
+  void contact_force(const SimulatedContact&, ContactForce& f) const override {
+    if (p_ != 1.0) f.delta_m = ref_ * std::pow(f.delta_m / ref_, p_);
+  }
+
+ private:
+  double p_, ref_;
+};
+
 class NonlinearStiffness : public ContactEffect {
  public:
   std::string name() const override { return "nonlinear_stiffness"; }
+  int list_order() const override { return 80; }
   std::string description() const override { return "the normal force is a power of the interference (Hertz-like)"; }
   int layout_order() const override { return 30; }
   std::shared_ptr<const ContactTerm> bind(const ContactBinding&) const override { return std::make_shared<Term>(); }
   bool injectable() const override { return true; }
-  bool present(const Effects& e) const override { return e.stiffness_exponent != 1.0; }
-  void draw(unsigned seed, const contact_id::Scene&, Effects& e) const override {
+  std::shared_ptr<const Injection> draw(unsigned seed, const contact_id::Scene&) const override {
     EffectDraw r(seed, name());
-    e.stiffness_exponent = 1.0 + std::abs(r.magnitude(0.25, 0.5));
+    return inject({{"stiffness_exponent", 1.0 + std::abs(r.magnitude(0.25, 0.5))}});
+  }
+  /// delta_ref_m: the interference at which the law's force equals the linear one (default 0.1 mm).
+  std::shared_ptr<const Injection> inject(const TruthValues& v) const override {
+    check_truth_keys(name(), v, {"stiffness_exponent", "delta_ref_m"});
+    return std::make_shared<Law>(truth_value(v, "stiffness_exponent", 1.0), truth_value(v, "delta_ref_m", 1e-4));
   }
 };
 

@@ -8,6 +8,7 @@ namespace {
 class RestChange : public Effect {
  public:
   std::string name() const override { return "rest_change"; }
+  int list_order() const override { return 90; }
   std::string description() const override {
     return "the rest pose changes at events located from the data (the body slips on its support and stays where it went)";
   }

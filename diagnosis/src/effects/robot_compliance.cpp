@@ -14,6 +14,12 @@ namespace {
 
 using hil::Matrix6d;
 
+/// The name the fit reports entry (i, j) of C under (C_x_x ... C_rz_rz).
+std::string entry_name(int i, int j) {
+  static const char* ax[6] = {"x", "y", "z", "rx", "ry", "rz"};
+  return std::string("C_") + ax[i] + "_" + ax[j];
+}
+
 // Typical sizes of the compliance entries: 1 µm/N translational, 10 µrad/N coupling, 0.1 mrad/(N m)
 // rotational; the identifiable directions are chosen in these units.
 double compliance_scale(int i, int j) {
@@ -93,7 +99,6 @@ class Term : public ContactTerm {
   }
   void report_derived(const ContactSlots& s, Eigen::Index p, const Fit& f, std::vector<Reported>& out) const override {
     // The compliance entries the fitted directions give (informative, not PNR-checked).
-    const char* ax[6] = {"x", "y", "z", "rx", "ry", "rz"};
     const Eigen::Index q0 = p + s.nonlinear;
     const Eigen::Index r = static_cast<Eigen::Index>(basis_.size());
     for (int i = 0; i < 6; ++i)
@@ -104,7 +109,7 @@ class Term : public ContactTerm {
         const double v = b.dot(f.phi.segment(s.nonlinear, r));
         const double sd = std::sqrt(std::max(0.0, b.dot(f.cov.block(q0, q0, r, r) * b)));
         const std::string unit = (i < 3 && j < 3) ? "m/N" : (i >= 3 && j >= 3) ? "rad/(N m)" : "m/(N m)";
-        out.push_back({std::string("C_") + ax[i] + "_" + ax[j], unit, v, sd, false});
+        out.push_back({entry_name(i, j), unit, v, sd, false});
       }
   }
   std::string check(const ContactSlots& slots, Eigen::Index p, const Fit& f) const override {
@@ -138,21 +143,54 @@ class Term : public ContactTerm {
   std::vector<Matrix6d> null_basis_;  ///< the symmetric directions the data cannot see (the rest of the 21)
 };
 
+/// The ee deflects under its load: T = T_cmd Exp(C w_ee).
+class Wrist : public Injection {
+ public:
+  explicit Wrist(const Matrix6d& C) : C_(C) {}
+  /// The entries it sets (those the test can check a fit's derived entries against).
+  TruthValues truth() const override {
+    TruthValues t;
+    for (int i = 0; i < 6; ++i)
+      for (int j = i; j < 6; ++j)
+        if (C_(i, j) != 0.0) t[entry_name(i, j)] = C_(i, j);
+    return t;
+  }
+  std::vector<TruthField> file_fields() const override {
+    return {{"compliance", C_, {}, "wrist compliance (robot_compliance), 6x6 from wrench (N, N m) to displacement (m, rad)"}};
+  }
+  void channels(const contact_id::Scene&, SimulationChannels& c) const override { c.compliance = C_; }
+
+ private:
+  Matrix6d C_;
+};
+
 class RobotCompliance : public ContactEffect {
  public:
   std::string name() const override { return "robot_compliance"; }
+  int list_order() const override { return 20; }
   std::string description() const override { return "the end effector deflects under the contact load (6x6 Cartesian compliance)"; }
   bool extends(FamilyKind f) const override { return f == FamilyKind::contact || f == FamilyKind::deflection; }
   int layout_order() const override { return 20; }
   std::shared_ptr<const ContactTerm> bind(const ContactBinding& b) const override { return std::make_shared<Term>(b); }
   bool injectable() const override { return true; }
-  bool present(const Effects& e) const override { return !e.compliance.isZero(); }
-  void draw(unsigned seed, const contact_id::Scene&, Effects& e) const override {
+  std::shared_ptr<const Injection> draw(unsigned seed, const contact_id::Scene&) const override {
     EffectDraw r(seed, name());
     // A lateral compliance of the wrist: 0.5-1 µm/N in x and y of the ee frame (a tenth to a fifth
     // of the contact's own compliance 1/K).
-    e.compliance(0, 0) = std::abs(r.magnitude(0.5e-6, 1e-6));
-    e.compliance(1, 1) = std::abs(r.magnitude(0.5e-6, 1e-6));
+    const double cxx = std::abs(r.magnitude(0.5e-6, 1e-6));
+    return inject({{"C_x_x", cxx}, {"C_y_y", std::abs(r.magnitude(0.5e-6, 1e-6))}});
+  }
+  /// Keys C_<i>_<j> (i <= j of x y z rx ry rz): the entries of the symmetric C, as the fit reports them.
+  std::shared_ptr<const Injection> inject(const TruthValues& v) const override {
+    std::vector<std::string> keys;
+    Matrix6d C = Matrix6d::Zero();
+    for (int i = 0; i < 6; ++i)
+      for (int j = i; j < 6; ++j) {
+        keys.push_back(entry_name(i, j));
+        C(i, j) = C(j, i) = truth_value(v, keys.back());
+      }
+    check_truth_keys(name(), v, keys);
+    return std::make_shared<Wrist>(C);
   }
 };
 

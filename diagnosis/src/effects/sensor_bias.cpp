@@ -24,18 +24,37 @@ class Term : public ContactTerm {
   const ContactData& d_;
 };
 
+/// The plate reads a constant too much per component.
+class Bias : public Injection {
+ public:
+  explicit Bias(const hil::Vector6d& b) : b_(b) {}
+  TruthValues truth() const override { return by_component("bias_", b_); }
+  std::vector<TruthField> file_fields() const override { return {{"sensor_bias", b_, {}, "fx fy fz (N), mx my mz (N m)"}}; }
+  void sensor(hil::Vector6d& w) const override { w += b_; }
+
+ private:
+  hil::Vector6d b_;
+};
+
 class SensorBias : public ContactEffect {
  public:
   std::string name() const override { return "sensor_bias"; }
+  int list_order() const override { return 40; }
   std::string description() const override { return "the force plate has a constant offset per component"; }
   bool extends(FamilyKind f) const override { return f == FamilyKind::contact || f == FamilyKind::stiffness; }
   int layout_order() const override { return 80; }
   std::shared_ptr<const ContactTerm> bind(const ContactBinding& b) const override { return std::make_shared<Term>(b.data); }
   bool injectable() const override { return true; }
-  bool present(const Effects& e) const override { return !e.sensor_bias.isZero(); }
-  void draw(unsigned seed, const contact_id::Scene&, Effects& e) const override {
+  std::shared_ptr<const Injection> draw(unsigned seed, const contact_id::Scene&) const override {
     EffectDraw r(seed, name());
-    for (int c = 0; c < 6; ++c) e.sensor_bias(c) = c < 3 ? r.magnitude(3.0, 8.0) : r.magnitude(0.3, 0.8);
+    TruthValues v;
+    for (int c = 0; c < 6; ++c)
+      v[std::string("bias_") + kWrenchComponents[static_cast<std::size_t>(c)]] = c < 3 ? r.magnitude(3.0, 8.0) : r.magnitude(0.3, 0.8);
+    return inject(v);
+  }
+  /// Keys bias_<component>, N or N m.
+  std::shared_ptr<const Injection> inject(const TruthValues& v) const override {
+    return std::make_shared<Bias>(per_component(name(), "bias_", v));
   }
 };
 

@@ -36,20 +36,40 @@ class Term : public ContactTerm {
   int reference_ = 2;
 };
 
+/// The plate reads (1 + γ_c) w_c per component.
+class Gain : public Injection {
+ public:
+  explicit Gain(const hil::Vector6d& g) : g_(g) {}
+  TruthValues truth() const override { return by_component("gain_", g_); }
+  std::vector<TruthField> file_fields() const override {
+    return {{"sensor_gain", g_, {}, "γ per component: the plate reads (1 + γ) w (0 = none)"}};
+  }
+  void sensor(hil::Vector6d& w) const override { w = w.cwiseProduct(hil::Vector6d::Ones() + g_); }
+
+ private:
+  hil::Vector6d g_;
+};
+
 class SensorGain : public ContactEffect {
  public:
   std::string name() const override { return "sensor_gain"; }
+  int list_order() const override { return 50; }
   std::string description() const override { return "the force plate's scale differs between components"; }
   bool extends(FamilyKind f) const override { return f == FamilyKind::contact || f == FamilyKind::stiffness; }
   int layout_order() const override { return 50; }
   std::shared_ptr<const ContactTerm> bind(const ContactBinding& b) const override { return std::make_shared<Term>(b.data, b.samples); }
   bool injectable() const override { return true; }
-  bool present(const Effects& e) const override { return !e.sensor_gain.isZero(); }
-  void draw(unsigned seed, const contact_id::Scene&, Effects& e) const override {
+  std::shared_ptr<const Injection> draw(unsigned seed, const contact_id::Scene&) const override {
     EffectDraw r(seed, name());
     // The tangential forces and the tilting moments; the dominant normal component's gain is
     // indistinguishable from K, so it stays the reference.
-    for (int c : {0, 1, 3, 4}) e.sensor_gain(c) = r.magnitude(0.08, 0.15);
+    TruthValues v;
+    for (int c : {0, 1, 3, 4}) v[std::string("gain_") + kWrenchComponents[static_cast<std::size_t>(c)]] = r.magnitude(0.08, 0.15);
+    return inject(v);
+  }
+  /// Keys gain_<component>: γ, the plate reads (1 + γ) w.
+  std::shared_ptr<const Injection> inject(const TruthValues& v) const override {
+    return std::make_shared<Gain>(per_component(name(), "gain_", v));
   }
 };
 

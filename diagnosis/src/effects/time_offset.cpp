@@ -34,18 +34,29 @@ class Term : public ContactTerm {
   Param param_;
 };
 
+/// The generator's wrench stream lags the poses: interpolated at t - τ.
+class Delay : public ScalarInjection {
+ public:
+  explicit Delay(double tau_s) : ScalarInjection("time_offset_s", tau_s, "delay of the wrench, s") {}
+  void channels(const contact_id::Scene&, SimulationChannels& c) const override { c.delay_s = value(); }
+};
+
 class TimeOffset : public ContactEffect {
  public:
   std::string name() const override { return "time_offset"; }
+  int list_order() const override { return 30; }
   std::string description() const override { return "the wrench stream is delayed against the pose stream"; }
   bool extends(FamilyKind f) const override { return f == FamilyKind::contact || f == FamilyKind::deflection; }
   int layout_order() const override { return 40; }
   std::shared_ptr<const ContactTerm> bind(const ContactBinding& b) const override { return std::make_shared<Term>(b.data); }
   bool injectable() const override { return true; }
-  bool present(const Effects& e) const override { return e.time_offset_s != 0; }
-  void draw(unsigned seed, const contact_id::Scene&, Effects& e) const override {
+  std::shared_ptr<const Injection> draw(unsigned seed, const contact_id::Scene&) const override {
     EffectDraw r(seed, name());
-    e.time_offset_s = r.magnitude(0.015, 0.04);
+    return inject({{"time_offset_s", r.magnitude(0.015, 0.04)}});
+  }
+  std::shared_ptr<const Injection> inject(const TruthValues& v) const override {
+    check_truth_keys(name(), v, {"time_offset_s"});
+    return std::make_shared<Delay>(truth_value(v, "time_offset_s"));
   }
 };
 

@@ -18,17 +18,28 @@ class Term : public ContactTerm {
   }
 };
 
+/// c_v times the slip speed along each contact's tangent.
+class Viscous : public ScalarInjection {
+ public:
+  explicit Viscous(double cv) : ScalarInjection("viscous_n_s_per_m", cv, "viscous friction coefficient, N s/m") {}
+  void contact_force(const SimulatedContact& at, ContactForce& f) const override { f.tangential_n += value() * at.contact.slip_speed; }
+};
+
 class ViscousFriction : public ContactEffect {
  public:
   std::string name() const override { return "viscous_friction"; }
+  int list_order() const override { return 60; }
   std::string description() const override { return "the friction force grows with the sliding speed"; }
   int layout_order() const override { return 60; }
   std::shared_ptr<const ContactTerm> bind(const ContactBinding&) const override { return std::make_shared<Term>(); }
   bool injectable() const override { return true; }
-  bool present(const Effects& e) const override { return e.viscous_n_s_per_m != 0; }
-  void draw(unsigned seed, const contact_id::Scene&, Effects& e) const override {
+  std::shared_ptr<const Injection> draw(unsigned seed, const contact_id::Scene&) const override {
     EffectDraw r(seed, name());
-    e.viscous_n_s_per_m = std::abs(r.magnitude(4000, 8000));
+    return inject({{"viscous_n_s_per_m", std::abs(r.magnitude(4000, 8000))}});
+  }
+  std::shared_ptr<const Injection> inject(const TruthValues& v) const override {
+    check_truth_keys(name(), v, {"viscous_n_s_per_m"});
+    return std::make_shared<Viscous>(truth_value(v, "viscous_n_s_per_m"));
   }
 };
 

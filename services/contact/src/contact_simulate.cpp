@@ -5,6 +5,7 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <filesystem>
 
 #include <hil/diagnose/contact_family.hpp>
@@ -21,7 +22,28 @@ namespace fs = std::filesystem;
 
 namespace {
 
-/// The hidden truth of an injected simulation, for the test that checks the diagnosis.
+/// A field of the hidden-effects file as JSON: a number, an array, an array of rows, or an object.
+nlohmann::json field_json(const hil::diagnose::TruthField& f) {
+  if (!f.labels.empty()) {
+    nlohmann::json o = nlohmann::json::object();
+    for (std::size_t i = 0; i < f.labels.size(); ++i) o[f.labels[i]] = f.value(static_cast<Eigen::Index>(i), 0);
+    return o;
+  }
+  if (f.value.size() == 1) return f.value(0, 0);
+  auto row = [&](Eigen::Index r) {
+    std::vector<double> v;
+    for (Eigen::Index c = 0; c < f.value.cols(); ++c) v.push_back(f.value(r, c));
+    return v;
+  };
+  if (f.value.cols() == 1) return std::vector<double>(f.value.data(), f.value.data() + f.value.size());
+  nlohmann::json rows = nlohmann::json::array();
+  for (Eigen::Index r = 0; r < f.value.rows(); ++r) rows.push_back(row(r));
+  return rows;
+}
+
+/// The hidden truth of an injected simulation, for the test that checks the diagnosis: the
+/// simulation's K, μ and true geometry, then every injectable effect's fields (the effects write
+/// their own: hil::diagnose::truth_file_fields).
 nlohmann::json effects_json(const hil::diagnose::Effects& e, const cid::ContactModel& m, unsigned seed) {
   nlohmann::json j;
   format::tag_format(j, "hidden_effects");
@@ -30,22 +52,71 @@ nlohmann::json effects_json(const hil::diagnose::Effects& e, const cid::ContactM
   j["K"] = m.K;
   j["mu"] = m.mu;
   j["geometric"] = e.geometric;
-  j["compliance"] = nlohmann::json::array();
-  for (int r = 0; r < 6; ++r) {
-    std::vector<double> row;
-    for (int c = 0; c < 6; ++c) row.push_back(e.compliance(r, c));
-    j["compliance"].push_back(row);
-  }
-  j["time_offset_s"] = e.time_offset_s;
-  j["sensor_bias"] = std::vector<double>(e.sensor_bias.data(), e.sensor_bias.data() + 6);
-  j["sensor_gain"] = std::vector<double>(e.sensor_gain.data(), e.sensor_gain.data() + 6);
-  j["viscous_n_s_per_m"] = e.viscous_n_s_per_m;
-  j["damping_n_s_per_m"] = e.damping_n_s_per_m;
-  j["stiffness_exponent"] = e.stiffness_exponent;
+  for (const auto& f : hil::diagnose::truth_file_fields(e)) j[f.key] = field_json(f);
   return j;
 }
 
+/// An object of numbers by name.
+nlohmann::json object_schema(const std::string& description) {
+  return {{"type", "object"}, {"additionalProperties", {{"type", "number"}}}, {"description", description}};
+}
+
+/// A field's schema from its shape (TruthField's: number, array, array of rows, object).
+nlohmann::json field_schema(const hil::diagnose::TruthField& f) {
+  if (!f.labels.empty()) return object_schema(f.description);
+  nlohmann::json s;
+  if (f.value.size() == 1) {
+    s = {{"type", "number"}};
+  } else if (f.value.cols() == 1) {
+    s = {{"type", "array"}, {"minItems", f.value.rows()}, {"maxItems", f.value.rows()}, {"items", {{"type", "number"}}}};
+  } else {
+    const nlohmann::json row = {{"type", "array"},
+                                {"minItems", f.value.cols()},
+                                {"maxItems", f.value.cols()},
+                                {"items", {{"type", "number"}}}};
+    s = {{"type", "array"}, {"minItems", f.value.rows()}, {"maxItems", f.value.rows()}, {"items", row}};
+  }
+  s["description"] = f.description;
+  return s;
+}
+
 }  // namespace
+
+nlohmann::json hidden_effects_schema() {
+  nlohmann::json j;
+  j["$schema"] = "https://json-schema.org/draft/2020-12/schema";
+  j["$id"] = "https://hil.example/schemas/hil.hidden_effects.schema.json";
+  j["title"] = "hil.hidden_effects";
+  j["description"] =
+      "Written by `hil contact simulate ... --inject EFFECT --truth-out OUT` (and by `hil demo` beside its run): the effects hidden in "
+      "a simulated run with their drawn magnitudes, the truth a blind diagnosis is checked against. Generated from the effect "
+      "registry by `hil contact truth-schema`. See docs/diagnosis.md.";
+  j["type"] = "object";
+  std::vector<std::string> required{"format", "format_version", "effects", "effect_seed", "K", "mu", "geometric"};
+  std::vector<std::string> injectable;
+  for (const hil::diagnose::Effect* e : hil::diagnose::registered_effects())
+    if (e->contact() && e->contact()->injectable()) injectable.push_back(e->name());
+  nlohmann::json p;
+  p["format"] = {{"const", "hil.hidden_effects"}};
+  p["format_version"] = {{"const", format::kJsonFormatVersion}};
+  p["effects"] = {{"type", "array"},
+                  {"minItems", 1},
+                  {"uniqueItems", true},
+                  {"items", {{"enum", injectable}}},
+                  {"description", "the injected effects"}};
+  p["effect_seed"] = {{"type", "integer"}, {"minimum", 0}, {"description", "seed of the effects' random magnitudes"}};
+  p["K"] = {{"type", "number"}, {"description", "contact stiffness of the simulation, N/m"}};
+  p["mu"] = {{"type", "number"}, {"minimum", 0}, {"description", "friction coefficient of the simulation"}};
+  p["geometric"] = object_schema("true value of each geometric uncertainty by name (those absent stay at their design value), m or rad");
+  for (const auto& f : hil::diagnose::truth_file_fields(hil::diagnose::Effects{})) {
+    p[f.key] = field_schema(f);
+    if (std::find(required.begin(), required.end(), f.key) == required.end()) required.push_back(f.key);
+  }
+  j["required"] = required;
+  j["properties"] = p;
+  j["additionalProperties"] = false;
+  return j;
+}
 
 int simulate_run(const SimulateArgs& a) {
   const auto rig = format::load_rig(a.rig);

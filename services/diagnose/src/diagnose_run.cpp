@@ -110,6 +110,7 @@ RunDiagnosis diagnose_table(const std::string& table_path, const std::string& ri
   const auto candidates = checked_candidates(o, dg::stiffness_extensions());
   dg::DiagnoseOptions dopt;
   dopt.cv.folds = o.folds;
+  dopt.cv.threads = o.threads;
   dopt.cv.offsets = cv_offsets(o, candidates);
   try {
     r.stiffness = std::make_unique<dg::StiffnessData>(dg::make_stiffness_data(model, table.rows));
@@ -144,6 +145,7 @@ RunDiagnosis diagnose_run(const format::Run& run, const Options& o) {
   if (r.run_name.empty()) r.run_name = fs::path(run.dir).parent_path().filename().string();
   dg::DiagnoseOptions dopt;
   dopt.cv.folds = o.folds;
+  dopt.cv.threads = o.threads;
   dg::ModelFactory make;
   const auto candidates = checked_candidates(o, rig.model.contact ? dg::contact_extensions() : dg::deflection_extensions());
   dopt.cv.offsets = cv_offsets(o, candidates);

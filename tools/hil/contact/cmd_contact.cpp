@@ -101,6 +101,19 @@ void add_contact(CLI::App& app) {
   sim->add_option("--truth-out", sa.truth_out, "write the injected effects (the hidden truth) as JSON (hil.hidden_effects; - for stdout)");
   sim->callback([] { set_action([] { return simulate_run(sa); }); });
 
+  static std::string schema_out = "-";
+  auto* schema =
+      contact->add_subcommand("truth-schema",
+                              "Write the JSON schema of --truth-out files (hil.hidden_effects), made from the diagnosis' effect registry");
+  schema->add_option("--out", schema_out, "where to write it (- for stdout; docs/schemas/hil.hidden_effects.schema.json is this)")
+      ->capture_default_str();
+  schema->callback([] {
+    set_action([] {
+      write_json(schema_out, contact::hidden_effects_schema());
+      return 0;
+    });
+  });
+
   static IdentifyArgs ia;
   auto* id = contact->add_subcommand("identify", "Identify K and mu (and optionally the geometric uncertainties) from a run");
   id->add_option("RUN", ia.run, "run folder")->required();

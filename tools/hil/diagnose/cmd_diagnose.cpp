@@ -29,6 +29,7 @@ struct DiagnoseArgs {
   std::vector<std::string> candidates;
   int folds = 5;
   int cv_offsets = 0;
+  int threads = 0;
   hil::diagnose::RateSource damping_rates = hil::diagnose::RateSource::automatic;
   bool quiet = false;
 };
@@ -38,6 +39,7 @@ int diagnose_cmd(const DiagnoseArgs& a) {
   o.candidates = a.candidates;
   o.folds = a.folds;
   o.cv_offsets = a.cv_offsets;
+  o.threads = a.threads;
   o.damping_rates = a.damping_rates;
   const bool tty = isatty(STDERR_FILENO) != 0;
   if (!a.quiet)
@@ -90,6 +92,11 @@ void add_diagnose(CLI::App& app) {
   d->add_option("--candidates", da.candidates, candidates_help())->delimiter(',');
   d->add_option("--folds", da.folds, "blocks of the cross-validation over time")->capture_default_str()->check(CLI::Range(2, 1000));
   d->add_option("--cv-offsets", da.cv_offsets, cv_offsets_help())->capture_default_str()->check(CLI::Range(0, 64));
+  d->add_option("--threads", da.threads,
+                "threads the cross-validation folds run on (0: one per core; e.g. 1 leaves a core to an acquisition); "
+                "the result is the same on any number")
+      ->capture_default_str()
+      ->check(CLI::Range(0, 256));
   const std::map<std::string, hil::diagnose::RateSource> rates{{"auto", hil::diagnose::RateSource::automatic},
                                                                {"twist", hil::diagnose::RateSource::twist},
                                                                {"poses", hil::diagnose::RateSource::poses}};

@@ -2,13 +2,16 @@
 /// \file A contact-family effect's model (one file per effect, diagnosis/src/effects/): the parameters
 /// it adds (units, scales, bounds), what it writes into the contact geometry (feature offsets, a
 /// delay, an ee deflection, the stiffness law), its design columns per contact or per row, its
-/// report lines, its physical-validity check, and its draw for the hidden-effect generator.
+/// report lines, its physical-validity check, and its injection into the hidden-effect generator
+/// (its drawn truth and its part of the forward simulation).
 ///
 /// A ContactEffect (registered, stateless) binds to a run as a ContactTerm: the part of one
 /// ContactFamily that is this effect, with the choices it derives from the data (a basis, a
 /// reference component). Terms are immutable once bound, so families built from them can be shared.
 #include <Eigen/Geometry>
+#include <array>
 #include <functional>
+#include <map>
 #include <memory>
 #include <random>
 #include <string>
@@ -22,7 +25,6 @@
 namespace hil::diagnose {
 
 struct ContactData;
-struct Effects;
 class ContactTerm;
 
 /// Where a term's parameters start in the family's θ and φ (-1: it has none of that kind).
@@ -123,6 +125,101 @@ class ContactTerm {
   virtual bool derives_from_data() const { return false; }
 };
 
+// ---------------------------------------------------------------------------------------------
+// Injection: the hidden-effect generator's forward simulation (simulate_with_effects), as an effect
+// writes its part of it. The generator's own terms are the nominal model's: K δ e_n + μ K δ e_t per
+// contact at the scene's true geometry and the commanded poses; an effect adds to them.
+
+/// True values by key: the names the diagnosis reports the effect's parameters under (bias_fz,
+/// time_offset_s, C_x_x, an uncertainty's name) and the effect's settings (e.g. damping_friction).
+using TruthValues = std::map<std::string, double>;
+
+/// One field of the hidden-effects file (docs/schemas/hil.hidden_effects.schema.json): a number
+/// (1 x 1), an array (n x 1), an array of rows (n x m) or, with `labels`, an object label -> value.
+struct TruthField {
+  std::string key;
+  Eigen::MatrixXd value;
+  std::vector<std::string> labels;
+  std::string description;  ///< what it is, with its units (the schema's description)
+};
+
+/// What the forward simulation takes from the effects before it computes the contacts.
+struct SimulationChannels {
+  Eigen::VectorXd x;                                 ///< the scene's true feature uncertainties (m, rad)
+  hil::Matrix6d compliance = hil::Matrix6d::Zero();  ///< ee deflection per ee wrench (ee frame): T = T_cmd Exp(C w_ee)
+  double delay_s = 0.0;                              ///< the wrench stream's lag behind the poses
+};
+
+/// One contact of the forward simulation.
+struct SimulatedContact {
+  const contact_id::Scene& scene;
+  const contact_id::Kinematics& kin;  ///< the true (deflected) ee kinematics
+  const contact_id::ContactPoint& contact;
+};
+
+/// The force of one contact as the effects build it: (K δ_e + normal_n) e_n + (μ (K δ_e +
+/// friction_normal_n) + tangential_n) e_t, with δ_e the interference the stiffness law sees.
+struct ContactForce {
+  double delta_m = 0.0;            ///< δ_e: the interference, or what a stiffness law makes of it
+  double normal_n = 0.0;           ///< added normal force (e.g. damping)
+  double friction_normal_n = 0.0;  ///< added to the normal force the friction bound follows
+  double tangential_n = 0.0;       ///< added tangential force (e.g. viscous friction)
+};
+
+/// One injected effect: its drawn truth and its part of the forward simulation. Immutable; every
+/// hook has a default that does nothing.
+class Injection {
+ public:
+  virtual ~Injection() = default;
+  /// Its true values (TruthValues' keys).
+  virtual TruthValues truth() const = 0;
+  /// Its fields of the hidden-effects file (none: it writes none, e.g. an absent geometric offset).
+  virtual std::vector<TruthField> file_fields() const = 0;
+  /// The geometry, deflection and delay it changes.
+  virtual void channels(const contact_id::Scene& scene, SimulationChannels& c) const {
+    (void)scene;
+    (void)c;
+  }
+  /// Its part of one contact's force (in the effects' layout order).
+  virtual void contact_force(const SimulatedContact& at, ContactForce& f) const {
+    (void)at;
+    (void)f;
+  }
+  /// The sensor's reading of the (delayed) true plate wrench, in place (gains before biases: the layout order).
+  virtual void sensor(hil::Vector6d& w) const { (void)w; }
+};
+
+/// An injection whose truth is one number, under the same key in TruthValues and in the file.
+class ScalarInjection : public Injection {
+ public:
+  ScalarInjection(std::string key, double value, std::string description)
+      : key_(std::move(key)), value_(value), description_(std::move(description)) {}
+  TruthValues truth() const override { return {{key_, value_}}; }
+  std::vector<TruthField> file_fields() const override { return {{key_, Eigen::MatrixXd::Constant(1, 1, value_), {}, description_}}; }
+  double value() const { return value_; }
+
+ private:
+  std::string key_;
+  double value_;
+  std::string description_;
+};
+
+/// The plate's wrench components in their order, as the diagnosis names them (bias_fx, gain_mz, ...).
+inline constexpr std::array<const char*, 6> kWrenchComponents{"fx", "fy", "fz", "mx", "my", "mz"};
+
+/// `values`' entry `key`, or `fallback` when it has none.
+double truth_value(const TruthValues& values, const std::string& key, double fallback = 0.0);
+/// \throws std::invalid_argument naming `effect` and the first key of `values` not in `known`.
+void check_truth_keys(const std::string& effect, const TruthValues& values, const std::vector<std::string>& known);
+/// Per wrench component, `values`' entry `<prefix><component>` (bias_fx ... bias_mz; 0 where absent).
+/// \throws std::invalid_argument naming `effect` on any other key.
+hil::Vector6d per_component(const std::string& effect, const std::string& prefix, const TruthValues& values);
+/// The inverse of per_component: `<prefix><component>` -> w(c).
+TruthValues by_component(const std::string& prefix, const hil::Vector6d& w);
+/// Sets the entries of x (the scene's uncertainties, in order) named in `by_name`.
+/// \throws std::invalid_argument on a name the scene does not declare.
+void set_uncertainties(const contact_id::Scene& scene, const TruthValues& by_name, Eigen::VectorXd& x);
+
 /// A contact-family effect: its registry entry and the model it binds.
 class ContactEffect : public Effect {
  public:
@@ -133,14 +230,13 @@ class ContactEffect : public Effect {
   virtual int layout_order() const { return 1000; }
   /// \throws std::runtime_error when the run cannot have it (e.g. no observable feature uncertainty).
   virtual std::shared_ptr<const ContactTerm> bind(const ContactBinding& b) const = 0;
-  /// The hidden-effect generator: draws its magnitude (seeded) into `e`.
+  /// The hidden-effect generator: its injection with a seeded random magnitude, sized to stand well
+  /// above the sensor's resolution on the scene.
   /// \throws std::invalid_argument when it cannot be injected (default: not injectable).
-  virtual void draw(unsigned seed, const contact_id::Scene& scene, Effects& e) const;
-  /// Whether `e` holds it (Effects::names).
-  virtual bool present(const Effects& e) const {
-    (void)e;
-    return false;
-  }
+  virtual std::shared_ptr<const Injection> draw(unsigned seed, const contact_id::Scene& scene) const;
+  /// Its injection with the given true values (keys it does not know: std::invalid_argument; keys
+  /// left out: absent, e.g. inject({}) is the effect at zero magnitude).
+  virtual std::shared_ptr<const Injection> inject(const TruthValues& values) const;
   virtual bool injectable() const { return false; }
 };
 

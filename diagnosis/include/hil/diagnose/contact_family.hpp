@@ -107,9 +107,9 @@ RateChoice choose_rate(const std::vector<double>& t_s, const std::vector<double>
 ContactData make_contact_data(const cid::Scene& scene, double v_tm, const std::vector<cid::Measurement>& m, double force_scale_n = 0.0,
                               double moment_scale_nm = 0.0, RateSource rates = RateSource::automatic);
 
-/// The nominal contact model with a set of extensions. Not thread-safe: when the contacts depend on
-/// φ (geometric_offset, robot_compliance, time_offset), design() keeps scratch and the last
-/// evaluation's contacts; use one object per thread.
+/// The nominal contact model with a set of extensions. Immutable once built and shared by every
+/// thread: when the contacts depend on φ (geometric_offset, robot_compliance, time_offset), the
+/// scratch and the last evaluation's contacts a design reuses are its evaluator's (make_data()).
 class ContactFamily : public ModelFamily {
  public:
   ContactFamily(const ContactData& d, std::set<std::string> extensions);
@@ -120,7 +120,9 @@ class ContactFamily : public ModelFamily {
   std::vector<Param> linear() const override { return linear_; }
   std::vector<Param> nonlinear() const override { return nonlinear_; }
   std::vector<Eigen::VectorXd> starts() const override;
-  void design(const Eigen::VectorXd& phi, Eigen::MatrixXd& A) const override;
+  std::unique_ptr<FamilyData> make_data() const override;
+  using ModelFamily::design;
+  void design(const Eigen::VectorXd& phi, Eigen::MatrixXd& A, FamilyData& data) const override;
   std::vector<Reported> report(const Fit& f) const override;
   /// K > 0, μ >= 0, c_v >= 0, D >= 0 (each within two standard deviations), p > 0, and a positive
   /// semi-definite compliance.
@@ -219,16 +221,20 @@ class ContactFamily : public ModelFamily {
     std::array<std::vector<cid::PosedPolyhedron>, 2> posed;
     std::array<std::vector<char>, 2> done;
   };
+  /// One evaluator's: the base a finite difference steps from and the scratch of mindist.
+  struct Data : FamilyData {
+    Base base;
+    Scratch scratch;
+  };
   static constexpr double kReach_m = 5e-3;  ///< pairs farther apart are not tabled: beyond, full mindist
   std::shared_ptr<const PairTable> pairs_;
-  mutable Base base_;
-  mutable Scratch scratch_;
   static std::shared_ptr<const PairTable> make_pairs(const ContactData& d);
-  Geometry geometry_at(const Eigen::VectorXd& x) const;
+  /// \param base the evaluator's base (Geometry::changed is against it; invalid: every feature changed).
+  Geometry geometry_at(const Eigen::VectorXd& x, const Base& base) const;
   /// mindist's contacts of sample k at the ee pose of `kin`; `base`: that sample's contacts in the
   /// base (same ee pose), reused for the pairs of unchanged features. Returns false when it ran full mindist.
   bool sample_contacts(std::size_t k, const cid::Kinematics& kin, const Geometry& g, const std::vector<cid::ContactPoint>* base,
-                       std::vector<cid::ContactPoint>& out) const;
+                       std::vector<cid::ContactPoint>& out, Scratch& w) const;
 };
 
 /// max over z of the smallest eigenvalue of C + Σ z_k N_k (symmetric C, N_k): whether some matrix
@@ -241,29 +247,34 @@ double max_min_eigenvalue(const Matrix6d& C, const std::vector<Matrix6d>& free_d
 // ---------------------------------------------------------------------------------------------
 // The hidden-effect generator.
 
-/// Effects injected into a simulation (zero / one = absent). Same parameterisations as above.
+/// Effects injected into a simulation, each its own Injection (contact_effect.hpp).
 struct Effects {
-  std::map<std::string, double> geometric;  ///< x_u true values by name (others at design)
-  Matrix6d compliance = Matrix6d::Zero();   ///< robot compliance C (ee frame; m/N, rad/N, rad/(N m))
-  double time_offset_s = 0.0;
-  Vector6d sensor_bias = Vector6d::Zero();
-  Vector6d sensor_gain = Vector6d::Zero();  ///< γ per component
-  double viscous_n_s_per_m = 0.0;
-  double damping_n_s_per_m = 0.0;
-  bool damping_friction = false;  ///< the friction bound follows the total normal force
-  double stiffness_exponent = 1.0;
-  double delta_ref_m = 1e-4;
-  std::vector<std::string> names() const;  ///< the effects present
+  /// The scene's true feature uncertainties by name before any effect (a truth file's; those absent
+  /// are at their design value). geometric_offset's injection replaces them.
+  std::map<std::string, double> geometric;
+  /// The injected effects by name.
+  std::map<std::string, std::shared_ptr<const Injection>> injected;
+  /// The effects present, in the registry's order.
+  std::vector<std::string> names() const;
+  /// The true value of a parameter the diagnosis reports under `name`: an injected effect's, else
+  /// a feature uncertainty's (`geometric`, else its design value); none when the test cannot know it.
+  std::optional<double> truth_of(const std::string& name, const cid::Scene& scene) const;
 };
 
-/// Draws an effect of the named kind with a seeded random magnitude, sized to stand well above the
-/// sensor's resolution on the scene (the test knows the truth, the diagnosis does not).
-/// \throws std::invalid_argument on an unknown name.
+/// Draws an effect of the named kind with a seeded random magnitude into `e` (ContactEffect::draw).
+/// \throws std::invalid_argument on an unknown or not injectable name.
 void draw_effect(const std::string& name, unsigned seed, const cid::Scene& scene, Effects& e);
+/// Injects an effect with the given true values into `e` (ContactEffect::inject).
+/// \throws std::invalid_argument on an unknown or not injectable name, or a key it does not know.
+void inject_effect(const std::string& name, const TruthValues& values, Effects& e);
+/// The hidden-effects file's fields of `e`: every injectable effect's, the absent ones at zero
+/// magnitude, in the registry's order (a later field of the same key replaces an earlier one).
+std::vector<TruthField> truth_file_fields(const Effects& e);
 
 /// Forward simulation with effects: for each true (commanded) kinematics, the plate wrench of the
-/// extended model; the measured kinematics are the commanded ones (the pose the robot reports).
-/// `t_s` gives the times (for time_offset); the sensor model quantises and adds noise.
+/// nominal model with each injected effect's part (Injection's hooks, in the effects' layout
+/// order); the measured kinematics are the commanded ones (the pose the robot reports). `t_s`
+/// gives the times (for a delay); the sensor model quantises and adds noise.
 std::vector<cid::SimulatedSample> simulate_with_effects(const cid::Scene& s, const cid::ContactModel& m, const Effects& e,
                                                         const std::vector<double>& t_s, const std::vector<cid::Kinematics>& truth,
                                                         const cid::SensorModel& sensor);

@@ -87,7 +87,8 @@ class DeflectionFamily : public ModelFamily {
   std::vector<Param> linear() const override { return linear_; }
   std::vector<Param> nonlinear() const override { return nonlinear_; }
   std::vector<Eigen::VectorXd> starts() const override;
-  void design(const Eigen::VectorXd& phi, Eigen::MatrixXd& A) const override;
+  using ModelFamily::design;
+  void design(const Eigen::VectorXd& phi, Eigen::MatrixXd& A, FamilyData&) const override;
   /// C must be symmetric positive semi-definite (within two standard deviations).
   std::string check(const Fit& f) const override;
   /// With rest_change: the same family with its events located from the samples `train` only.

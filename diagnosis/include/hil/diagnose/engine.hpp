@@ -75,7 +75,17 @@ struct LocatedEvent {
   int first_sample = 0;  ///< the first sample (index into the observations) after it
 };
 
+/// What one evaluator of a family keeps between its designs: scratch space and caches (Pinocchio's
+/// Data to the family's Model). The family itself is immutable once built, so one family serves
+/// every thread; each thread designs with its own data (ModelFamily::make_data). A family's data
+/// never changes a design's values, only what it costs.
+class FamilyData {
+ public:
+  virtual ~FamilyData() = default;
+};
+
 /// A separable model family: prediction = A(φ) θ, 6 rows per sample (row 6k + c).
+/// Thread-safe: every member is const and keeps nothing; per-evaluator state lives in FamilyData.
 class ModelFamily {
  public:
   virtual ~ModelFamily() = default;
@@ -84,8 +94,16 @@ class ModelFamily {
   virtual std::vector<Param> nonlinear() const { return {}; }
   /// Starting points for φ (the best by projected cost starts LM). Default: φ = 0.
   virtual std::vector<Eigen::VectorXd> starts() const;
-  /// A(φ) in physical units, 6N x linear().size(). Must be deterministic.
-  virtual void design(const Eigen::VectorXd& phi, Eigen::MatrixXd& A) const = 0;
+  /// A fresh workspace for design(), one per evaluator (thread). Default: an empty one.
+  virtual std::unique_ptr<FamilyData> make_data() const { return std::make_unique<FamilyData>(); }
+  /// A(φ) in physical units, 6N x linear().size(). Must be deterministic, whatever `data` holds.
+  /// \param data from this family's make_data(), used by one thread at a time.
+  virtual void design(const Eigen::VectorXd& phi, Eigen::MatrixXd& A, FamilyData& data) const = 0;
+  /// A(φ) with a fresh workspace (one-off designs; an evaluator keeps its data instead).
+  void design(const Eigen::VectorXd& phi, Eigen::MatrixXd& A) const {
+    const auto data = make_data();
+    design(phi, A, *data);
+  }
   /// The parameters people read (e.g. K and μ from θ = (K, μK)); default: θ and φ as they are.
   virtual std::vector<Reported> report(const Fit& f) const;
   /// Physical validity of fitted parameters (e.g. a compliance must be positive semi-definite):
@@ -190,6 +208,9 @@ struct CvOptions {
   /// the grid's offsets removes that dependence (docs/diagnosis.md, "Repeated blocked CV"). The
   /// intervals, warm starts and plotted held-out predictions of offset 0 are unchanged by it.
   int offsets = 1;
+  /// Threads the folds run on (0: one per core). The folds are independent fits, each with its
+  /// own family data and design cache; the results do not depend on the number of threads.
+  int threads = 0;
 };
 
 /// The score of one model.

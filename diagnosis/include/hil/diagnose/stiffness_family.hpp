@@ -49,7 +49,8 @@ class StiffnessFamily : public ModelFamily {
   std::string name() const override;
   std::vector<Param> linear() const override { return linear_; }
   std::vector<Param> nonlinear() const override { return nonlinear_; }
-  void design(const Eigen::VectorXd& phi, Eigen::MatrixXd& A) const override;
+  using ModelFamily::design;
+  void design(const Eigen::VectorXd& phi, Eigen::MatrixXd& A, FamilyData&) const override;
   /// Joint compliances must not be negative (beyond two standard deviations).
   std::string check(const Fit& f) const override;
 

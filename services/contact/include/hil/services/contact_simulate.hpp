@@ -4,6 +4,8 @@
 #include <string>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 namespace hil::services::contact {
 
 /// -1 / empty: the rig's or the truth file's value.
@@ -21,5 +23,9 @@ struct SimulateArgs {
 /// Writes the run folder (run.yaml, samples.csv, rig.yaml) and, with inject, the truth JSON.
 /// \throws error::FormatError / std::runtime_error on bad input.
 int simulate_run(const SimulateArgs& a);
+
+/// The JSON schema of the truth file (hil.hidden_effects, docs/schemas/): the simulation's own
+/// fields and every injectable effect's (hil::diagnose::truth_file_fields), from the effect registry.
+nlohmann::json hidden_effects_schema();
 
 }  // namespace hil::services::contact

@@ -21,6 +21,9 @@ struct Options {
   /// most any candidate asks for (Effect::cv_offsets: 8 with rest_change, whose held-out error
   /// depends on where the blocks cut its events), else 1.
   int cv_offsets = 0;
+  /// Threads the cross-validation folds run on (CvOptions::threads; 0: one per core). The result
+  /// does not depend on it.
+  int threads = 0;
   /// Where contact_damping's penetration rates come from (contact runs).
   hil::diagnose::RateSource damping_rates = hil::diagnose::RateSource::automatic;
   hil::diagnose::Progress progress;
