@@ -4,6 +4,7 @@
 #include <Eigen/QR>
 #include <Eigen/SVD>
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -585,20 +586,25 @@ std::vector<Reported> values_reported(const ModelFamily& m, Fit f, const Fit& fu
 /// parameters fixed, and each reported value's largest shift d widens its interval as an
 /// uncertainty uniform over ± d (std d / √3, added in quadrature). The PNR keeps the asymptotic std:
 /// the alternatives move the estimate, they do not make the run less informative.
-void model_form_intervals(Score& s, const ModelFamily& m, const Observations& obs, const std::vector<int>& all, const FitOptions& o) {
-  std::vector<ModelFamily::ModelForm> forms = m.model_forms();
+/// The full model refitted under one alternative model form (ModelFamily::model_forms), warm-started
+/// from the full fit: what model_form_intervals measures the shifts on.
+Fit model_form_fit(const ModelFamily& form, const ModelFamily& m, const Score& s, const Observations& obs, const std::vector<int>& all,
+                   const FitOptions& o) {
+  DesignCache cache(form, obs.size());
+  const Eigen::VectorXd warm = mapped(form.nonlinear(), s.full.phi_names, s.full.phi);
+  const std::vector<bool> fixed = fixed_by_name(m, s.full.fixed, form);
+  return fit_with(form, obs, all, o, cache, &warm, false, &fixed);
+}
+
+/// Widens the full fit's intervals by the largest shift of each value under the model forms.
+void model_form_intervals(Score& s, const std::vector<ModelFamily::ModelForm>& forms, const std::vector<Fit>& fits) {
   if (forms.empty()) return;
   std::map<std::string, double> shift;
-  for (const auto& form : forms) {
-    const ModelFamily& fm = *form.model;
-    DesignCache cache(fm, obs.size());
-    const Eigen::VectorXd warm = mapped(fm.nonlinear(), s.full.phi_names, s.full.phi);
-    const std::vector<bool> fixed = fixed_by_name(m, s.full.fixed, fm);
-    const Fit f = fit_with(fm, obs, all, o, cache, &warm, false, &fixed);
-    for (const auto& r : values_reported(fm, f, s.full))
+  for (std::size_t i = 0; i < forms.size(); ++i) {
+    for (const auto& r : values_reported(*forms[i].model, fits[i], s.full))
       for (const auto& q : s.full.reported)
         if (q.name == r.name && std::isfinite(r.value)) shift[q.name] = std::max(shift[q.name], std::abs(r.value - q.value));
-    s.model_forms.push_back(form.assumption);
+    s.model_forms.push_back(forms[i].assumption);
   }
   for (auto& r : s.full.reported) {
     const auto it = shift.find(r.name);
@@ -607,6 +613,30 @@ void model_form_intervals(Score& s, const ModelFamily& m, const Observations& ob
     if (r.std_asymptotic == 0.0) r.std_asymptotic = r.std;
     r.std = std::hypot(r.std, r.std_model_form);
   }
+}
+
+/// Runs task(i, worker) for every i < n on `workers` threads (worker 0 is the caller's), each
+/// worker taking the next task not yet taken. Every task writes only its own results, so the
+/// outcome does not depend on the schedule. Rethrows the exception of the lowest failed task.
+template <class Task>
+void run_tasks(std::size_t n, std::size_t workers, Task&& task) {
+  std::vector<std::exception_ptr> failed(n);
+  std::atomic<std::size_t> next{0};
+  auto work = [&](std::size_t w) {
+    for (std::size_t i = next.fetch_add(1); i < n; i = next.fetch_add(1)) {
+      try {
+        task(i, w);
+      } catch (...) {
+        failed[i] = std::current_exception();
+      }
+    }
+  };
+  std::vector<std::thread> pool;
+  for (std::size_t w = 1; w < workers; ++w) pool.emplace_back(work, w);
+  work(0);
+  for (auto& t : pool) t.join();
+  for (const auto& e : failed)
+    if (e) std::rethrow_exception(e);
 }
 
 }  // namespace
@@ -685,28 +715,23 @@ Score score(const ModelFamily& m, const Observations& obs, const CvOptions& o, c
     fd.fit = fit_with(fm, obs, fd.train, fold_fit, fc, warm ? &*warm : nullptr, false, &fixed);
     fd.prediction = predict_with(fc.get(fd.fit.phi), fd.fit, n);
   };
-  // Folds are independent: worker w takes folds w, w + workers, ... (each with its own data and
-  // cache; worker 0 the full fit's). Results go to their fold's slot, so the order is the serial one.
-  const std::size_t workers = std::min<std::size_t>(folds.size(), o.threads > 0 ? static_cast<std::size_t>(o.threads)
-                                                                                : std::max(1U, std::thread::hardware_concurrency()));
-  {
-    std::vector<std::exception_ptr> failed(std::max<std::size_t>(workers, 1));
-    auto work = [&](std::size_t w) {
-      try {
-        std::optional<DesignCache> other;
-        if (w > 0) other.emplace(m, n);
-        for (std::size_t i = w; i < folds.size(); i += workers) run_fold(i, w > 0 ? *other : cache);
-      } catch (...) {
-        failed[w] = std::current_exception();
-      }
-    };
-    std::vector<std::thread> pool;
-    for (std::size_t w = 1; w < workers; ++w) pool.emplace_back(work, w);
-    if (workers > 0) work(0);
-    for (auto& t : pool) t.join();
-    for (const auto& e : failed)
-      if (e) std::rethrow_exception(e);
-  }
+  // The model forms' refits (they need the full fit only) and the folds are independent: they run
+  // side by side, the refits first (the longest), each worker with its own data and design cache
+  // (worker 0 the full fit's). Each result goes to its own slot, so the outcome is the serial one.
+  const std::vector<ModelFamily::ModelForm> forms = o.model_forms ? m.model_forms() : std::vector<ModelFamily::ModelForm>{};
+  std::vector<Fit> form_fits(forms.size());
+  const std::size_t tasks = forms.size() + folds.size();
+  const std::size_t workers = std::max<std::size_t>(1, std::min<std::size_t>(tasks, o.threads > 0 ? static_cast<std::size_t>(o.threads)
+                                                                                                  : std::thread::hardware_concurrency()));
+  std::vector<std::optional<DesignCache>> worker_cache(workers);
+  run_tasks(tasks, workers, [&](std::size_t i, std::size_t w) {
+    if (i < forms.size()) {
+      form_fits[i] = model_form_fit(*forms[i].model, m, s, obs, all, o.fit);
+      return;
+    }
+    if (w > 0 && !worker_cache[w]) worker_cache[w].emplace(m, n);
+    run_fold(i - forms.size(), w > 0 ? *worker_cache[w] : cache);
+  });
   std::map<std::string, std::vector<double>> by_name;
   std::size_t folds_unshifted = 0;
   double pooled_sq = 0.0;
@@ -731,7 +756,7 @@ Score score(const ModelFamily& m, const Observations& obs, const CvOptions& o, c
   }
   s.cv_error = std::sqrt(pooled_sq / offsets);
   honest_intervals(s, by_name, folds_unshifted);
-  if (o.model_forms) model_form_intervals(s, m, obs, all, o.fit);
+  model_form_intervals(s, forms, form_fits);
   s.full.invalid = m.check(s.full);
   s.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return s;
