@@ -180,6 +180,10 @@ class Diagnose(unittest.TestCase):
         r = hil("diagnose", table, "--rig", rig, "--cv-offsets", "65", "--quiet")
         self.assertEqual(r.returncode, 2, r.stderr)
         self.assertIn("--cv-offsets: Value 65 not in range 0 to 64", r.stderr)
+        # Threads: 0 (one per core) to 256.
+        r = hil("diagnose", table, "--rig", rig, "--threads", "-1", "--quiet")
+        self.assertEqual(r.returncode, 2, r.stderr)
+        self.assertIn("--threads: Value -1 not in range 0 to 256", r.stderr)
 
     @unittest.skipUnless(os.path.exists(TIAGO), "../shared/data/tiago-suspension is not beside this checkout")
     def test_tiago_deflection_mode(self):
