@@ -54,6 +54,7 @@ FakeRobotController::FakeRobotController(FakeRobotConfig cfg, std::shared_ptr<co
     throw ConfigError("host", "'" + I.cfg.host + "': the fake robot controller listens on 127.0.0.0/8 only");
   if (I.cfg.port < 0 || I.cfg.port > 65535) throw ConfigError("port", "must be 0..65535");
   if (!(I.cfg.clock.speed > 0.0)) throw ConfigError("speed", "must be > 0");
+  if (!(I.cfg.scenario_step_per_request_s >= 0.0)) throw ConfigError("scenario_step_per_request_s", "must be >= 0");
   unsigned top = 0;
   for (const auto& e : I.cfg.map.entries) {
     top = std::max(top, e.address + register_count(e.type));
@@ -186,7 +187,10 @@ void FakeRobotController::run() noexcept {
       }
       std::lock_guard lk(I.m);
       if (I.scenario) {
-        I.scenario->at(I.cfg.clock.scenario_time(std::chrono::duration<double>(Clock::now() - I.start).count()), I.point);
+        const double t_scenario = I.cfg.scenario_step_per_request_s > 0.0
+                                      ? I.cfg.scenario_step_per_request_s * static_cast<double>(I.stats.requests - 1)
+                                      : I.cfg.clock.scenario_time(std::chrono::duration<double>(Clock::now() - I.start).count());
+        I.scenario->at(t_scenario, I.point);
         encode_state(I.cfg.map, I.point.joints_rad, I.point.p_base_tcp_m, I.point.q_base_tcp,
                      std::span<std::uint16_t>(I.mapping->tab_registers, I.nregs));
         I.mirror();

@@ -5,10 +5,12 @@
 #include <modbus/modbus.h>
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <numbers>
 
 #include <hil/drivers/can_channel.hpp>
 #include <hil/drivers/error.hpp>
@@ -72,7 +74,25 @@ RobotControllerDriver::RobotControllerDriver(ModbusConfig cfg) : cfg_(std::move(
     (b.table == RegisterTable::holding ? max_h : max_i) = std::max(b.table == RegisterTable::holding ? max_h : max_i, b.address + b.count);
   holding_.assign(max_h, 0);
   input_.assign(max_i, 0);
+  holding_again_.assign(max_h, 0);
+  input_again_.assign(max_i, 0);
   for (const auto& e : cfg_.map.entries) decoded_.push_back(Decoded{parse_quantity(e.quantity, "quantity"), &e});
+  const auto block_of = [&](RegisterTable table, unsigned address) {
+    for (std::size_t k = 0; k < plan_.size(); ++k)
+      if (plan_[k].table == table && address >= plan_[k].address && address < plan_[k].address + plan_[k].count) return k;
+    return plan_.size();  // not reached: the plan covers every register of the map
+  };
+  const auto add_once = [](std::vector<std::size_t>& v, std::size_t k) {
+    if (std::find(v.begin(), v.end(), k) == v.end()) v.push_back(k);
+  };
+  for (const auto& e : cfg_.map.entries) {
+    if (e.turns_address < 0) continue;
+    const std::size_t a = block_of(e.table, e.address), t = block_of(e.table, static_cast<unsigned>(e.turns_address));
+    if (a == t) continue;  // one request reads both: consistent by construction
+    add_once(angle_blocks_, a);
+    add_once(turn_blocks_, t);
+    split_turned_.push_back(&e);
+  }
   backoff_s_ = cfg_.reconnect_min_s;
   last_problem_.reserve(256);
 }
@@ -81,7 +101,8 @@ RobotControllerDriver::~RobotControllerDriver() = default;
 
 void RobotControllerDriver::set_problem(const char* what, int err) noexcept {
   char buf[256];
-  std::snprintf(buf, sizeof buf, "%s: %s", what, err != 0 ? modbus_strerror(err) : "");
+  if (err != 0) std::snprintf(buf, sizeof buf, "%s: %s", what, modbus_strerror(err));
+  else std::snprintf(buf, sizeof buf, "%s", what);
   try {
     last_problem_.assign(buf);
   } catch (...) {
@@ -153,6 +174,82 @@ void RobotControllerDriver::disconnect() noexcept {
   counters_.connected = false;
 }
 
+PollStatus RobotControllerDriver::read_block(const ReadBlock& b, std::uint16_t* dst) noexcept {
+  using Clock = std::chrono::steady_clock;
+  for (int attempt = 0;; ++attempt) {
+    const int rc = b.table == RegisterTable::holding
+                       ? modbus_read_registers(impl_->ctx, static_cast<int>(b.address), static_cast<int>(b.count), dst)
+                       : modbus_read_input_registers(impl_->ctx, static_cast<int>(b.address), static_cast<int>(b.count), dst);
+    if (rc == static_cast<int>(b.count)) return PollStatus::ok;
+    const int err = rc < 0 ? errno : EMBBADDATA;
+    if (err > MODBUS_ENOBASE && err <= MODBUS_ENOBASE + MODBUS_EXCEPTION_GATEWAY_TARGET) {
+      ++counters_.exceptions;
+      ++counters_.consecutive_failures;
+      set_problem("exception response", err);
+      return PollStatus::exception;
+    }
+    const bool link_lost = err == ECONNRESET || err == EPIPE || err == ENOTCONN || err == EBADF || err == ECONNREFUSED ||
+                           err == ECONNABORTED || err == EIO;
+    if (!link_lost && attempt < cfg_.retries) {
+      ++counters_.retries;
+      modbus_flush(impl_->ctx);
+      continue;
+    }
+    ++counters_.consecutive_failures;
+    const bool timeout = err == ETIMEDOUT;
+    if (timeout) ++counters_.timeouts;
+    else if (!link_lost) ++counters_.bad_frames;
+    set_problem(link_lost ? "link lost" : timeout ? "no answer" : "garbled answer", err);
+    // Start over on a fresh connection; the next poll reconnects right away, then backs off.
+    impl_->reset();
+    counters_.connected = false;
+    next_attempt_ = Clock::now();
+    return link_lost ? PollStatus::disconnected : timeout ? PollStatus::timeout : PollStatus::bad_frame;
+  }
+}
+
+PollStatus RobotControllerDriver::read_untorn() noexcept {
+  // A UR joint crossing 0 rad between the angle request and the counter request decodes a full
+  // turn off (6.282 rad for -0.001). Reading the angles again brackets the counter read: if no
+  // angle wrapped between the two angle reads, the counter read between them is theirs.
+  constexpr int kRounds = 4;  // a joint sitting on 0 rad may flicker; more than this is a fault
+  for (int round = 0; !angle_blocks_.empty(); ++round) {
+    for (const std::size_t k : angle_blocks_) {
+      const ReadBlock& b = plan_[k];
+      std::uint16_t* dst = (b.table == RegisterTable::holding ? holding_again_.data() : input_again_.data()) + b.address;
+      if (const PollStatus st = read_block(b, dst); st != PollStatus::ok) return st;
+    }
+    bool wrapped = false;
+    for (const RegisterEntry* e : split_turned_) {
+      const bool h = e->table == RegisterTable::holding;
+      const double first = decode_entry(*e, (h ? holding_ : input_).data() + e->address);
+      const double again = decode_entry(*e, (h ? holding_again_ : input_again_).data() + e->address);
+      wrapped = wrapped || std::abs(again - first) > std::numbers::pi;
+    }
+    if (!wrapped) return PollStatus::ok;
+    ++counters_.torn_reads;
+    if (round + 1 == kRounds) {
+      ++counters_.bad_frames;
+      ++counters_.consecutive_failures;
+      set_problem("a joint angle kept wrapping between its angle and turn-counter reads", 0);
+      return PollStatus::bad_frame;
+    }
+    // The second angles become the first; the counters are read after them, then angles again.
+    for (const std::size_t k : angle_blocks_) {
+      const ReadBlock& b = plan_[k];
+      const auto& src = b.table == RegisterTable::holding ? holding_again_ : input_again_;
+      auto& dst = b.table == RegisterTable::holding ? holding_ : input_;
+      std::copy_n(src.begin() + b.address, b.count, dst.begin() + b.address);
+    }
+    for (const std::size_t k : turn_blocks_) {
+      const ReadBlock& b = plan_[k];
+      std::uint16_t* dst = (b.table == RegisterTable::holding ? holding_.data() : input_.data()) + b.address;
+      if (const PollStatus st = read_block(b, dst); st != PollStatus::ok) return st;
+    }
+  }
+  return PollStatus::ok;
+}
+
 PollStatus RobotControllerDriver::poll(RobotSample& out) noexcept {
   ++counters_.polls;
   using Clock = std::chrono::steady_clock;
@@ -173,37 +270,9 @@ PollStatus RobotControllerDriver::poll(RobotSample& out) noexcept {
   const std::int64_t t0 = realtime_ns();
   for (const ReadBlock& b : plan_) {
     std::uint16_t* dst = (b.table == RegisterTable::holding ? holding_.data() : input_.data()) + b.address;
-    for (int attempt = 0;; ++attempt) {
-      const int rc = b.table == RegisterTable::holding
-                         ? modbus_read_registers(impl_->ctx, static_cast<int>(b.address), static_cast<int>(b.count), dst)
-                         : modbus_read_input_registers(impl_->ctx, static_cast<int>(b.address), static_cast<int>(b.count), dst);
-      if (rc == static_cast<int>(b.count)) break;
-      const int err = rc < 0 ? errno : EMBBADDATA;
-      if (err > MODBUS_ENOBASE && err <= MODBUS_ENOBASE + MODBUS_EXCEPTION_GATEWAY_TARGET) {
-        ++counters_.exceptions;
-        ++counters_.consecutive_failures;
-        set_problem("exception response", err);
-        return PollStatus::exception;
-      }
-      const bool link_lost = err == ECONNRESET || err == EPIPE || err == ENOTCONN || err == EBADF || err == ECONNREFUSED ||
-                             err == ECONNABORTED || err == EIO;
-      if (!link_lost && attempt < cfg_.retries) {
-        ++counters_.retries;
-        modbus_flush(impl_->ctx);
-        continue;
-      }
-      ++counters_.consecutive_failures;
-      const bool timeout = err == ETIMEDOUT;
-      if (timeout) ++counters_.timeouts;
-      else if (!link_lost) ++counters_.bad_frames;
-      set_problem(link_lost ? "link lost" : timeout ? "no answer" : "garbled answer", err);
-      // Start over on a fresh connection; the next poll reconnects right away, then backs off.
-      impl_->reset();
-      counters_.connected = false;
-      next_attempt_ = Clock::now();
-      return link_lost ? PollStatus::disconnected : timeout ? PollStatus::timeout : PollStatus::bad_frame;
-    }
+    if (const PollStatus st = read_block(b, dst); st != PollStatus::ok) return st;
   }
+  if (const PollStatus st = read_untorn(); st != PollStatus::ok) return st;
   const std::int64_t t1 = realtime_ns();
   out.t_ns = t0 + (t1 - t0) / 2;
   out.rtt_ns = t1 - t0;

@@ -63,7 +63,9 @@ TEST(RobotDriver, ReadsTheUrMapFromTheFake) {
   EXPECT_GE(s.rtt_ns, 0);
   EXPECT_EQ(s.sequence, 1U);
   EXPECT_EQ(rig.drv->read_plan().size(), 3U);
-  EXPECT_EQ(rig.fake->stats().requests, 3U);
+  // Angles, turn counters, pose, and the angles again to bracket the counters (no torn joint).
+  EXPECT_EQ(rig.fake->stats().requests, 4U);
+  EXPECT_EQ(rig.drv->counters().torn_reads, 0U);
   EXPECT_EQ(rig.fake->stats().writes_refused, 0U);
 }
 
@@ -166,6 +168,79 @@ TEST(FakeRobot, PlaysAScenarioWithClockOffset) {
   ASSERT_EQ(drv.poll(s), PollStatus::ok);
   EXPECT_GE(s.joints[0], 100.0);
   EXPECT_LT(s.joints[0], 200.0);  // a bound against hangs, not a timing check
+}
+
+// UR angles (270-275) and turn counters (320-325) come in separate requests. With the fake in
+// lock-step (one scenario second per request) joint 1 crosses 0 rad exactly between the first
+// poll's angle request and its counter request, in both directions: read naively, the joint
+// decodes a full turn off (-6.283 rad for +0.0004, or 6.282 for -0.0006).
+TEST(RobotDriver, AJointCrossingZeroBetweenAngleAndCounterReadsHasNoSpike) {
+  for (const double direction : {-1.0, 1.0}) {
+    SCOPED_TRACE(direction < 0 ? "falling through 0 rad" : "rising through 0 rad");
+    std::vector<ScenarioPoint> pts(2);
+    pts[0].t_s = 0;
+    pts[0].joints_rad = kJoints;
+    pts[0].joints_rad[0] = -direction * 0.0004;  // 0.4 mrad on one side; 0.6 mrad on the other a request later
+    pts[0].p_base_tcp_m = kP;
+    pts[0].q_base_tcp = kQ;
+    pts[1] = pts[0];
+    pts[1].t_s = 1000;
+    pts[1].joints_rad[0] += direction * 1.0;  // 1 mrad per request
+    FakeRobotConfig fc;
+    fc.scenario_step_per_request_s = 1.0;
+    FakeRobotController fake(fc, std::make_shared<Scenario>(pts));
+    fake.start();
+    ModbusConfig mc;
+    mc.port = fake.port();
+    mc.timeout_s = 1.0;
+    RobotControllerDriver drv(mc);
+    drv.connect();
+    RobotSample s;
+    double previous = pts[0].joints_rad[0];
+    for (int k = 0; k < 12; ++k) {
+      ASSERT_EQ(drv.poll(s), PollStatus::ok) << drv.last_problem();
+      // At most a few requests (mrad) from the last poll, on the side the motion goes.
+      EXPECT_LT(std::abs(s.joints[0] - previous), 0.02) << "poll " << k << ": j1 = " << s.joints[0];
+      EXPECT_LT(std::abs(s.joints[0]), 0.1) << "poll " << k;
+      for (unsigned j = 1; j < 6; ++j) EXPECT_NEAR(s.joints[j], kJoints[j], 1e-3);
+      EXPECT_NEAR((s.p_base_tcp_m - kP).norm(), 0.0, 2e-4);
+      previous = s.joints[0];
+    }
+    EXPECT_GE(drv.counters().torn_reads, 1U) << "the crossing was placed between two requests";
+  }
+}
+
+// A joint resting on 0 rad whose reading flickers across it (encoder noise of a count) at every
+// angle read: no counter read is bracketed by two angle reads on one side, so the poll fails as
+// a named bad frame after its re-reads instead of returning a value that may be a turn off.
+TEST(RobotDriver, AnAngleFlickeringAcrossZeroAtEveryReadIsABadFrameNotAGuess) {
+  // Requests of one poll: angles, counters, pose, angles again; then (counters, angles) per re-read.
+  const char sides[] = "+++--++--+";
+  std::vector<ScenarioPoint> pts;
+  for (int k = 0; sides[k] != 0; ++k) {
+    ScenarioPoint p;
+    p.t_s = k;
+    p.joints_rad = kJoints;
+    p.joints_rad[0] = sides[k] == '+' ? 0.001 : -0.001;
+    p.p_base_tcp_m = kP;
+    p.q_base_tcp = kQ;
+    pts.push_back(p);
+  }
+  FakeRobotConfig fc;
+  fc.scenario_step_per_request_s = 1.0;
+  FakeRobotController fake(fc, std::make_shared<Scenario>(pts));
+  fake.start();
+  ModbusConfig mc;
+  mc.port = fake.port();
+  mc.timeout_s = 1.0;
+  RobotControllerDriver drv(mc);
+  drv.connect();
+  RobotSample s;
+  EXPECT_EQ(drv.poll(s), PollStatus::bad_frame);
+  EXPECT_NE(drv.last_problem().find("wrapping"), std::string::npos) << drv.last_problem();
+  EXPECT_EQ(drv.counters().samples, 0U);
+  EXPECT_EQ(drv.counters().torn_reads, 4U);
+  EXPECT_EQ(fake.stats().requests, 10U);
 }
 
 TEST(RobotDriver, UnreachableControllerThrowsThenBacksOff) {
@@ -323,7 +398,7 @@ TEST(RobotDriverRtu, ReadsOverASerialLine) {
   t.join();
   ASSERT_EQ(st, PollStatus::ok) << drv.last_problem();
   expect_state(s, 0.5e-3 + 1e-9, 1e-4, 2e-3);
-  EXPECT_EQ(replies.load(), 3);
+  EXPECT_EQ(replies.load(), 4);  // the angle block twice, bracketing the turn counters
   drv.disconnect();
   modbus_free(server);
   modbus_mapping_free(mapping);

@@ -152,6 +152,10 @@ struct FakeRobotConfig {
   RegisterMap map = ur_register_map();
   ModbusFaults faults;
   DeviceClock clock;
+  /// > 0: lock-step playback, the scenario advances this much per request (the first request sees
+  /// t = 0) whatever the wall clock does: a replay that is the same on a loaded machine, and a
+  /// motion placed exactly between two requests of one poll. 0: the scenario plays in wall time.
+  double scenario_step_per_request_s = 0.0;
   std::uint64_t seed = 1;
 };
 

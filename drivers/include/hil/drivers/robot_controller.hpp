@@ -104,10 +104,19 @@ class RobotControllerDriver {
   struct Impl;
   bool try_connect() noexcept;
   void set_problem(const char* what, int err) noexcept;
+  /// One block into its image; on failure counts, sets the problem and \returns why (ok = read).
+  PollStatus read_block(const ReadBlock& b, std::uint16_t* dst) noexcept;
+  /// Angles whose turn counter is read in another request (UR: 270-275 vs 320-325): after the
+  /// plan, their blocks are read again; a wrap in between means the counter may belong to the
+  /// other side of 0 rad, so the counters and angles are read again until no angle wrapped.
+  PollStatus read_untorn() noexcept;
   ModbusConfig cfg_;
   std::unique_ptr<Impl> impl_;
   std::vector<ReadBlock> plan_;
   std::vector<std::uint16_t> holding_, input_;
+  std::vector<std::uint16_t> holding_again_, input_again_;  ///< second reads of angle blocks
+  std::vector<std::size_t> angle_blocks_, turn_blocks_;     ///< plan indices (split angle/turn pairs)
+  std::vector<const RegisterEntry*> split_turned_;          ///< entries whose turns are in another block
   struct Decoded {
     Quantity q;
     const RegisterEntry* e;

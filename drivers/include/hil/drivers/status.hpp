@@ -31,6 +31,12 @@ struct DeviceCounters {
   std::uint64_t retries = 0;
   std::uint64_t reconnects = 0;      ///< successful reconnections after a lost link
   std::uint64_t dropped_frames = 0;  ///< frames the channel lost (kernel overflow)
+  /// Robot: polls where a joint angle wrapped between its angle and turn-counter requests, so
+  /// both were read again (the decoded joint would have been a full turn off).
+  std::uint64_t torn_reads = 0;
+  /// Samples the device itself flagged as bad (ATI status word non-zero, RDT status, sensor fault):
+  /// delivered with the device-fault quality flag, never as good samples.
+  std::uint64_t device_faults = 0;
   std::uint32_t consecutive_failures = 0;
   bool connected = false;
   bool bus_off = false;  ///< last error frame said bus-off and nothing valid came since
