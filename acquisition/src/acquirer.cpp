@@ -91,6 +91,7 @@ std::int64_t thread_cpu_ns() {
 DeviceHealth merged(const DeviceHealth& h, const drivers::DeviceCounters& c) {
   DeviceHealth out = h;
   out.frames_dropped = std::max(out.frames_dropped, c.dropped_frames);
+  out.device_faults = c.device_faults;
   return out;
 }
 
@@ -104,6 +105,7 @@ hil_msgs::msg::DeviceStatus to_msg(const DeviceHealth& h, std::int64_t now_ns) {
   m.last_sample_age_s(std::isfinite(h.last_sample_age_s) ? h.last_sample_age_s : -1.0);
   m.samples(h.samples);
   m.frames_dropped(h.frames_dropped);
+  m.device_faults(h.device_faults);
   m.errors(h.errors);
   m.last_error(h.state == DeviceState::ok ? h.last_error : (h.reason.empty() ? h.last_error : h.reason));
   return m;
@@ -224,7 +226,7 @@ void Acquirer::plate_loop() {
       r.seq = s.sequence;
       r.wrench_fp = s.w_fp;
       if (s.saturated_axes || s.gauge_saturated) r.quality |= kWrenchSaturated;
-      if (s.can_bus_error || s.error_frames > 0) r.quality |= kDeviceFault;
+      if (s.device_fault || s.error_frames > 0) r.quality |= kDeviceFault;
       // The live stream goes out first, outside the lock: the robot thread holds the lock while it
       // synchronises, records and publishes samples (a CSV flush among them), and a monitor's
       // wrench must not wait behind that. Only this thread uses the wrench writer.
@@ -235,10 +237,11 @@ void Acquirer::plate_loop() {
       switch (st) {
         case drivers::PollStatus::ok: {
           if (r.quality & kDeviceFault) {
-            plate_mon_.error(s.error_frames > 0
-                                 ? fmt::format("{} CAN error frame(s): {}", s.error_frames, drivers::describe(plate_->last_bus_error()))
-                                 : std::string("force plate reports a CAN bus error (status 0x4000)"),
-                             now);
+            std::string why = s.device_fault ? "the force plate flags its reading: " + plate_->describe_status(s) : std::string();
+            if (s.error_frames > 0)
+              why += fmt::format("{}{} CAN error frame(s): {}", why.empty() ? "" : "; ", s.error_frames,
+                                 drivers::describe(plate_->last_bus_error()));
+            plate_mon_.error(why, now);
           }
           plate_mon_.sample(r.t_ns);
           if (raw_) raw_->plate(s);

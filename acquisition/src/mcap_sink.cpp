@@ -44,6 +44,7 @@ void McapSink::health(const std::vector<acquisition::DeviceHealth>& devices, std
     m.last_sample_age_s(h.last_sample_age_s);
     m.samples(h.samples);
     m.frames_dropped(h.frames_dropped);
+    m.device_faults(h.device_faults);
     m.errors(h.errors);
     m.last_error(h.last_error);
     writer_.write_status(m);

@@ -176,7 +176,10 @@ PollStatus AtiFtCanDriver::poll(WrenchSample& out) noexcept {
       // A second first frame: the one before was an earlier answer's, late (the plate answers in
       // order, so the newest is ours).
       if (have_a) ++counters_.late_frames;
-      if (!ati::decode_gauges_first(f, out.status_word, out.gauges)) {
+      std::uint16_t status = 0;
+      const bool decoded = ati::decode_gauges_first(f, status, out.gauges);
+      out.status_word = status;
+      if (!decoded) {
         ++counters_.bad_frames;
         ++counters_.consecutive_failures;
         std::snprintf(msg, sizeof msg, "gauge frame 1 (id 0x%03X) has length %u, expected 8", id_a, f.len);
@@ -211,7 +214,10 @@ PollStatus AtiFtCanDriver::poll(WrenchSample& out) noexcept {
         g[i] = v;
       }
       out.gauge_saturated = sat;
-      out.can_bus_error = (out.status_word & ati::kStatusCanBusError) != 0;
+      // Any bit is a fault: bit 15 joins every error, and the others (supply, calibration,
+      // EEPROM, temperature...) each make the gauges untrustworthy.
+      out.device_fault = out.status_word != 0;
+      if (out.device_fault) ++counters_.device_faults;
       out.w_sensor.noalias() = G_ * g;
       finish(out);
       counters_.dropped_frames = channel_->stats().rx_dropped;
@@ -230,6 +236,10 @@ PollStatus AtiFtCanDriver::poll(WrenchSample& out) noexcept {
   }
   problem(have_a ? "gauge frame 2 missing" : have_b ? "gauge frame 1 missing" : "no gauge answer");
   return PollStatus::timeout;
+}
+
+std::string AtiFtCanDriver::describe_status(const WrenchSample& s) const {
+  return "ATI status " + ati::describe_status(static_cast<std::uint16_t>(s.status_word));
 }
 
 }  // namespace hil::drivers

@@ -1,5 +1,8 @@
 #include <hil/drivers/ati_protocol.hpp>
 
+#include <cstdio>
+#include <utility>
+
 #include <bit>
 #include <cstring>
 
@@ -172,6 +175,42 @@ const char* force_unit_name(std::uint8_t code) noexcept {
 const char* torque_unit_name(std::uint8_t code) noexcept {
   static const char* n[] = {"?", "lbf-in", "lbf-ft", "N-m", "N-mm", "kgf-cm", "kN-m"};
   return code <= 6 ? n[code] : "?";
+}
+
+std::string describe_status(std::uint16_t status) {
+  static constexpr std::pair<std::uint16_t, const char*> kBits[] = {
+      {kStatusWatchdogReset, "watchdog reset"},
+      {kStatusDacAdcTooHigh, "DAC/ADC check too high"},
+      {kStatusDacAdcTooLow, "DAC/ADC check too low"},
+      {kStatusAnalogGround, "analog ground out of range"},
+      {kStatusSupplyTooHigh, "supply too high"},
+      {kStatusSupplyTooLow, "supply too low"},
+      {kStatusBadCalibration, "bad active calibration"},
+      {kStatusEepromFailure, "EEPROM failure"},
+      {kStatusConfigInvalid, "configuration invalid"},
+      {kStatusTemperatureTooHigh, "temperature too high"},
+      {kStatusTemperatureTooLow, "temperature too low"},
+      {kStatusCanBusError, "CAN bus error"},
+      {kStatusAnyError, "any error"},
+  };
+  char head[16];
+  std::snprintf(head, sizeof head, "0x%04X (", status);
+  std::string out = head;
+  std::uint16_t named = 0;
+  for (const auto& [bit, name] : kBits) {
+    named |= bit;
+    if ((status & bit) == 0) continue;
+    if (out.back() != '(') out += ", ";
+    out += name;
+  }
+  for (int b = 0; b < 16; ++b) {
+    const auto bit = static_cast<std::uint16_t>(1U << b);
+    if ((status & bit) == 0 || (named & bit) != 0) continue;
+    if (out.back() != '(') out += ", ";
+    out += "reserved bit " + std::to_string(b);
+  }
+  if (status == 0) out += "ok";
+  return out + ")";
 }
 
 }  // namespace hil::drivers::ati

@@ -63,7 +63,7 @@ bool DeclarativeForcePlate::feed(const CanFrame& f, WrenchSample& out) noexcept 
     out.status_word = pending_status_;
     out.gauges = {};
     out.gauge_saturated = false;
-    out.can_bus_error = false;
+    out.device_fault = false;  // what a declarative status means is the user's: recorded, not judged
     return true;
   }
   return false;

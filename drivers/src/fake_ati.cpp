@@ -205,7 +205,11 @@ void FakeAtiForcePlate::run() noexcept {
         }
         bool sat = false;
         const ati::Gauges g = I.model.gauges(w, sat);
-        const std::uint16_t status = (f.error_frame_rate_hz > 0.0 || bus_off) ? ati::kStatusCanBusError : 0;
+        std::uint32_t bits = f.status_now;
+        for (const auto& sw : f.status) bits |= sw.window.contains(t_req) ? sw.bits : 0U;
+        if (f.error_frame_rate_hz > 0.0 || bus_off) bits |= ati::kStatusCanBusError;
+        if ((bits & 0x7FFFU) != 0) bits |= ati::kStatusAnyError;
+        const auto status = static_cast<std::uint16_t>(bits);
         const auto fr = ati::encode_gauges(base, status, g);
         answer[0] = fr[0];
         answer[1] = fr[1];

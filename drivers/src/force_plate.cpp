@@ -258,4 +258,10 @@ std::unique_ptr<ForcePlate> make_force_plate(const ForcePlateConfig& cfg, std::u
   return std::make_unique<AtiFtCanDriver>(cfg, std::move(channel));
 }
 
+std::string ForcePlate::describe_status(const WrenchSample& s) const {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "status 0x%08X", s.status_word);
+  return buf;
+}
+
 }  // namespace hil::drivers

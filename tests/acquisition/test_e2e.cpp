@@ -240,6 +240,91 @@ TEST(EndToEnd, InjectedFaultsAreReportedAndRecoveredFrom) {
   EXPECT_GE(flagged, 2) << "the silent and bus-off holes must be marked in the recording";
 }
 
+// The plate flags its readings (ATI status bits: supply too low, then temperature too high) in two
+// windows. Every output sample whose filter window holds a flagged reading is recorded with
+// kDeviceFault; samples far from them are not; DeviceStatus names the bits.
+TEST(EndToEnd, FlaggedReadingsNeverReachTheRecordingAsGoodSamples) {
+  hil::test::TempDir tmp;
+  auto scenario = example_scenario(true);
+  auto bus = drivers::CanLoopbackBus::create();
+  drivers::FakeAtiConfig fc;
+  fc.faults.status.push_back({{0.8, 0.3}, drivers::ati::kStatusSupplyTooLow});
+  fc.faults.status.push_back({{1.8, 0.3}, drivers::ati::kStatusTemperatureTooHigh});
+  drivers::FakeAtiForcePlate fake_plate(fc, bus->open(), scenario);
+  drivers::FakeRobotConfig rc;
+  rc.map = drivers::float32_register_map();
+  drivers::FakeRobotController fake_robot(rc, scenario);
+  drivers::ModbusConfig mc;
+  mc.port = fake_robot.port();
+  mc.map = drivers::float32_register_map();
+  hil::dds::Participant participant({test_domain(180), "", "hil_localhost", "e2e-status"});
+  StatusLog log;
+  hil::dds::Reader<hil_msgs::msg::DeviceStatus> reader(
+      participant, hil::dds::topics::kDeviceStatus, [&](const auto& msg, const auto&) { log.add(msg); }, hil::dds::StreamQos{true, 0, 10});
+  format::RunInfo info;
+  info.rig = "press_bench";
+  info.output_rate_hz = 50;
+  const auto dir = tmp.path() + "/run";
+  const std::int64_t start_ns = acquisition::realtime_ns();
+  std::uint64_t device_faults = 0;
+  {
+    acquisition::RunRecorder rec(dir, info, "", start_ns, 6);
+    acquisition::Acquirer acq(acquisition::AcquirerOptions{}, drivers::make_force_plate({}, bus->open()),
+                              std::make_unique<drivers::RobotControllerDriver>(mc), &participant, &rec);
+    fake_plate.start();
+    fake_robot.start();
+    acq.start();
+    std::this_thread::sleep_for(std::chrono::milliseconds(3000));
+    acq.stop();
+    for (const auto& h : acq.health())
+      if (h.device == "force_plate") device_faults = h.device_faults;
+    fake_plate.stop();
+    fake_robot.stop();
+    rec.close();
+  }
+  std::vector<double> flagged_s;  // times of the readings the plate flagged, run time
+  {
+    const auto raw = format::read_csv(dir + "/raw/force_plate.csv", requiring({"t_ns", "status_word"}));
+    const auto t = raw.numeric("t_ns");
+    const auto st = raw.numeric("status_word");
+    for (std::size_t i = 0; i < t.size(); ++i)
+      if (st[i] != 0) flagged_s.push_back((t[i] - static_cast<double>(start_ns)) * 1e-9);
+  }
+  ASSERT_GT(flagged_s.size(), 100U) << "the status windows left no flagged readings";
+  EXPECT_EQ(device_faults, flagged_s.size());
+  const auto csv = format::read_csv(dir + "/samples.csv", requiring({"t", "quality"}));
+  const auto ts = csv.numeric("t");
+  const auto q = csv.numeric("quality");
+  ASSERT_GT(ts.size(), 100U);
+  const auto is_fault = [&](std::size_t i) { return (static_cast<std::uint32_t>(q[i]) & acquisition::kDeviceFault) != 0; };
+  // The output nearest each flagged reading has it in its filter window: flagged.
+  for (const double tf : flagged_s) {
+    std::size_t best = 0;
+    for (std::size_t i = 1; i < ts.size(); ++i)
+      if (std::abs(ts[i] - tf) < std::abs(ts[best] - tf)) best = i;
+    if (std::abs(ts[best] - tf) > 0.02) continue;  // no output near it (the run's edges)
+    EXPECT_TRUE(is_fault(best)) << "sample at t = " << ts[best] << " s recorded as good next to a reading flagged at " << tf << " s";
+  }
+  // Samples 0.2 s away from every flagged reading are not marked (the flag is specific).
+  std::size_t clean = 0;
+  for (std::size_t i = 0; i < ts.size(); ++i) {
+    double nearest = 1e9;
+    for (const double tf : flagged_s) nearest = std::min(nearest, std::abs(ts[i] - tf));
+    if (nearest < 0.2) continue;
+    EXPECT_FALSE(is_fault(i)) << "sample at t = " << ts[i] << " s marked with no flagged reading near";
+    ++clean;
+  }
+  EXPECT_GT(clean, 50U);
+  std::lock_guard<std::mutex> lock(log.m);
+  bool named_supply = false, named_temperature = false;
+  for (const auto& e : log.entries) {
+    named_supply = named_supply || (e.device == "force_plate" && e.error.find("supply too low") != std::string::npos);
+    named_temperature = named_temperature || (e.device == "force_plate" && e.error.find("temperature too high") != std::string::npos);
+  }
+  EXPECT_TRUE(named_supply);
+  EXPECT_TRUE(named_temperature);
+}
+
 // Faults switched on and off while the service runs, as `hil fake-rig` does from its command line.
 TEST(EndToEnd, FaultSwitchesAreReportedWithinThreePeriods) {
   auto scenario = example_scenario(true);

@@ -322,8 +322,8 @@ TEST_F(AtiFaults, ErrorFramesAndStatusBit) {
   f.error_frame_rate_hz = 500;
   b.fake->set_faults(f);
   WrenchSample s;
-  ASSERT_TRUE(hil::test::eventually([&] { return b.plate->poll(s) == PollStatus::ok && s.can_bus_error; }));
-  EXPECT_EQ(s.status_word & ati::kStatusCanBusError, ati::kStatusCanBusError);
+  ASSERT_TRUE(hil::test::eventually([&] { return b.plate->poll(s) == PollStatus::ok && s.device_fault; }));
+  EXPECT_EQ(s.status_word, ati::kStatusCanBusError | ati::kStatusAnyError);
   ASSERT_TRUE(hil::test::eventually([&] {
     b.plate->poll(s);
     return b.plate->counters().error_frames > 0;
@@ -449,4 +449,51 @@ TEST(AtiDriver, StaleSecondFrameNeverTearsAReading) {
   ASSERT_EQ(st, PollStatus::ok);
   EXPECT_EQ(s.gauges, ours) << "gauges 4-5 came from the stale frame";
   EXPECT_EQ(b.plate->counters().late_frames, late0 + 1);
+}
+
+// Every class of status bit the board documents marks the reading as a device fault, counted and
+// named; none is only logged. The board sets bit 15 (any error) with each.
+TEST_F(AtiFaults, EveryStatusBitClassIsADeviceFaultNamedAndCounted) {
+  const struct {
+    std::uint16_t bit;
+    const char* words;
+  } classes[] = {
+      {ati::kStatusWatchdogReset, "watchdog reset"},
+      {ati::kStatusDacAdcTooHigh, "DAC/ADC check too high"},
+      {ati::kStatusAnalogGround, "analog ground out of range"},
+      {ati::kStatusSupplyTooLow, "supply too low"},
+      {ati::kStatusSupplyTooHigh, "supply too high"},
+      {ati::kStatusBadCalibration, "bad active calibration"},
+      {ati::kStatusEepromFailure, "EEPROM failure"},
+      {ati::kStatusConfigInvalid, "configuration invalid"},
+      {ati::kStatusTemperatureTooHigh, "temperature too high"},
+      {ati::kStatusTemperatureTooLow, "temperature too low"},
+      {ati::kStatusCanBusError, "CAN bus error"},
+  };
+  std::uint64_t faults = 0;
+  for (const auto& c : classes) {
+    SCOPED_TRACE(c.words);
+    CanFaults f;
+    f.status_now = c.bit;
+    b.fake->set_faults(f);
+    WrenchSample s;
+    ASSERT_TRUE(hil::test::eventually([&] { return b.plate->poll(s) == PollStatus::ok && s.status_word != 0; }));
+    EXPECT_EQ(s.status_word, static_cast<std::uint32_t>(c.bit | ati::kStatusAnyError));
+    EXPECT_TRUE(s.device_fault);
+    EXPECT_GT(b.plate->counters().device_faults, faults);
+    faults = b.plate->counters().device_faults;
+    const std::string said = b.plate->describe_status(s);
+    EXPECT_NE(said.find(c.words), std::string::npos) << said;
+    EXPECT_NE(said.find("any error"), std::string::npos) << said;
+    b.fake->set_faults(CanFaults{});
+    ASSERT_TRUE(hil::test::eventually([&] { return b.plate->poll(s) == PollStatus::ok && s.status_word == 0; }));
+    EXPECT_FALSE(s.device_fault);
+  }
+}
+
+TEST(AtiProtocol, StatusWordsAreNamedBitByBitWithReservedBitsByNumber) {
+  EXPECT_EQ(ati::describe_status(0), "0x0000 (ok)");
+  EXPECT_EQ(ati::describe_status(0x8020), "0x8020 (supply too low, any error)");
+  EXPECT_EQ(ati::describe_status(0x8200), "0x8200 (any error, reserved bit 9)");
+  EXPECT_EQ(ati::describe_status(0x0001), "0x0001 (watchdog reset)");
 }

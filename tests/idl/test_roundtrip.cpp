@@ -97,7 +97,7 @@ TEST(BusTypes, HilTypes) {
 
   hil_msgs::msg::DeviceStatus d;
   d.device("force_plate"), d.state(hil_msgs::msg::DEVICE_DEGRADED), d.connected(true), d.rate_hz(999.5);
-  d.last_sample_age_s(0.002), d.samples(100000), d.frames_dropped(3), d.errors(1), d.last_error("bus-off");
+  d.last_sample_age_s(0.002), d.samples(100000), d.frames_dropped(3), d.errors(1), d.device_faults(4), d.last_error("bus-off");
   EXPECT_EQ(roundtrip(d, "hil_msgs::msg::dds_::DeviceStatus_"), d);
 
   hil_msgs::msg::StiffnessMeasurement sm;

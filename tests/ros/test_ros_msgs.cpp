@@ -26,6 +26,7 @@ hil_msgs::msg::DeviceStatus status(std::uint8_t state, const std::string& last_e
   s.samples(123456);
   s.frames_dropped(7);
   s.errors(2);
+  s.device_faults(5);
   s.last_error(last_error);
   return s;
 }
@@ -61,11 +62,12 @@ TEST(RosDiagnostics, AFaultyDeviceSaysWhyWithItsCountersAsValues) {
   EXPECT_EQ(d.hardware_id(), "ATI serial FT1 on can0");
   EXPECT_EQ(d.message(), "bus_error: bus-off");
   const auto v = values(d);
-  EXPECT_EQ(v.size(), 8u);
+  EXPECT_EQ(v.size(), 9u);
   EXPECT_DOUBLE_EQ(std::stod(v.at("rate_hz")), 999.5);
   EXPECT_EQ(v.at("samples"), "123456");
   EXPECT_EQ(v.at("frames_dropped"), "7");
   EXPECT_EQ(v.at("errors"), "2");
+  EXPECT_EQ(v.at("device_faults"), "5");
   EXPECT_DOUBLE_EQ(std::stod(v.at("last_sample_age_s")), 0.0012);
   EXPECT_EQ(v.at("connected"), "true");
   EXPECT_EQ(v.at("state"), "fault");
@@ -81,7 +83,7 @@ TEST(RosDiagnostics, MessageIsOkWhenOkAndTheStateWhenNoReasonIsKnown) {
 
   d = messages::to_diagnostic_status(status(hil_msgs::msg::DEVICE_OK, ""), "");
   EXPECT_EQ(values(d).count("last_error"), 0u);
-  EXPECT_EQ(values(d).size(), 7u);
+  EXPECT_EQ(values(d).size(), 8u);
 
   d = messages::to_diagnostic_status(status(hil_msgs::msg::DEVICE_DEGRADED, "silent for 4.0 ms"), "x");
   EXPECT_EQ(d.level(), level::WARN);

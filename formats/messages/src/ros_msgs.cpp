@@ -70,6 +70,7 @@ diagnostic_msgs::msg::DiagnosticStatus to_diagnostic_status(const hil_msgs::msg:
   v.push_back(kv("samples", fmt::format("{}", s.samples())));
   v.push_back(kv("frames_dropped", fmt::format("{}", s.frames_dropped())));
   v.push_back(kv("errors", fmt::format("{}", s.errors())));
+  v.push_back(kv("device_faults", fmt::format("{}", s.device_faults())));
   v.push_back(kv("last_sample_age_s", fmt::format("{}", s.last_sample_age_s())));
   v.push_back(kv("connected", s.connected() ? "true" : "false"));
   v.push_back(kv("state", state_name(s.state())));

@@ -34,7 +34,7 @@ struct FakeRigOptions {
   std::uint64_t seed = 1;
   // force plate faults
   double drop = 0, corrupt = 0, error_frames_hz = 0, plate_delay_s = 0;
-  std::vector<std::string> silent, bus_off;
+  std::vector<std::string> silent, bus_off, plate_status;
   double plate_clock_offset_s = 0, plate_clock_drift_ppm = 0;
   // robot faults
   double exceptions = 0, slow_fraction = 0, slow_delay_s = 0.5, robot_delay_s = 0;
@@ -59,6 +59,31 @@ std::vector<drivers::TimeWindow> windows(const std::vector<std::string>& specs, 
     } catch (const std::exception&) {
       throw std::runtime_error(fmt::format("{} '{}': expected START:DURATION in seconds (start ≥ 0, duration > 0)", option, s));
     }
+  }
+  return out;
+}
+
+/// "0x0020@1.5:0.5": status bits set in the answers from 1.5 s for 0.5 s.
+std::vector<drivers::StatusWindow> status_windows(const std::vector<std::string>& specs, const char* option) {
+  std::vector<drivers::StatusWindow> out;
+  for (const auto& s : specs) {
+    const auto at = s.find('@');
+    const auto fail = [&] {
+      return std::runtime_error(
+          fmt::format("{} '{}': expected BITS@START:DURATION (bits as 0x.... non-zero, start ≥ 0 s, duration > 0 s)", option, s));
+    };
+    if (at == std::string::npos || at == 0) throw fail();
+    std::uint32_t bits = 0;
+    try {
+      std::size_t n = 0;
+      const unsigned long v = std::stoul(s.substr(0, at), &n, 0);
+      if (n != at || v == 0 || v > 0xFFFFFFFFUL) throw fail();
+      bits = static_cast<std::uint32_t>(v);
+    } catch (const std::logic_error&) {
+      throw fail();
+    }
+    const auto w = windows({s.substr(at + 1)}, option);
+    out.push_back({w.front(), bits});
   }
   return out;
 }
@@ -105,6 +130,7 @@ int fake_rig(const FakeRigOptions& o) {
     pc.faults.extra_delay_s = o.plate_delay_s;
     pc.faults.silent = windows(o.silent, "--silent");
     pc.faults.bus_off = windows(o.bus_off, "--bus-off");
+    pc.faults.status = status_windows(o.plate_status, "--plate-status");
     pc.clock = {o.plate_clock_offset_s, o.plate_clock_drift_ppm, o.speed};
     pc.seed = o.seed;
     drivers::SocketCanOptions so;
@@ -192,6 +218,8 @@ void add_fake_rig(CLI::App& app) {
   g_plate->add_option("--corrupt", o.corrupt, "share of answers sent corrupt (wrong length)")->check(CLI::Range(0.0, 1.0));
   g_plate->add_option("--silent", o.silent, "START:DURATION (s) without answers; repeatable");
   g_plate->add_option("--bus-off", o.bus_off, "START:DURATION (s) of bus-off (error frames, silence, restart); repeatable");
+  g_plate->add_option("--plate-status", o.plate_status,
+                      "BITS@START:DURATION: status bits (e.g. 0x0020, supply too low) in the plate's answers; repeatable");
   g_plate->add_option("--error-frames", o.error_frames_hz, "error-passive error frames per second")->check(CLI::NonNegativeNumber);
   g_plate->add_option("--plate-delay", o.plate_delay_s, "extra delay on every answer (s)")->check(CLI::NonNegativeNumber);
   g_plate->add_option("--plate-clock-offset", o.plate_clock_offset_s, "device clock offset (s)");

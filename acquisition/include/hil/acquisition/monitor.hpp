@@ -22,6 +22,7 @@ struct DeviceHealth {
   std::uint64_t samples = 0;
   std::uint64_t frames_dropped = 0;
   std::uint64_t errors = 0;
+  std::uint64_t device_faults = 0;  ///< readings the device flagged bad (from the driver's counters)
   std::string last_error;
   std::string reason;  ///< why the state is what it is, e.g. "silent for 4.0 ms"
 };

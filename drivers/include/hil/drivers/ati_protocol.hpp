@@ -7,7 +7,8 @@
 ///    base|0x2, base|0x3, base|0x4, two float32 each (the row's coefficients for SG0..SG5).
 ///  - 0x5 serial number (8 ASCII bytes), 0x7 counts per force and per torque (2 × int32),
 ///    0x8 units (force code, torque code), 0xF firmware (major, minor, build uint16).
-///  - status bit 0x4000 = CAN bus error.
+///  - status word: bit 15 = any error, with the cause in bits 0-14 (kStatus*). Every bit set
+///    marks the reading as a device fault: the independent drivers stop on any non-zero status.
 /// Conversion: F/T in the device's units = (M · SG) ./ [cpf cpf cpf cpt cpt cpt].
 #include <array>
 #include <cstdint>
@@ -25,7 +26,22 @@ inline constexpr std::uint8_t kOpSerial = 0x5;
 inline constexpr std::uint8_t kOpCounts = 0x7;
 inline constexpr std::uint8_t kOpUnits = 0x8;
 inline constexpr std::uint8_t kOpFirmware = 0xF;
+// Status word bits (first gauge frame), as docs/hardware.md cites them.
+inline constexpr std::uint16_t kStatusWatchdogReset = 0x0001;
+inline constexpr std::uint16_t kStatusDacAdcTooHigh = 0x0002;
+inline constexpr std::uint16_t kStatusDacAdcTooLow = 0x0004;
+inline constexpr std::uint16_t kStatusAnalogGround = 0x0008;
+inline constexpr std::uint16_t kStatusSupplyTooHigh = 0x0010;
+inline constexpr std::uint16_t kStatusSupplyTooLow = 0x0020;
+inline constexpr std::uint16_t kStatusBadCalibration = 0x0040;
+inline constexpr std::uint16_t kStatusEepromFailure = 0x0080;
+inline constexpr std::uint16_t kStatusConfigInvalid = 0x0100;
+inline constexpr std::uint16_t kStatusTemperatureTooHigh = 0x0800;
+inline constexpr std::uint16_t kStatusTemperatureTooLow = 0x1000;
 inline constexpr std::uint16_t kStatusCanBusError = 0x4000;
+inline constexpr std::uint16_t kStatusAnyError = 0x8000;
+/// The factory base id of a NETCANOEM board (frame ids 0x200-0x20F).
+inline constexpr std::uint32_t kFactoryBase = 0x20;
 inline constexpr std::uint32_t kMaxBase = 0x7F;
 
 using Gauges = std::array<std::int16_t, 6>;
@@ -61,6 +77,9 @@ struct Firmware {
 };
 CanFrame encode_firmware(std::uint32_t base, const Firmware& fw) noexcept;
 bool decode_firmware(const CanFrame& f, Firmware& fw) noexcept;
+
+/// "0x8020 (supply too low, any error)"; "0x0000 (ok)". Reserved bits are named by number.
+std::string describe_status(std::uint16_t status);
 
 /// ATI unit codes → SI factor (0 if unknown). Force: 1 lbf, 2 N, 3 klbf, 4 kN, 5 kgf, 6 gf.
 /// Torque: 1 lbf·in, 2 lbf·ft, 3 N·m, 4 N·mm, 5 kgf·cm, 6 kN·m.

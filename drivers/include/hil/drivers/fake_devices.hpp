@@ -63,6 +63,12 @@ struct TimeWindow {
   bool contains(double t) const noexcept { return t >= start_s && t < start_s + duration_s; }
 };
 
+/// Status bits a fake device sets in its answers during a window.
+struct StatusWindow {
+  TimeWindow window;
+  std::uint32_t bits = 0;
+};
+
 struct CanFaults {
   double drop_fraction = 0.0;        ///< share of response frames not sent
   double corrupt_fraction = 0.0;     ///< share of responses sent with a wrong length (truncated)
@@ -71,6 +77,10 @@ struct CanFaults {
   double error_frame_rate_hz = 0.0;  ///< error-passive error frames per second (status bit 0x4000 set meanwhile)
   double extra_delay_s = 0.0;        ///< every answer this much later
   bool silent_now = false;           ///< switch: silent until cleared
+  /// Status-word bits in the gauge answers (ATI: bit 15, any error, joins any other bit, as the
+  /// board does); `status_now` is a switch.
+  std::vector<StatusWindow> status;
+  std::uint32_t status_now = 0;
 };
 
 struct ModbusFaults {

@@ -77,10 +77,12 @@ struct WrenchSample {
   Vector6d w_fp = Vector6d::Zero();      ///< tared, force-plate frame, about the plate origin
   Vector6d w_sensor = Vector6d::Zero();  ///< raw, sensor frame, before tare
   ati::Gauges gauges{};                  ///< ATI only
-  std::uint16_t status_word = 0;         ///< ATI status / declarative `status` signal
+  std::uint32_t status_word = 0;         ///< the device's status word (ATI) / declarative `status` signal
   std::uint8_t saturated_axes = 0;       ///< bit i: |w_fp[i]| ≥ saturation_limits[i]
   bool gauge_saturated = false;          ///< a strain gauge at its int16 limit
-  bool can_bus_error = false;            ///< ATI status bit 0x4000
+  /// The device flagged this reading as bad (ATI: any status bit). Such a sample is delivered with
+  /// the device-fault quality flag and counted (DeviceCounters::device_faults), never as good.
+  bool device_fault = false;
   bool taring = false;                   ///< a tare is being averaged
   std::uint32_t error_frames = 0;        ///< CAN error frames seen during this poll
 };
@@ -108,6 +110,8 @@ class ForcePlate {
   /// One sample: ATI sends a request and waits for the answer; the declarative decoder waits for
   /// one complete set of frames. Never throws; \returns the status, `out` is valid only on ok.
   virtual PollStatus poll(WrenchSample& out) noexcept = 0;
+  /// Why the device flagged `s` (device_fault): its status word in words. Not real-time safe.
+  virtual std::string describe_status(const WrenchSample& s) const;
 
   /// Averages the next `samples` raw wrenches (0 = config.tare_samples) and subtracts them from then
   /// on (sensor frame). Thread-safe.
@@ -163,6 +167,7 @@ class AtiFtCanDriver final : public ForcePlate {
   AtiFtCanDriver(const ForcePlateConfig& cfg, std::unique_ptr<CanChannel> channel);
   ForcePlateInfo start() override;
   PollStatus poll(WrenchSample& out) noexcept override;
+  std::string describe_status(const WrenchSample& s) const override;
   /// gauges → wrench in SI units, sensor frame (valid after start()).
   const Matrix6d& gauge_to_wrench() const noexcept { return G_; }
 
