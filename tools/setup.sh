@@ -16,6 +16,7 @@ deps() {
     build-essential cmake ninja-build pkg-config python3
     libeigen3-dev libspdlog-dev libfmt-dev libyaml-cpp-dev libcli11-dev nlohmann-json3-dev
     libmodbus-dev libfastrtps-dev libfastcdr-dev fastddsgen fastdds-tools default-jre-headless
+    libtinyxml2-dev  # the Net F/T calibration page (drivers)
     can-utils iproute2 libgtest-dev libgmock-dev libbenchmark-dev zlib1g-dev libzstd-dev liblz4-dev
     python3-can python3-pymodbus python3-serial-asyncio python3-numpy python3-jsonschema
     pybind11-dev python3-dev python3-pytest

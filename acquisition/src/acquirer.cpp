@@ -152,7 +152,7 @@ void Acquirer::start() {
   start_ns_ = recorder_ ? recorder_->start_ns() : realtime_ns();
   plate_info_ = plate_->start();
   spdlog::info("force plate: {} serial '{}' firmware '{}' on {}", plate_info_.protocol, plate_info_.serial, plate_info_.firmware,
-               plate_->channel().name());
+               plate_->link());
   if (robot_) {
     robot_->connect();
     robot_identity_ = robot_->identify();
@@ -160,8 +160,7 @@ void Acquirer::start() {
                  robot_identity_.answered ? ", server id " + std::to_string(robot_identity_.server_id) + " '" + robot_identity_.text + "'"
                                           : "");
   }
-  plate_hardware_id_ = plate_info_.protocol + (plate_info_.serial.empty() ? "" : " serial " + plate_info_.serial) + " on " +
-                       plate_->channel().name();
+  plate_hardware_id_ = plate_info_.protocol + (plate_info_.serial.empty() ? "" : " serial " + plate_info_.serial) + " on " + plate_->link();
   if (robot_) robot_hardware_id_ = robot_->config().describe();
   if (w_tf_static_) w_tf_static_->write(to_tf_message(opt_.static_frames, to_time(static_cast<double>(realtime_ns()) * 1e-9)));
   if (opt_.wait_for_subscribers > 0 && w_sample_ && !w_sample_->wait_for_readers(opt_.wait_for_subscribers, std::chrono::seconds(10)))
@@ -237,11 +236,7 @@ void Acquirer::plate_loop() {
       switch (st) {
         case drivers::PollStatus::ok: {
           if (r.quality & kDeviceFault) {
-            std::string why = s.device_fault ? "the force plate flags its reading: " + plate_->describe_status(s) : std::string();
-            if (s.error_frames > 0)
-              why += fmt::format("{}{} CAN error frame(s): {}", why.empty() ? "" : "; ", s.error_frames,
-                                 drivers::describe(plate_->last_bus_error()));
-            plate_mon_.error(why, now);
+            plate_mon_.error(plate_->describe_fault(s), now);
           }
           plate_mon_.sample(r.t_ns);
           if (raw_) raw_->plate(s);

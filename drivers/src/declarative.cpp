@@ -6,7 +6,7 @@
 namespace hil::drivers {
 
 DeclarativeForcePlate::DeclarativeForcePlate(const ForcePlateConfig& cfg, std::unique_ptr<CanChannel> channel)
-    : ForcePlate(cfg, std::move(channel)) {
+    : CanForcePlate(cfg, std::move(channel)) {
   if (cfg_.protocol != ForcePlateProtocol::declarative) throw ConfigError("protocol", "DeclarativeForcePlate needs protocol declarative");
   for (unsigned i = 0; i < cfg_.signals.size(); ++i) {
     const auto& s = cfg_.signals[i];

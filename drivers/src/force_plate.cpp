@@ -126,7 +126,7 @@ void validate_signals(const std::vector<CanSignal>& signals) {
 
 void ForcePlateConfig::validate() const {
   if (!(rate_hz > 0.0) || rate_hz > 20000.0) throw ConfigError("rate_hz", "must be in (0, 20000]");
-  if (protocol == ForcePlateProtocol::ati_ft_can && base_id > ati::kMaxBase)
+  if (protocol == ForcePlateProtocol::ati_netcanoem && base_id > ati::kMaxBase)
     throw ConfigError("base_id", "ATI base id must be 0..0x7F (11-bit id = base << 4 | opcode)");
   const Eigen::Matrix3d R = T_fp_sensor.linear();
   if (!R.allFinite() || !T_fp_sensor.translation().allFinite() || (R.transpose() * R - Eigen::Matrix3d::Identity()).norm() > 1e-6 ||
@@ -143,18 +143,32 @@ void ForcePlateConfig::validate() const {
   if (startup_tries < 1) throw ConfigError("startup_tries", "must be ≥ 1");
   if (tare_samples < 1) throw ConfigError("tare_samples", "must be ≥ 1");
   if (protocol == ForcePlateProtocol::declarative) validate_signals(signals);
+  if (protocol == ForcePlateProtocol::ati_netft_rdt) {
+    if (host.empty()) throw ConfigError("host", "the Net F/T box's address is needed (its web page shows it; factory 192.168.1.1)");
+    if (port < 1 || port > 65535) throw ConfigError("port", "must be 1..65535, got " + std::to_string(port));
+    (void)netft_calibration.newtons_per_count();  // names counts_per_force / force_unit
+    (void)netft_calibration.newton_metres_per_count();
+  }
+}
+
+const char* to_string(ForcePlateProtocol p) noexcept {
+  switch (p) {
+    case ForcePlateProtocol::ati_netcanoem: return "ati_netcanoem";
+    case ForcePlateProtocol::declarative: return "declarative";
+    case ForcePlateProtocol::ati_netft_rdt: return "ati_netft_rdt";
+  }
+  return "?";
 }
 
 double ForcePlateConfig::response_timeout() const noexcept {
   if (response_timeout_s > 0.0) return response_timeout_s;
-  return protocol == ForcePlateProtocol::ati_ft_can ? 0.9 / rate_hz : 3.0 / rate_hz;
+  return protocol == ForcePlateProtocol::ati_netcanoem ? 0.9 / rate_hz : 3.0 / rate_hz;
 }
 
 // ---- common part -------------------------------------------------------------------------------
 
-ForcePlate::ForcePlate(const ForcePlateConfig& cfg, std::unique_ptr<CanChannel> channel) : cfg_(cfg), channel_(std::move(channel)) {
+ForcePlate::ForcePlate(const ForcePlateConfig& cfg) : cfg_(cfg) {
   cfg_.validate();
-  if (!channel_) throw ConfigError("channel", "no CAN channel given");
   const Eigen::Matrix3d R = cfg_.T_fp_sensor.linear();
   const Eigen::Vector3d p = cfg_.T_fp_sensor.translation();
   Eigen::Matrix3d P;
@@ -205,7 +219,17 @@ void ForcePlate::finish(WrenchSample& s) noexcept {
   counters_.bus_off = false;
 }
 
-void ForcePlate::book_error_frame(const CanFrame& f) noexcept {
+CanForcePlate::CanForcePlate(const ForcePlateConfig& cfg, std::unique_ptr<CanChannel> channel)
+    : ForcePlate(cfg), channel_(std::move(channel)) {
+  if (!channel_) throw ConfigError("channel", "no CAN channel given");
+}
+
+std::string CanForcePlate::describe_link_errors(const WrenchSample& s) const {
+  if (s.error_frames == 0) return {};
+  return std::to_string(s.error_frames) + " CAN error frame(s): " + describe(last_bus_error_);
+}
+
+void CanForcePlate::book_error_frame(const CanFrame& f) noexcept {
   ++counters_.error_frames;
   last_bus_error_ = decode_error_frame(f);
   if (last_bus_error_.bus_off) {
@@ -216,8 +240,8 @@ void ForcePlate::book_error_frame(const CanFrame& f) noexcept {
   }
 }
 
-PollStatus ForcePlate::next_data_frame(std::chrono::steady_clock::time_point deadline, CanFrame& f, WrenchSample& out,
-                                       const char* context) noexcept {
+PollStatus CanForcePlate::next_data_frame(std::chrono::steady_clock::time_point deadline, CanFrame& f, WrenchSample& out,
+                                          const char* context) noexcept {
   for (;;) {
     const auto now = std::chrono::steady_clock::now();
     if (now >= deadline) return PollStatus::timeout;
@@ -253,15 +277,24 @@ void ForcePlate::problem(const char* what) noexcept {
   }
 }
 
-std::unique_ptr<ForcePlate> make_force_plate(const ForcePlateConfig& cfg, std::unique_ptr<CanChannel> channel) {
+std::unique_ptr<CanForcePlate> make_force_plate(const ForcePlateConfig& cfg, std::unique_ptr<CanChannel> channel) {
   if (cfg.protocol == ForcePlateProtocol::declarative) return std::make_unique<DeclarativeForcePlate>(cfg, std::move(channel));
-  return std::make_unique<AtiFtCanDriver>(cfg, std::move(channel));
+  return std::make_unique<AtiNetCanOemDriver>(cfg, std::move(channel));
 }
 
 std::string ForcePlate::describe_status(const WrenchSample& s) const {
   char buf[32];
   std::snprintf(buf, sizeof buf, "status 0x%08X", s.status_word);
   return buf;
+}
+
+std::string ForcePlate::describe_link_errors(const WrenchSample&) const { return {}; }
+
+std::string ForcePlate::describe_fault(const WrenchSample& s) const {
+  std::string out = s.device_fault ? "the force plate flags its reading: " + describe_status(s) : std::string();
+  const std::string link_errors = describe_link_errors(s);
+  if (!link_errors.empty()) out += (out.empty() ? "" : "; ") + link_errors;
+  return out;
 }
 
 }  // namespace hil::drivers

@@ -96,7 +96,7 @@ def write_rig():
             y.append("          - vertices_m: " + fmt_pts(w))
     y += ["      - name: base", "        polyhedra:",
           "          - vertices_m: " + fmt_pts([(x, yy, z) for z in (-0.05, -0.012) for x in (-0.2, 0.2) for yy in (-0.2, 0.2)])]
-    y += ["", "devices:", "  force_plate:", "    protocol: ati_ft_can", "    interface: vcan0", "    rate_hz: 1000",
+    y += ["", "devices:", "  force_plate:", "    protocol: ati_netcanoem", "    interface: vcan0", "    rate_hz: 1000",
           "    sensor_pose: {translation_m: [0.0, 0.0, 0.0]}",
           # The controller's pose as float32 registers: the UR map's 0.1 mm steps are coarser than
           # the contact's interference (50 N / K = 0.3 mm).

@@ -68,8 +68,8 @@ TEST(EndToEnd, ThirtySecondsAt1kHzNoneLost) {
   hil::test::TempDir tmp;
   auto scenario = example_scenario(true);
   auto bus = drivers::CanLoopbackBus::create();
-  drivers::FakeAtiConfig fc;
-  drivers::FakeAtiForcePlate fake_plate(fc, bus->open(), scenario);
+  drivers::FakeNetCanOemConfig fc;
+  drivers::FakeNetCanOemBoard fake_plate(fc, bus->open(), scenario);
   drivers::FakeRobotConfig rc;
   rc.map = drivers::float32_register_map();
   drivers::FakeRobotController fake_robot(rc, scenario);
@@ -146,10 +146,10 @@ TEST(EndToEnd, InjectedFaultsAreReportedAndRecoveredFrom) {
   hil::test::TempDir tmp;
   auto scenario = example_scenario(true);
   auto bus = drivers::CanLoopbackBus::create();
-  drivers::FakeAtiConfig fc;
+  drivers::FakeNetCanOemConfig fc;
   fc.faults.silent.push_back({1.0, 0.3});   // plate silent from 1.0 s to 1.3 s
   fc.faults.bus_off.push_back({3.0, 0.3});  // bus-off from 3.0 s to 3.3 s (losses are forgotten after 1 s)
-  drivers::FakeAtiForcePlate fake_plate(fc, bus->open(), scenario);
+  drivers::FakeNetCanOemBoard fake_plate(fc, bus->open(), scenario);
   drivers::FakeRobotConfig rc;
   rc.map = drivers::float32_register_map();
   rc.faults.exception_windows.push_back({1.5, 0.3});  // Modbus exceptions from 1.5 s to 1.8 s
@@ -247,10 +247,10 @@ TEST(EndToEnd, FlaggedReadingsNeverReachTheRecordingAsGoodSamples) {
   hil::test::TempDir tmp;
   auto scenario = example_scenario(true);
   auto bus = drivers::CanLoopbackBus::create();
-  drivers::FakeAtiConfig fc;
+  drivers::FakeNetCanOemConfig fc;
   fc.faults.status.push_back({{0.8, 0.3}, drivers::ati::kStatusSupplyTooLow});
   fc.faults.status.push_back({{1.8, 0.3}, drivers::ati::kStatusTemperatureTooHigh});
-  drivers::FakeAtiForcePlate fake_plate(fc, bus->open(), scenario);
+  drivers::FakeNetCanOemBoard fake_plate(fc, bus->open(), scenario);
   drivers::FakeRobotConfig rc;
   rc.map = drivers::float32_register_map();
   drivers::FakeRobotController fake_robot(rc, scenario);
@@ -329,7 +329,7 @@ TEST(EndToEnd, FlaggedReadingsNeverReachTheRecordingAsGoodSamples) {
 TEST(EndToEnd, FaultSwitchesAreReportedWithinThreePeriods) {
   auto scenario = example_scenario(true);
   auto bus = drivers::CanLoopbackBus::create();
-  drivers::FakeAtiForcePlate fake_plate(drivers::FakeAtiConfig{}, bus->open(), scenario);
+  drivers::FakeNetCanOemBoard fake_plate(drivers::FakeNetCanOemConfig{}, bus->open(), scenario);
   drivers::FakeRobotConfig rc;
   rc.map = drivers::float32_register_map();
   drivers::FakeRobotController fake_robot(rc, scenario);

@@ -289,7 +289,7 @@ int main(int argc, char** argv) {
   using namespace hil;
   auto sc = scenario();
   auto bus = drivers::CanLoopbackBus::create();
-  drivers::FakeAtiConfig pc;
+  drivers::FakeNetCanOemConfig pc;
   drivers::FakeRobotConfig rc;
   rc.map = drivers::float32_register_map();
   if (faults) {  // the clock faults hold throughout the soak
@@ -298,7 +298,7 @@ int main(int argc, char** argv) {
     rc.clock.drift_ppm = -80.0;
     rc.clock.offset_s = -0.003;
   }
-  drivers::FakeAtiForcePlate fake_plate(pc, bus->open(), sc);
+  drivers::FakeNetCanOemBoard fake_plate(pc, bus->open(), sc);
   drivers::FakeRobotController fake_robot(rc, sc);
   drivers::ModbusConfig mc;
   mc.port = fake_robot.port();

@@ -1,4 +1,4 @@
-// The ATI F/T CAN OEM protocol: pure codecs, then the driver against the fake plate over the
+// The ATI NETCANOEM protocol: pure codecs, then the driver against the fake plate over the
 // loopback bus (calibration read, conversion, tare, sensor→plate transform, faults).
 #include <gtest/gtest.h>
 
@@ -71,10 +71,10 @@ namespace {
 /// Fake plate and driver on one loopback bus.
 struct Bench {
   std::shared_ptr<CanLoopbackBus> bus = CanLoopbackBus::create("ati-test");
-  FakeAtiConfig fake_cfg;
+  FakeNetCanOemConfig fake_cfg;
   ForcePlateConfig drv_cfg;
-  std::unique_ptr<FakeAtiForcePlate> fake;
-  std::unique_ptr<ForcePlate> plate;
+  std::unique_ptr<FakeNetCanOemBoard> fake;
+  std::unique_ptr<CanForcePlate> plate;
 
   explicit Bench(const Eigen::Isometry3d& T_fp_sensor = Eigen::Isometry3d::Identity(), std::uint32_t base = 0x0A) {
     fake_cfg.base_id = base;
@@ -85,7 +85,7 @@ struct Bench {
     drv_cfg.startup_timeout_s = 0.5;
   }
   void start_fake(std::shared_ptr<const Scenario> scenario = nullptr) {
-    fake = std::make_unique<FakeAtiForcePlate>(fake_cfg, bus->open(), std::move(scenario));
+    fake = std::make_unique<FakeNetCanOemBoard>(fake_cfg, bus->open(), std::move(scenario));
     fake->start();
   }
   ForcePlateInfo start_driver() {
@@ -94,7 +94,7 @@ struct Bench {
   }
   /// The quantisation bound of the conversion: half a count on every gauge.
   Vector6d tolerance() const {
-    const auto* ati = dynamic_cast<const AtiFtCanDriver*>(plate.get());
+    const auto* ati = dynamic_cast<const AtiNetCanOemDriver*>(plate.get());
     const Vector6d per_gauge = 0.5 * ati->gauge_to_wrench().cwiseAbs().rowwise().sum();
     const double f = per_gauge.head<3>().norm(), m = per_gauge.tail<3>().norm();
     const double arm = drv_cfg.T_fp_sensor.translation().norm();
@@ -125,7 +125,7 @@ TEST(AtiDriver, ReadsCalibrationFromTheDevice) {
   EXPECT_EQ(info.counts_per_force, 2000);
   EXPECT_EQ(info.counts_per_torque, 100000);
   EXPECT_TRUE(info.calibration.isApprox(b.fake_cfg.calibration.cast<float>().cast<double>(), 0.0));
-  const auto* ati = dynamic_cast<const AtiFtCanDriver*>(b.plate.get());
+  const auto* ati = dynamic_cast<const AtiNetCanOemDriver*>(b.plate.get());
   EXPECT_NEAR(ati->gauge_to_wrench()(0, 0), 60.0 * 4.4482216152605 / 2000, 1e-9);
   EXPECT_NEAR(ati->gauge_to_wrench()(3, 3), 180.0 / 100000, 1e-12);
 }
@@ -233,7 +233,7 @@ TEST(AtiDriver, NoDeviceFailsStartNamingTheStep) {
     b.start_driver();
     FAIL() << "no error";
   } catch (const DeviceError& e) {
-    EXPECT_STREQ(e.what(), "ATI F/T CAN (base 0x0A) on ati-test: serial number (opcode 0x5): no answer after 2 tries of 10 ms");
+    EXPECT_STREQ(e.what(), "ATI NETCANOEM (base 0x0A) on ati-test: serial number (opcode 0x5): no answer after 2 tries of 10 ms");
   }
   WrenchSample s;
   EXPECT_EQ(b.plate->poll(s), PollStatus::disconnected);
@@ -243,13 +243,13 @@ TEST(AtiDriver, BadConfigurationIsNamed) {
   auto bus = CanLoopbackBus::create();
   ForcePlateConfig c;
   c.base_id = 0x80;
-  EXPECT_TRUE(hil::test::config_error([&] { AtiFtCanDriver d(c, bus->open()); }, "base_id", "0..0x7F"));
+  EXPECT_TRUE(hil::test::config_error([&] { AtiNetCanOemDriver d(c, bus->open()); }, "base_id", "0..0x7F"));
   c.base_id = 1;
   c.saturation_limits = {1, 2, 3};
-  EXPECT_TRUE(hil::test::config_error([&] { AtiFtCanDriver d(c, bus->open()); }, "saturation_limits", "needs 6 values"));
+  EXPECT_TRUE(hil::test::config_error([&] { AtiNetCanOemDriver d(c, bus->open()); }, "saturation_limits", "needs 6 values"));
   c.saturation_limits.clear();
   c.T_fp_sensor.linear() *= 2.0;
-  EXPECT_TRUE(hil::test::config_error([&] { AtiFtCanDriver d(c, bus->open()); }, "sensor_pose", "not a rigid transform"));
+  EXPECT_TRUE(hil::test::config_error([&] { AtiNetCanOemDriver d(c, bus->open()); }, "sensor_pose", "not a rigid transform"));
 }
 
 // Fault injection: each fault is seen by the driver and polling recovers when it ends.
@@ -348,7 +348,7 @@ TEST_F(AtiFaults, DelayedAnswersAreLateThenDrained) {
 }
 
 TEST(GaugeModel, IntegerQuantisationThroughTheInverseMatrix) {
-  FakeAtiConfig c;
+  FakeNetCanOemConfig c;
   const AtiGaugeModel model(c);
   bool sat = true;
   const ati::Gauges g = model.gauges(Vector6d::Zero(), sat);

@@ -132,9 +132,9 @@ TEST_F(SocketCan, ErrorFramesFollowTheErrorMask) {
 }
 
 TEST_F(SocketCan, AtiBusOffAndRecovery) {
-  FakeAtiConfig fc;
+  FakeNetCanOemConfig fc;
   fc.base_id = 0x22;
-  FakeAtiForcePlate fake(fc, open());
+  FakeNetCanOemBoard fake(fc, open());
   fake.start();
   ForcePlateConfig pc;
   pc.base_id = 0x22;
@@ -170,9 +170,9 @@ TEST_F(SocketCan, KernelDropCounter) {
 }
 
 TEST_F(SocketCan, AtiDriverAgainstTheFakePlate) {
-  FakeAtiConfig fc;
+  FakeNetCanOemConfig fc;
   fc.base_id = 0x21;
-  FakeAtiForcePlate fake(fc, open());
+  FakeNetCanOemBoard fake(fc, open());
   Vector6d w;
   w << 5, -6, 400, 1, -2, 0.5;
   fake.set_wrench(w);

@@ -107,7 +107,7 @@ def test_read_rig():
     assert unc[1]["kind"] == "rotation" and unc[1]["prior_std"] == 1e-3
     np.testing.assert_array_equal(unc[0]["axis"], [0, 0, 1])
     fp, robot_dev = rig["devices"]["force_plate"], rig["devices"]["robot"]
-    assert fp["protocol"] == "ati_ft_can" and fp["base_id"] == 0
+    assert fp["protocol"] == "ati_netcanoem" and fp["base_id"] == 0
     np.testing.assert_array_equal(fp["saturation_limits"], [660, 660, 1980, 60, 60, 60])
     assert robot_dev["port"] == 5020 and robot_dev["register_map"] == "ur"
 

@@ -62,10 +62,10 @@ TEST(RosTopics, TfStaticForLateJoinersDiagnosticsAndNamedJoints) {
   auto pcfg = rig_service::force_plate_config(rig);
   auto mcfg = rig_service::robot_controller_config(rig);
   auto bus = drivers::CanLoopbackBus::create("loop0");
-  drivers::FakeAtiConfig fc;
+  drivers::FakeNetCanOemConfig fc;
   fc.base_id = pcfg.base_id;
   fc.T_fp_sensor = pcfg.T_fp_sensor;
-  drivers::FakeAtiForcePlate fake_plate(fc, bus->open(), scenario);
+  drivers::FakeNetCanOemBoard fake_plate(fc, bus->open(), scenario);
   drivers::FakeRobotConfig rc;
   rc.map = mcfg.map;
   rc.port = 0;
@@ -178,7 +178,7 @@ TEST(RosTopics, TfStaticForLateJoinersDiagnosticsAndNamedJoints) {
         if ("hil/" + s.device() == d.name() && s.stamp() == array.header().stamp()) same = &s;
       ASSERT_NE(same, nullptr) << d.name() << ": no DeviceStatus with the array's stamp";
       // Who the device is: the plate's protocol, serial and CAN interface; the controller's address.
-      const std::string hw = same->device() == "robot" ? mcfg.describe() : "ati_ft_can serial " + plate_serial + " on loop0";
+      const std::string hw = same->device() == "robot" ? mcfg.describe() : "ati_netcanoem serial " + plate_serial + " on loop0";
       EXPECT_EQ(d, messages::to_diagnostic_status(*same, hw)) << d.name() << " '" << d.hardware_id() << "' " << d.message();
       if (d.name() == "hil/force_plate" && d.level() == level::OK) plate_ok = true;
       if (d.name() == "hil/robot" && d.level() == level::OK) robot_ok = true;

@@ -16,6 +16,7 @@
 #include <hil/rig_service/acquire.hpp>
 #include <hil/acquisition/acquirer.hpp>
 #include <hil/acquisition/identity.hpp>
+#include <hil/drivers/netft_driver.hpp>
 #include <hil/drivers/socketcan.hpp>
 #include <hil/error/error.hpp>
 #include <hil/format/ros_frames.hpp>
@@ -40,18 +41,28 @@ struct RigDevices {
   Eigen::Isometry3d T_world_base = Eigen::Isometry3d::Identity();
   double play_duration_s = 0.0;
   std::shared_ptr<drivers::CanLoopbackBus> loop;
-  std::unique_ptr<drivers::FakeAtiForcePlate> fake_plate;
+  std::unique_ptr<drivers::FakeNetCanOemBoard> fake_plate;
+  std::unique_ptr<drivers::FakeNetFtRdt> fake_netft;
   std::unique_ptr<drivers::FakeRobotController> fake_robot;
-  std::unique_ptr<drivers::CanChannel> channel;
+  std::unique_ptr<drivers::CanChannel> channel;  ///< CAN protocols only
 
+  bool can() const { return plate_cfg.protocol != drivers::ForcePlateProtocol::ati_netft_rdt; }
   void start_fakes() {
     if (fake_plate) fake_plate->start();
+    if (fake_netft) fake_netft->start();
     if (fake_robot) fake_robot->start();
   }
   void stop_fakes() {
     if (fake_plate) fake_plate->stop();
+    if (fake_netft) fake_netft->stop();
     if (fake_robot) fake_robot->stop();
   }
+  /// The plate's driver, on the channel for CAN protocols (consumed), on its own UDP socket for RDT.
+  std::unique_ptr<drivers::ForcePlate> make_plate() {
+    if (!can()) return std::make_unique<drivers::NetFtRdtDriver>(plate_cfg);
+    return drivers::make_force_plate(plate_cfg, std::move(channel));
+  }
+  std::string link() const { return can() ? channel->name() : "udp " + plate_cfg.host + ":" + std::to_string(plate_cfg.port); }
 };
 
 RigDevices open_rig_devices(const AcquireOptions& o) {
@@ -74,18 +85,32 @@ RigDevices open_rig_devices(const AcquireOptions& o) {
     const auto played = format::load_run(o.play);
     auto scenario = std::make_shared<const drivers::Scenario>(rig_service::scenario_from_run(played, d.T_world_base, false));
     d.play_duration_s = scenario->duration_s() / o.play_speed;
-    drivers::FakeAtiConfig fc;
+    if (!d.can()) {
+      // The fake box on 127.0.0.1 (an ephemeral port); the driver is pointed at it.
+      drivers::FakeNetFtConfig nc;
+      nc.rate_hz = d.plate_cfg.rate_hz;
+      nc.calibration = d.plate_cfg.netft_calibration;
+      nc.T_fp_sensor = d.plate_cfg.T_fp_sensor;
+      nc.clock.speed = o.play_speed;
+      nc.faults = o.netft_faults;
+      d.fake_netft = std::make_unique<drivers::FakeNetFtRdt>(nc, scenario);
+      d.plate_cfg.host = "127.0.0.1";
+      d.plate_cfg.port = d.fake_netft->port();
+    }
+    drivers::FakeNetCanOemConfig fc;
     fc.base_id = d.plate_cfg.base_id;
     fc.T_fp_sensor = d.plate_cfg.T_fp_sensor;
     fc.clock.speed = o.play_speed;
     fc.faults = o.plate_faults;
-    if (o.play_over_socketcan) {
+    if (!d.can()) {
+      // no CAN fake
+    } else if (o.play_over_socketcan) {
       drivers::SocketCanOptions so;
       so.interface = d.plate_cfg.interface;
-      d.fake_plate = std::make_unique<drivers::FakeAtiForcePlate>(fc, drivers::SocketCanChannel::open(so), scenario);
+      d.fake_plate = std::make_unique<drivers::FakeNetCanOemBoard>(fc, drivers::SocketCanChannel::open(so), scenario);
     } else {
       d.loop = drivers::CanLoopbackBus::create("loop0");
-      d.fake_plate = std::make_unique<drivers::FakeAtiForcePlate>(fc, d.loop->open(), scenario);
+      d.fake_plate = std::make_unique<drivers::FakeNetCanOemBoard>(fc, d.loop->open(), scenario);
       d.channel = d.loop->open();
     }
     if (d.with_robot) {
@@ -99,7 +124,7 @@ RigDevices open_rig_devices(const AcquireOptions& o) {
       d.robot_cfg.port = d.fake_robot->port();
     }
   }
-  if (!d.channel) {
+  if (!d.channel && d.can()) {
     drivers::SocketCanOptions so;
     so.interface = d.plate_cfg.interface;
     d.channel = drivers::SocketCanChannel::open(so);
@@ -118,23 +143,26 @@ AcquireResult run_acquisition(const AcquireOptions& o, const std::function<void(
   const auto& pcfg = d.plate_cfg;
   const auto& mcfg = d.robot_cfg;
   const bool with_robot = d.with_robot;
-  auto& channel = d.channel;
 
   format::RunInfo info;
   info.rig = rig.name;
   info.output_rate_hz = o.output_rate_hz;
-  info.sources.push_back({"force_plate", "can", pcfg.rate_hz, "raw/force_plate.candump.log"});
+  if (d.can()) info.sources.push_back({"force_plate", "can", pcfg.rate_hz, "raw/force_plate.candump.log"});
+  else info.sources.push_back({"force_plate", "udp", pcfg.rate_hz, "raw/force_plate.csv"});
   if (with_robot) info.sources.push_back({"robot", "modbus", mcfg.rate_hz, "raw/robot.csv"});
   info.notes = o.play.empty() ? "Recorded by hil acquire." : "Recorded by hil acquire from the fake rig playing " + o.play + ".";
   const auto start_ns = acquisition::realtime_ns();
   acquisition::RunRecorder recorder(o.out, info, d.rig_text, start_ns, with_robot ? mcfg.map.joint_count() : 0);
 
   // Every CAN frame both ways, as candump -L, next to the readings (raw/force_plate.csv).
-  auto can_log = drivers::CanLogChannel::open_write(recorder.raw_path("force_plate.candump.log"),
-                                                    drivers::CanLogOptions{pcfg.interface, false, 1.0, {}});
-  drivers::CanLogChannel* can_log_ptr = can_log.get();
-  channel = std::make_unique<drivers::CanRecordingChannel>(std::move(channel), std::move(can_log));
-  auto plate = drivers::make_force_plate(pcfg, std::move(channel));
+  drivers::CanLogChannel* can_log_ptr = nullptr;
+  if (d.can()) {
+    auto can_log = drivers::CanLogChannel::open_write(recorder.raw_path("force_plate.candump.log"),
+                                                      drivers::CanLogOptions{pcfg.interface, false, 1.0, {}});
+    can_log_ptr = can_log.get();
+    d.channel = std::make_unique<drivers::CanRecordingChannel>(std::move(d.channel), std::move(can_log));
+  }
+  auto plate = d.make_plate();
   std::unique_ptr<drivers::RobotControllerDriver> robot;
   if (with_robot) robot = std::make_unique<drivers::RobotControllerDriver>(mcfg);
 
@@ -175,7 +203,7 @@ AcquireResult run_acquisition(const AcquireOptions& o, const std::function<void(
     const auto now = std::chrono::steady_clock::now();
     if (duration > 0 && now - t0 >= std::chrono::duration<double>(duration)) break;
     if (now >= next_flush) {  // the CAN log is written by the plate thread; FILE* locks make this safe
-      can_log_ptr->flush();
+      if (can_log_ptr != nullptr) can_log_ptr->flush();
       if (mcap_sink) mcap_sink->flush();
       next_flush += std::chrono::seconds(1);
     }
@@ -226,10 +254,28 @@ int run_check(const AcquireOptions& o, std::ostream& out) {
     return st;
   };
 
-  out << fmt::format("force plate ({} on {}, base id 0x{:02X}):\n",
-                     d.plate_cfg.protocol == drivers::ForcePlateProtocol::ati_ft_can ? "ATI F/T CAN" : "declarative", d.channel->name(),
-                     d.plate_cfg.base_id);
-  auto plate = drivers::make_force_plate(d.plate_cfg, std::move(d.channel));
+  if (o.scan) {
+    if (d.plate_cfg.protocol != drivers::ForcePlateProtocol::ati_netcanoem) {
+      ok = false;
+      out << fmt::format("scan: only NETCANOEM boards answer a base-id scan; the rig's force plate is {}\n",
+                         drivers::to_string(d.plate_cfg.protocol));
+    } else {
+      const auto boards = drivers::scan_netcanoem(*d.channel);
+      out << fmt::format("scan: NETCANOEM base ids 0x00-0x7F on {}: {} board(s) answered\n", d.channel->name(), boards.size());
+      bool rigs_found = false;
+      for (const auto& b : boards) {
+        out << fmt::format("  base id 0x{:02X} (ids 0x{:03X}-0x{:03X})  serial '{}'\n", b.base_id, b.base_id << 4, (b.base_id << 4) | 0xF,
+                           b.serial);
+        rigs_found = rigs_found || b.base_id == d.plate_cfg.base_id;
+      }
+      if (!boards.empty() && !rigs_found)
+        out << fmt::format("  the rig file says base_id 0x{:02X}: set devices.force_plate.base_id to the board's\n", d.plate_cfg.base_id);
+    }
+  }
+  if (d.plate_cfg.protocol == drivers::ForcePlateProtocol::ati_netcanoem)
+    out << fmt::format("force plate (ATI NETCANOEM on {}, base id 0x{:02X}):\n", d.link(), d.plate_cfg.base_id);
+  else out << fmt::format("force plate ({} on {}):\n", drivers::to_string(d.plate_cfg.protocol), d.link());
+  auto plate = d.make_plate();
   try {
     print_identity(acquisition::plate_identity(plate->start()));
     drivers::WrenchSample w;
@@ -237,8 +283,11 @@ int run_check(const AcquireOptions& o, std::ostream& out) {
     if (st == drivers::PollStatus::ok) {
       out << fmt::format("  {:<18} f [{:.3f}, {:.3f}, {:.3f}] N, m [{:.4f}, {:.4f}, {:.4f}] N m (plate frame, not tared)\n", "wrench",
                          w.w_fp[0], w.w_fp[1], w.w_fp[2], w.w_fp[3], w.w_fp[4], w.w_fp[5]);
-      out << fmt::format("  {:<18} [{}, {}, {}, {}, {}, {}] status 0x{:04X}\n", "gauges", w.gauges[0], w.gauges[1], w.gauges[2],
-                         w.gauges[3], w.gauges[4], w.gauges[5], w.status_word);
+      if (d.plate_cfg.protocol == drivers::ForcePlateProtocol::ati_netcanoem)
+        out << fmt::format("  {:<18} [{}, {}, {}, {}, {}, {}]\n", "gauges", w.gauges[0], w.gauges[1], w.gauges[2], w.gauges[3], w.gauges[4],
+                           w.gauges[5]);
+      out << fmt::format("  {:<18} {}\n", "status", w.device_fault ? plate->describe_status(w) : "ok");
+      if (w.device_fault) ok = false;
     } else {
       ok = false;
       out << fmt::format("  FAILED: no wrench within 1 s ({}{}{})\n", drivers::to_string(st), plate->last_problem().empty() ? "" : ": ",

@@ -1,5 +1,9 @@
 #include <hil/rig_service/drivers_from_rig.hpp>
 
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
 #include <hil/calibration/robot.hpp>
 #include <hil/drivers/error.hpp>
 #include <hil/error/error.hpp>
@@ -34,11 +38,26 @@ drivers::ForcePlateConfig force_plate_config(const format::RigSpec& rig) {
   const auto& d = *rig.devices.force_plate;
   return rethrow_as_format(rig.source, "devices.force_plate", [&] {
     drivers::ForcePlateConfig c;
-    if (d.protocol == "ati_ft_can") c.protocol = drivers::ForcePlateProtocol::ati_ft_can;
+    if (d.protocol == "ati_netcanoem") c.protocol = drivers::ForcePlateProtocol::ati_netcanoem;
     else if (d.protocol == "declarative") c.protocol = drivers::ForcePlateProtocol::declarative;
-    else throw drivers::ConfigError("protocol", "'" + d.protocol + "' is not a protocol (ati_ft_can, declarative)");
+    else if (d.protocol == "ati_netft_rdt") c.protocol = drivers::ForcePlateProtocol::ati_netft_rdt;
+    else throw drivers::ConfigError("protocol", "'" + d.protocol + "' is not a protocol (ati_netcanoem, declarative, ati_netft_rdt)");
     c.interface = d.interface;
     c.base_id = d.base_id;
+    c.host = d.host;
+    c.port = d.port;
+    if (!d.calibration_xml.empty()) {
+      // Relative to the rig file, like every path in it.
+      std::filesystem::path p(d.calibration_xml);
+      if (p.is_relative()) p = std::filesystem::path(rig.source).parent_path() / p;
+      std::ifstream in(p, std::ios::binary);
+      if (!in) throw drivers::ConfigError("calibration_xml", "cannot read " + p.string());
+      std::ostringstream text;
+      text << in.rdbuf();
+      c.netft_calibration = drivers::netft::parse_calibration_xml(text.str(), p.string());
+    } else {
+      c.netft_calibration = {d.counts_per_force, d.counts_per_torque, d.force_unit, d.torque_unit};
+    }
     c.rate_hz = d.rate_hz;
     c.T_fp_sensor = d.T_fp_sensor.isometry();
     c.saturation_limits = d.saturation_limits;

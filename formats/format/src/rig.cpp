@@ -253,11 +253,41 @@ CanSignalSpec read_signal(const YNode& n) {
 }
 
 ForcePlateDeviceSpec read_force_plate(const YNode& n) {
-  n.only({"protocol", "interface", "base_id", "rate_hz", "sensor_pose", "signals", "saturation_limits"});
+  n.only({"protocol", "interface", "base_id", "host", "port", "calibration_xml", "counts_per_force", "counts_per_torque", "force_unit",
+          "torque_unit", "rate_hz", "sensor_pose", "signals", "saturation_limits"});
   ForcePlateDeviceSpec d;
   d.protocol = n.str("protocol", d.protocol);
-  if (d.protocol != "ati_ft_can" && d.protocol != "declarative")
-    n.child("protocol").fail("expected 'ati_ft_can' or 'declarative', found '" + d.protocol + "'");
+  // Rig files written before the board was named for what it is (the protocol is NETCANOEM's).
+  if (d.protocol == "ati_ft_can") d.protocol = "ati_netcanoem";
+  if (d.protocol != "ati_netcanoem" && d.protocol != "declarative" && d.protocol != "ati_netft_rdt")
+    n.child("protocol").fail("expected 'ati_netcanoem', 'declarative' or 'ati_netft_rdt', found '" + d.protocol + "'");
+  const bool rdt = d.protocol == "ati_netft_rdt";
+  for (const char* f : {"host", "port", "calibration_xml", "counts_per_force", "counts_per_torque", "force_unit", "torque_unit"})
+    if (!rdt && n.has(f)) n.child(f).fail("only the ati_netft_rdt protocol has this field");
+  if (rdt && (n.has("interface") || n.has("base_id")))
+    n.child(n.has("interface") ? "interface" : "base_id").fail("the ati_netft_rdt protocol is UDP: give host and port");
+  if (rdt) {
+    if (!n.has("host")) n.fail("the ati_netft_rdt protocol needs the box's address", "host");
+    d.host = n.str("host", "");
+    if (n.has("port")) {
+      const long p = n.child("port").integer();
+      if (p < 1 || p > 65535) n.child("port").fail("must be 1..65535");
+      d.port = static_cast<int>(p);
+    }
+    d.calibration_xml = n.str("calibration_xml", "");
+    if (n.has("counts_per_force")) d.counts_per_force = n.child("counts_per_force").num_positive();
+    if (n.has("counts_per_torque")) d.counts_per_torque = n.child("counts_per_torque").num_positive();
+    d.force_unit = n.str("force_unit", d.force_unit);
+    d.torque_unit = n.str("torque_unit", d.torque_unit);
+    const bool counts = n.has("counts_per_force") || n.has("counts_per_torque");
+    if (d.calibration_xml.empty() == !counts)
+      n.fail(counts ? "give either calibration_xml or counts_per_force/counts_per_torque, not both"
+                    : "the counts per unit are needed: calibration_xml (the box's netftapi2.xml saved to a file) or counts_per_force "
+                      "and counts_per_torque (the box's Configuration page)",
+             counts ? "calibration_xml" : "counts_per_force");
+    if (counts && (d.counts_per_force <= 0.0 || d.counts_per_torque <= 0.0))
+      n.fail("give both counts_per_force and counts_per_torque", d.counts_per_force <= 0.0 ? "counts_per_force" : "counts_per_torque");
+  }
   d.interface = n.str("interface", d.interface);
   if (n.has("base_id")) {
     const long b = n.child("base_id").integer();

@@ -17,7 +17,7 @@ const std::string kRun = std::string(HIL_SOURCE_DIR) + "/examples/runs/press_sli
 TEST(RigAdapter, ExampleRigGivesDriverConfigs) {
   const auto rig = format::load_rig(kRig);
   const ForcePlateConfig fp = rig_service::force_plate_config(rig);
-  EXPECT_EQ(fp.protocol, ForcePlateProtocol::ati_ft_can);
+  EXPECT_EQ(fp.protocol, ForcePlateProtocol::ati_netcanoem);
   EXPECT_EQ(fp.interface, "vcan0");
   EXPECT_EQ(fp.base_id, 0U);
   EXPECT_EQ(fp.rate_hz, 1000.0);
@@ -108,9 +108,9 @@ TEST(FakeRigPlaysARun, DriversReadTheRunBack) {
     const DeviceClock frozen{want.t_s / speed, 0.0, speed};
 
     auto bus = CanLoopbackBus::create();
-    FakeAtiConfig fc;
+    FakeNetCanOemConfig fc;
     fc.clock = frozen;
-    FakeAtiForcePlate plate(fc, bus->open(), scenario);
+    FakeNetCanOemBoard plate(fc, bus->open(), scenario);
     plate.start();
     ForcePlateConfig pc = rig_service::force_plate_config(*run.rig);
     pc.response_timeout_s = 0.5;

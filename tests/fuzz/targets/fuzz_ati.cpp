@@ -1,4 +1,4 @@
-// ATI F/T CAN OEM decoders (drivers/src/ati_protocol.cpp) on frames of any id and length.
+// ATI NETCANOEM decoders (drivers/src/ati_protocol.cpp) on frames of any id and length.
 // Input: per frame one header byte (length 0..64), a 16-bit id, then the payload.
 #include "fuzz_common.hpp"
 #include <hil/drivers/ati_protocol.hpp>

@@ -26,6 +26,8 @@ void add_acquire(CLI::App& app) {
   cmd->add_flag("--check", check,
                 "bring-up check: read each device's identity and one reading, print them and exit 0 (all answered) or 1; "
                 "records nothing");
+  cmd->add_flag("--scan", o.scan,
+                "with --check: first ask every NETCANOEM base id 0x00-0x7F for its serial and list the boards that answer");
   cmd->add_option("--duration", o.duration_s, "seconds to acquire (default: until Ctrl-C, or the played run's length)");
   cmd->add_option("--output-rate", o.output_rate_hz, "output rate in Hz (must divide the force-plate rate)")->capture_default_str();
   cmd->add_option("--can-interface", o.can_interface, "SocketCAN interface (default: the rig's)");

@@ -1,4 +1,4 @@
-// `hil fake-rig`: a fake ATI F/T CAN force plate on a SocketCAN interface and a fake robot
+// `hil fake-rig`: a fake ATI NETCANOEM force plate on a SocketCAN interface and a fake robot
 // controller (Modbus TCP on 127.0.0.1), playing a recorded run, with fault injection.
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
@@ -69,8 +69,8 @@ std::vector<drivers::StatusWindow> status_windows(const std::vector<std::string>
   for (const auto& s : specs) {
     const auto at = s.find('@');
     const auto fail = [&] {
-      return std::runtime_error(
-          fmt::format("{} '{}': expected BITS@START:DURATION (bits as 0x.... non-zero, start ≥ 0 s, duration > 0 s)", option, s));
+      return std::runtime_error(fmt::format("{} '{}': expected BITS@START:DURATION (bits as 0x.... non-zero, start ≥ 0 s, duration > 0 s)",
+                                            option, s));
     };
     if (at == std::string::npos || at == 0) throw fail();
     std::uint32_t bits = 0;
@@ -109,15 +109,15 @@ int fake_rig(const FakeRigOptions& o) {
     scenario = std::make_shared<drivers::Scenario>(std::vector<drivers::ScenarioPoint>{still});
   }
 
-  std::unique_ptr<drivers::FakeAtiForcePlate> plate;
+  std::unique_ptr<drivers::FakeNetCanOemBoard> plate;
   std::unique_ptr<drivers::FakeRobotController> robot;
   if (!o.no_plate) {
-    drivers::FakeAtiConfig pc;
+    drivers::FakeNetCanOemConfig pc;
     std::string iface = o.can_iface;
     if (rig.devices.force_plate) {
       const auto& fp = *rig.devices.force_plate;
-      if (fp.protocol != "ati_ft_can")
-        throw std::runtime_error("fake-rig: the fake force plate speaks ati_ft_can; the rig's plate is " + fp.protocol);
+      if (fp.protocol != "ati_netcanoem")
+        throw std::runtime_error("fake-rig: the fake force plate speaks ati_netcanoem; the rig's plate is " + fp.protocol);
       pc.base_id = fp.base_id;
       pc.T_fp_sensor = fp.T_fp_sensor.isometry();
       if (iface.empty()) iface = fp.interface;
@@ -138,8 +138,8 @@ int fake_rig(const FakeRigOptions& o) {
     so.channel.error_mask = 0;
     so.channel.filters = {drivers::CanFilter::masked(pc.base_id << 4, 0x7F0)};
     so.timestamps = false;
-    plate = std::make_unique<drivers::FakeAtiForcePlate>(pc, drivers::SocketCanChannel::open(so), scenario);
-    std::printf("fake-rig: force plate ATI F/T CAN base 0x%02X on %s\n", pc.base_id, iface.c_str());
+    plate = std::make_unique<drivers::FakeNetCanOemBoard>(pc, drivers::SocketCanChannel::open(so), scenario);
+    std::printf("fake-rig: force plate ATI NETCANOEM base 0x%02X on %s\n", pc.base_id, iface.c_str());
   }
   if (!o.no_robot) {
     drivers::FakeRobotConfig rc;
@@ -202,7 +202,7 @@ int fake_rig(const FakeRigOptions& o) {
 
 void add_fake_rig(CLI::App& app) {
   static FakeRigOptions o;
-  auto* cmd = app.add_subcommand("fake-rig", "Fake force plate (ATI F/T CAN on SocketCAN) and robot controller (Modbus TCP on "
+  auto* cmd = app.add_subcommand("fake-rig", "Fake force plate (ATI NETCANOEM on SocketCAN) and robot controller (Modbus TCP on "
                                              "127.0.0.1) playing a recorded run, with fault injection");
   cmd->add_option("--rig", o.rig, "rig file (default: the run's rig.yaml)");
   cmd->add_option("--run", o.run, "run folder to replay (default: a still rig)");

@@ -1,5 +1,5 @@
 #pragma once
-/// \file The ATI F/T CAN OEM protocol as pure functions (ATI "Net F/T CAN OEM" interface).
+/// \file The ATI NETCANOEM protocol as pure functions (ATI "Net F/T CAN OEM" interface).
 /// 11-bit id = base << 4 | opcode; all multi-byte values big-endian.
 ///  - 0x0 read gauges: request empty; answered by two frames: id base|0x0 = status word, SG0, SG2,
 ///    SG4 (8 bytes) and id base|0x1 = SG1, SG3, SG5 (6 bytes), int16 each.

@@ -1,5 +1,5 @@
 #pragma once
-/// \file The fake devices (what `hil fake-rig` runs): a fake ATI F/T CAN force plate answering the protocol on any CanChannel,
+/// \file The fake devices (what `hil fake-rig` runs): a fake ATI NETCANOEM force plate answering the protocol on any CanChannel,
 /// and a fake robot controller (a libmodbus TCP server on 127.0.0.0/8) serving a register map.
 /// Both play a Scenario (e.g. a recorded run) in real time or faster, with fault injection.
 /// Product features: users test their setups with them; the tests use them as real peers.
@@ -16,6 +16,7 @@
 #include <vector>
 
 #include <hil/drivers/ati_protocol.hpp>
+#include <hil/drivers/netft_rdt.hpp>
 #include <hil/drivers/can_channel.hpp>
 #include <hil/drivers/force_plate.hpp>
 #include <hil/drivers/register_map.hpp>
@@ -93,13 +94,13 @@ struct ModbusFaults {
   bool silent_now = false;
 };
 
-// ---- fake ATI F/T CAN plate --------------------------------------------------------------------
+// ---- fake ATI NETCANOEM plate --------------------------------------------------------------------
 
 /// A plausible, well-conditioned calibration matrix (gauges → counts) for fakes and tests.
 Matrix6d default_ati_calibration();
 
-struct FakeAtiConfig {
-  std::uint32_t base_id = 0;
+struct FakeNetCanOemConfig {
+  std::uint32_t base_id = ati::kFactoryBase;
   Matrix6d calibration = default_ati_calibration();
   std::int32_t counts_per_force = 1000;
   std::int32_t counts_per_torque = 100000;
@@ -113,24 +114,28 @@ struct FakeAtiConfig {
   std::uint64_t seed = 1;
 };
 
+/// Wrench on the plate (about its origin, plate frame) → wrench on the sensor (sensor frame), for
+/// a sensor mounted at T_fp_sensor. Pure.
+Matrix6d plate_to_sensor_wrench(const Eigen::Isometry3d& T_fp_sensor);
+
 /// The gauges that a wrench on the plate produces: w_fp → sensor frame → device units → counts →
 /// M⁻¹ → rounded int16. `saturated` is set when a gauge had to be clamped. Pure.
 class AtiGaugeModel {
  public:
-  explicit AtiGaugeModel(const FakeAtiConfig& cfg);
+  explicit AtiGaugeModel(const FakeNetCanOemConfig& cfg);
   ati::Gauges gauges(const Vector6d& w_fp, bool& saturated) const noexcept;
 
  private:
   Matrix6d A_;  ///< w_fp → gauges (real valued)
 };
 
-class FakeAtiForcePlate {
+class FakeNetCanOemBoard {
  public:
   /// \param scenario wrench source; null = the value of set_wrench().
-  FakeAtiForcePlate(FakeAtiConfig cfg, std::unique_ptr<CanChannel> channel, std::shared_ptr<const Scenario> scenario = nullptr);
-  ~FakeAtiForcePlate();
-  FakeAtiForcePlate(const FakeAtiForcePlate&) = delete;
-  FakeAtiForcePlate& operator=(const FakeAtiForcePlate&) = delete;
+  FakeNetCanOemBoard(FakeNetCanOemConfig cfg, std::unique_ptr<CanChannel> channel, std::shared_ptr<const Scenario> scenario = nullptr);
+  ~FakeNetCanOemBoard();
+  FakeNetCanOemBoard(const FakeNetCanOemBoard&) = delete;
+  FakeNetCanOemBoard& operator=(const FakeNetCanOemBoard&) = delete;
 
   /// Starts answering (a thread). The fault windows and the clock count from here.
   void start();
@@ -155,6 +160,64 @@ class FakeAtiForcePlate {
 };
 
 // ---- fake robot controller ---------------------------------------------------------------------
+
+/// Faults of a streaming device (the Net F/T's RDT): records lost on the way, datagrams cut short,
+/// silences, late datagrams, status bits.
+struct StreamFaults {
+  double drop_fraction = 0.0;        ///< share of records not sent (their rdt_sequence is used up)
+  double corrupt_fraction = 0.0;     ///< share of datagrams sent cut short (not whole records)
+  double duplicate_fraction = 0.0;   ///< share of datagrams sent twice (a network duplicate)
+  std::vector<TimeWindow> silent;    ///< nothing sent, the stream's counters running on
+  std::vector<TimeWindow> deaf;      ///< requests ignored (a stream asked for then does not start)
+  double extra_delay_s = 0.0;        ///< every datagram this much later than its record's time
+  std::vector<StatusWindow> status;  ///< status bits in the records (bit 31, any error, joins bits 17-30 and 0-15)
+  std::uint32_t status_now = 0;
+  bool silent_now = false;
+};
+
+struct FakeNetFtConfig {
+  std::string host = "127.0.0.1";     ///< must be in 127.0.0.0/8
+  int port = 0;                       ///< 0 = an ephemeral port (see port())
+  double rate_hz = 1000.0;            ///< the box's RDT output rate
+  unsigned records_per_datagram = 1;  ///< in buffered mode (command 0x0003)
+  netft::Calibration calibration{1'000'000.0, 1'000'000.0, "N", "Nm"};
+  Eigen::Isometry3d T_fp_sensor = Eigen::Isometry3d::Identity();
+  StreamFaults faults;
+  DeviceClock clock;
+  std::uint64_t seed = 1;
+};
+
+/// A Net F/T box streaming RDT over UDP on 127.0.0.0/8: answers start (real-time, buffered), stop,
+/// bias and latch-reset requests from one client at a time, and streams the scenario's wrench as
+/// counts at rate_hz (absolute deadlines, no drift).
+class FakeNetFtRdt {
+ public:
+  explicit FakeNetFtRdt(FakeNetFtConfig cfg, std::shared_ptr<const Scenario> scenario = nullptr);
+  ~FakeNetFtRdt();
+  FakeNetFtRdt(const FakeNetFtRdt&) = delete;
+  FakeNetFtRdt& operator=(const FakeNetFtRdt&) = delete;
+
+  int port() const noexcept;
+  void start();
+  void stop() noexcept;
+  void set_wrench(const Vector6d& w_fp);
+  void set_faults(const StreamFaults& f);
+
+  struct Stats {
+    std::uint64_t requests = 0, bad_requests = 0, starts = 0, stops = 0, biases = 0, latch_resets = 0, ignored_deaf = 0;
+    std::uint64_t records = 0;       ///< records made (rdt_sequence used)
+    std::uint64_t records_sent = 0;  ///< records that went out in whole datagrams
+    std::uint64_t records_dropped = 0, datagrams_corrupted = 0, datagrams_duplicated = 0, records_silenced = 0;
+    std::uint64_t records_flagged = 0;  ///< records sent with a non-zero status
+  };
+  Stats stats() const;
+
+ private:
+  void run() noexcept;
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+  std::jthread thread_;
+};
 
 struct FakeRobotConfig {
   std::string host = "127.0.0.1";  ///< must be in 127.0.0.0/8

@@ -1,5 +1,5 @@
 #pragma once
-/// \file Force-plate drivers on a CanChannel: the ATI F/T CAN OEM protocol and a declarative
+/// \file Force-plate drivers on a CanChannel: the ATI NETCANOEM protocol and a declarative
 /// decoder configured per signal (frame id, bits, byte order, scale, offset, wrench component).
 /// Both produce the wrench on the force plate, about the plate origin, in the force-plate frame
 /// (`w_fp` = [f_fp (N); m_fp (N·m)]), after a software tare and the sensor→plate transform.
@@ -15,6 +15,7 @@
 
 #include <hil/drivers/ati_protocol.hpp>
 #include <hil/drivers/can_channel.hpp>
+#include <hil/drivers/netft_rdt.hpp>
 #include <hil/drivers/status.hpp>
 #include <hil/so3/so3.hpp>
 
@@ -50,18 +51,23 @@ unsigned bytes_needed(const CanSignal& s) noexcept;
 /// \throws ConfigError naming `signals[i].<field>`.
 void validate_signals(const std::vector<CanSignal>& signals);
 
-enum class ForcePlateProtocol : std::uint8_t { ati_ft_can, declarative };
+/// ati_netcanoem and declarative speak CAN; ati_netft_rdt is the Net F/T box's UDP stream.
+enum class ForcePlateProtocol : std::uint8_t { ati_netcanoem, declarative, ati_netft_rdt };
+const char* to_string(ForcePlateProtocol p) noexcept;
 
 struct ForcePlateConfig {
-  ForcePlateProtocol protocol = ForcePlateProtocol::ati_ft_can;
-  std::string interface = "vcan0";  ///< SocketCAN interface (used by whoever opens the channel)
-  std::uint32_t base_id = 0;        ///< ATI base id (0..0x7F)
-  double rate_hz = 1000.0;
+  ForcePlateProtocol protocol = ForcePlateProtocol::ati_netcanoem;
+  std::string interface = "vcan0";                                ///< SocketCAN interface (used by whoever opens the channel)
+  std::uint32_t base_id = ati::kFactoryBase;                      ///< NETCANOEM base id (0..0x7F), factory 0x20
+  std::string host;                                               ///< ati_netft_rdt: the box's IPv4 address
+  int port = netft::kRdtPort;                                     ///< ati_netft_rdt: UDP port
+  netft::Calibration netft_calibration;                           ///< ati_netft_rdt: counts per unit (rig file or the box's netftapi2.xml)
+  double rate_hz = 1000.0;                                        ///< polling rate (CAN); the box's RDT output rate (ati_netft_rdt)
   Eigen::Isometry3d T_fp_sensor = Eigen::Isometry3d::Identity();  ///< sensor frame in the plate frame
   std::vector<CanSignal> signals;                                 ///< declarative only
   std::vector<double> saturation_limits;                          ///< |fx fy fz mx my mz| limits in N, N·m; empty = unknown
-  double response_timeout_s = 0.0;                                ///< per poll; 0 = 0.9 period (ATI) or 3 periods (declarative)
-  double startup_timeout_s = 0.1;                                 ///< per start-up request (ATI)
+  double response_timeout_s = 0.0;                                ///< per poll; 0 = 0.9 period (NETCANOEM) or 3 periods (declarative, RDT)
+  double startup_timeout_s = 0.1;                                 ///< per start-up request (NETCANOEM; RDT: for the first record)
   int startup_tries = 3;
   unsigned tare_samples = 16;  ///< samples averaged by tare()
   /// \throws ConfigError naming the field.
@@ -83,8 +89,8 @@ struct WrenchSample {
   /// The device flagged this reading as bad (ATI: any status bit). Such a sample is delivered with
   /// the device-fault quality flag and counted (DeviceCounters::device_faults), never as good.
   bool device_fault = false;
-  bool taring = false;                   ///< a tare is being averaged
-  std::uint32_t error_frames = 0;        ///< CAN error frames seen during this poll
+  bool taring = false;             ///< a tare is being averaged
+  std::uint32_t error_frames = 0;  ///< CAN error frames seen during this poll
 };
 
 /// What start() learned about the device.
@@ -97,7 +103,8 @@ struct ForcePlateInfo {
   Matrix6d calibration = Matrix6d::Zero();  ///< ATI: M (gauges → counts)
 };
 
-/// A force plate behind a CanChannel. Not thread-safe, except tare() which any thread may call.
+/// A force plate, whatever its link (CAN, UDP, serial). Not thread-safe, except tare() which any
+/// thread may call.
 class ForcePlate {
  public:
   virtual ~ForcePlate() = default;
@@ -112,6 +119,12 @@ class ForcePlate {
   virtual PollStatus poll(WrenchSample& out) noexcept = 0;
   /// Why the device flagged `s` (device_fault): its status word in words. Not real-time safe.
   virtual std::string describe_status(const WrenchSample& s) const;
+  /// The link's own trouble during the poll that produced `s` (CAN error frames); empty if none.
+  virtual std::string describe_link_errors(const WrenchSample& s) const;
+  /// Both of the above, joined: what makes `s` a device-fault sample. Not real-time safe.
+  std::string describe_fault(const WrenchSample& s) const;
+  /// The link, for messages: "can0", "udp 127.0.0.1:49152".
+  virtual std::string link() const = 0;
 
   /// Averages the next `samples` raw wrenches (0 = config.tare_samples) and subtracts them from then
   /// on (sensor frame). Thread-safe.
@@ -121,30 +134,19 @@ class ForcePlate {
   Vector6d tare_bias() const;
 
   const DeviceCounters& counters() const noexcept { return counters_; }
-  /// The last error frame seen.
-  const CanErrorInfo& last_bus_error() const noexcept { return last_bus_error_; }
   /// Text of the last non-ok poll (not real-time safe to read concurrently).
   const std::string& last_problem() const noexcept { return last_problem_; }
   const ForcePlateConfig& config() const noexcept { return cfg_; }
-  CanChannel& channel() noexcept { return *channel_; }
 
  protected:
-  ForcePlate(const ForcePlateConfig& cfg, std::unique_ptr<CanChannel> channel);
+  /// \throws ConfigError on a bad configuration.
+  explicit ForcePlate(const ForcePlateConfig& cfg);
   /// Tare, transform, saturation. Real-time safe.
   void finish(WrenchSample& s) noexcept;
-  /// Books an error frame (bus-off state, counters).
-  void book_error_frame(const CanFrame& f) noexcept;
   void problem(const char* what) noexcept;
-  /// Waits until `deadline` for the next data frame: error frames are booked (and counted in
-  /// `out`) on the way. \returns ok with `f` filled, timeout at the deadline, closed, bus_error
-  /// at once on a bus-off error frame, or bad_frame on a channel error (`context` names what was
-  /// awaited). Real-time safe.
-  PollStatus next_data_frame(std::chrono::steady_clock::time_point deadline, CanFrame& f, WrenchSample& out, const char* context) noexcept;
 
   ForcePlateConfig cfg_;
-  std::unique_ptr<CanChannel> channel_;
   DeviceCounters counters_;
-  CanErrorInfo last_bus_error_;
   std::string last_problem_;
   std::uint64_t sequence_ = 0;
 
@@ -160,11 +162,35 @@ class ForcePlate {
   bool have_limits_ = false;
 };
 
-/// The ATI F/T CAN OEM board.
-class AtiFtCanDriver final : public ForcePlate {
+/// A force plate behind a CanChannel: error frames, bus-off and the channel's losses.
+class CanForcePlate : public ForcePlate {
+ public:
+  /// The last error frame seen.
+  const CanErrorInfo& last_bus_error() const noexcept { return last_bus_error_; }
+  CanChannel& channel() noexcept { return *channel_; }
+  std::string link() const override { return channel_->name(); }
+  std::string describe_link_errors(const WrenchSample& s) const override;
+
+ protected:
+  /// \throws ConfigError on a bad configuration or without a channel.
+  CanForcePlate(const ForcePlateConfig& cfg, std::unique_ptr<CanChannel> channel);
+  /// Books an error frame (bus-off state, counters).
+  void book_error_frame(const CanFrame& f) noexcept;
+  /// Waits until `deadline` for the next data frame: error frames are booked (and counted in
+  /// `out`) on the way. \returns ok with `f` filled, timeout at the deadline, closed, bus_error
+  /// at once on a bus-off error frame, or bad_frame on a channel error (`context` names what was
+  /// awaited). Real-time safe.
+  PollStatus next_data_frame(std::chrono::steady_clock::time_point deadline, CanFrame& f, WrenchSample& out, const char* context) noexcept;
+
+  std::unique_ptr<CanChannel> channel_;
+  CanErrorInfo last_bus_error_;
+};
+
+/// The ATI NETCANOEM board.
+class AtiNetCanOemDriver final : public CanForcePlate {
  public:
   /// \throws ConfigError on a bad configuration.
-  AtiFtCanDriver(const ForcePlateConfig& cfg, std::unique_ptr<CanChannel> channel);
+  AtiNetCanOemDriver(const ForcePlateConfig& cfg, std::unique_ptr<CanChannel> channel);
   ForcePlateInfo start() override;
   PollStatus poll(WrenchSample& out) noexcept override;
   std::string describe_status(const WrenchSample& s) const override;
@@ -180,7 +206,7 @@ class AtiFtCanDriver final : public ForcePlate {
 
 /// The declarative decoder: a sample is complete when every configured frame id has been received
 /// since the previous sample.
-class DeclarativeForcePlate final : public ForcePlate {
+class DeclarativeForcePlate final : public CanForcePlate {
  public:
   /// \throws ConfigError naming `signals[i].<field>`.
   DeclarativeForcePlate(const ForcePlateConfig& cfg, std::unique_ptr<CanChannel> channel);
@@ -207,6 +233,17 @@ class DeclarativeForcePlate final : public ForcePlate {
 };
 
 /// The driver the configuration asks for. \throws ConfigError.
-std::unique_ptr<ForcePlate> make_force_plate(const ForcePlateConfig& cfg, std::unique_ptr<CanChannel> channel);
+/// A NETCANOEM board that answered a scan.
+struct NetCanOemBoard {
+  std::uint32_t base_id = 0;
+  std::string serial;
+};
+/// Asks every base id 0..0x7F for its serial number (opcode 0x5) and lists the boards that
+/// answered within `answer_window_s` of the last request, by base id. Sends 128 frames on ids
+/// (base << 4) | 0x5: run it on a bus whose other nodes do not use those ids. Never throws on
+/// silence (an empty list).
+std::vector<NetCanOemBoard> scan_netcanoem(CanChannel& channel, double answer_window_s = 0.2);
+
+std::unique_ptr<CanForcePlate> make_force_plate(const ForcePlateConfig& cfg, std::unique_ptr<CanChannel> channel);
 
 }  // namespace hil::drivers

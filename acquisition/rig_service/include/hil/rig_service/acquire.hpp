@@ -19,6 +19,7 @@ struct AcquireOptions {
   std::string can_interface, robot_host;
   int robot_port = 0;
   bool no_robot = false;
+  bool scan = false;  ///< check: first ask every NETCANOEM base id 0..0x7F for its serial
   bool tare = false;
   bool ros_topics = true;
   bool no_bus = false;
@@ -29,6 +30,7 @@ struct AcquireOptions {
   double play_speed = 1.0;
   bool play_over_socketcan = false;  ///< the fake plate talks on the SocketCAN interface instead of loopback
   drivers::CanFaults plate_faults;
+  drivers::StreamFaults netft_faults;  ///< --play with an ati_netft_rdt plate
   drivers::ModbusFaults robot_faults;
   bool mcap = false;                      ///< also record run.mcap (docs/mcap.md)
   std::string mcap_compression = "zstd";  ///< none | zstd | lz4

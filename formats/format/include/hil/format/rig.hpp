@@ -108,9 +108,15 @@ struct CanSignalSpec {
 };
 
 struct ForcePlateDeviceSpec {
-  std::string protocol = "ati_ft_can";  ///< ati_ft_can | declarative
-  std::string interface = "vcan0";      ///< SocketCAN interface name
-  std::uint32_t base_id = 0;            ///< ATI board base id (11-bit id = base << 4 | opcode)
+  std::string protocol = "ati_netcanoem";  ///< ati_netcanoem | declarative | ati_netft_rdt
+  std::string interface = "vcan0";         ///< SocketCAN interface name (CAN protocols)
+  std::uint32_t base_id = 0x20;            ///< NETCANOEM base id (11-bit id = base << 4 | opcode); factory 0x20
+  std::string host;                        ///< ati_netft_rdt: the box's IPv4 address
+  int port = 49152;                        ///< ati_netft_rdt: RDT UDP port
+  std::string calibration_xml;             ///< ati_netft_rdt: the box's netftapi2.xml saved to a file (rig-relative)
+  double counts_per_force = 0.0;           ///< ati_netft_rdt, without calibration_xml
+  double counts_per_torque = 0.0;
+  std::string force_unit = "N", torque_unit = "Nm";
   double rate_hz = 1000.0;
   Pose T_fp_sensor;                       ///< sensor frame in the force-plate frame
   std::vector<CanSignalSpec> signals;     ///< declarative protocol only

@@ -17,22 +17,27 @@ Matrix6d default_ati_calibration() {
   return M;
 }
 
-AtiGaugeModel::AtiGaugeModel(const FakeAtiConfig& cfg) {
-  const double f_si = ati::force_unit_to_si(cfg.force_units), t_si = ati::torque_unit_to_si(cfg.torque_units);
-  if (f_si == 0.0) throw ConfigError("force_units", "unknown ATI force unit code");
-  if (t_si == 0.0) throw ConfigError("torque_units", "unknown ATI torque unit code");
-  if (cfg.counts_per_force <= 0 || cfg.counts_per_torque <= 0) throw ConfigError("counts", "must be > 0");
-  Eigen::FullPivLU<Matrix6d> lu(cfg.calibration);
-  if (lu.rank() < 6) throw ConfigError("calibration", "the calibration matrix is singular");
-  // Wrench on the plate → wrench on the sensor: the inverse of the driver's X_fp_sensor.
-  const Eigen::Matrix3d R = cfg.T_fp_sensor.linear();
-  const Eigen::Vector3d p = cfg.T_fp_sensor.translation();
+Matrix6d plate_to_sensor_wrench(const Eigen::Isometry3d& T_fp_sensor) {
+  // The inverse of the drivers' X_fp_sensor (force_plate.cpp), written from the transform itself.
+  const Eigen::Matrix3d R = T_fp_sensor.linear();
+  const Eigen::Vector3d p = T_fp_sensor.translation();
   Eigen::Matrix3d P;
   P << 0, -p.z(), p.y(), p.z(), 0, -p.x(), -p.y(), p.x(), 0;
   Matrix6d X_sensor_fp = Matrix6d::Zero();
   X_sensor_fp.topLeftCorner<3, 3>() = R.transpose();
   X_sensor_fp.bottomLeftCorner<3, 3>() = -R.transpose() * P;
   X_sensor_fp.bottomRightCorner<3, 3>() = R.transpose();
+  return X_sensor_fp;
+}
+
+AtiGaugeModel::AtiGaugeModel(const FakeNetCanOemConfig& cfg) {
+  const double f_si = ati::force_unit_to_si(cfg.force_units), t_si = ati::torque_unit_to_si(cfg.torque_units);
+  if (f_si == 0.0) throw ConfigError("force_units", "unknown ATI force unit code");
+  if (t_si == 0.0) throw ConfigError("torque_units", "unknown ATI torque unit code");
+  if (cfg.counts_per_force <= 0 || cfg.counts_per_torque <= 0) throw ConfigError("counts", "must be > 0");
+  Eigen::FullPivLU<Matrix6d> lu(cfg.calibration);
+  if (lu.rank() < 6) throw ConfigError("calibration", "the calibration matrix is singular");
+  const Matrix6d X_sensor_fp = plate_to_sensor_wrench(cfg.T_fp_sensor);
   Vector6d to_counts;
   to_counts << cfg.counts_per_force / f_si, cfg.counts_per_force / f_si, cfg.counts_per_force / f_si, cfg.counts_per_torque / t_si,
       cfg.counts_per_torque / t_si, cfg.counts_per_torque / t_si;
@@ -58,8 +63,8 @@ ati::Gauges AtiGaugeModel::gauges(const Vector6d& w_fp, bool& saturated) const n
   return out;
 }
 
-struct FakeAtiForcePlate::Impl {
-  FakeAtiConfig cfg;
+struct FakeNetCanOemBoard::Impl {
+  FakeNetCanOemConfig cfg;
   std::unique_ptr<CanChannel> channel;
   std::shared_ptr<const Scenario> scenario;
   AtiGaugeModel model;
@@ -76,47 +81,48 @@ struct FakeAtiForcePlate::Impl {
     bool completes_answer;  ///< the last frame of an intact gauge answer
   };
   std::deque<Pending> pending;
-  Impl(FakeAtiConfig c, std::unique_ptr<CanChannel> ch, std::shared_ptr<const Scenario> s)
+  Impl(FakeNetCanOemConfig c, std::unique_ptr<CanChannel> ch, std::shared_ptr<const Scenario> s)
       : cfg(std::move(c)), channel(std::move(ch)), scenario(std::move(s)), model(cfg), faults(cfg.faults), rng(cfg.seed) {}
 };
 
-FakeAtiForcePlate::FakeAtiForcePlate(FakeAtiConfig cfg, std::unique_ptr<CanChannel> channel, std::shared_ptr<const Scenario> scenario) {
+FakeNetCanOemBoard::FakeNetCanOemBoard(FakeNetCanOemConfig cfg, std::unique_ptr<CanChannel> channel,
+                                       std::shared_ptr<const Scenario> scenario) {
   if (!channel) throw ConfigError("channel", "no CAN channel given");
   if (cfg.base_id > ati::kMaxBase) throw ConfigError("base_id", "ATI base id must be 0..0x7F");
   if (!(cfg.clock.speed > 0.0)) throw ConfigError("speed", "must be > 0");
   impl_ = std::make_unique<Impl>(std::move(cfg), std::move(channel), std::move(scenario));
 }
 
-FakeAtiForcePlate::~FakeAtiForcePlate() { stop(); }
+FakeNetCanOemBoard::~FakeNetCanOemBoard() { stop(); }
 
-void FakeAtiForcePlate::start() {
+void FakeNetCanOemBoard::start() {
   if (thread_.joinable()) return;
   impl_->stop = false;
   impl_->start = std::chrono::steady_clock::now();
   thread_ = std::jthread([this] { run(); });
 }
 
-void FakeAtiForcePlate::stop() noexcept {
+void FakeNetCanOemBoard::stop() noexcept {
   impl_->stop = true;
   if (thread_.joinable()) thread_.join();
 }
 
-void FakeAtiForcePlate::set_wrench(const Vector6d& w_fp) {
+void FakeNetCanOemBoard::set_wrench(const Vector6d& w_fp) {
   std::lock_guard lk(impl_->m);
   impl_->wrench = w_fp;
 }
 
-void FakeAtiForcePlate::set_faults(const CanFaults& f) {
+void FakeNetCanOemBoard::set_faults(const CanFaults& f) {
   std::lock_guard lk(impl_->m);
   impl_->faults = f;
 }
 
-FakeAtiForcePlate::Stats FakeAtiForcePlate::stats() const {
+FakeNetCanOemBoard::Stats FakeNetCanOemBoard::stats() const {
   std::lock_guard lk(impl_->m);
   return impl_->stats;
 }
 
-void FakeAtiForcePlate::run() noexcept {
+void FakeNetCanOemBoard::run() noexcept {
   using Clock = std::chrono::steady_clock;
   Impl& I = *impl_;
   const std::uint32_t base = I.cfg.base_id;

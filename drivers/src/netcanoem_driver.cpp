@@ -27,11 +27,12 @@ bool is_plain(const CanFrame& f) noexcept { return !f.error && !f.extended && !f
 
 }  // namespace
 
-AtiFtCanDriver::AtiFtCanDriver(const ForcePlateConfig& cfg, std::unique_ptr<CanChannel> channel) : ForcePlate(cfg, std::move(channel)) {
-  if (cfg_.protocol != ForcePlateProtocol::ati_ft_can) throw ConfigError("protocol", "AtiFtCanDriver needs protocol ati_ft_can");
+AtiNetCanOemDriver::AtiNetCanOemDriver(const ForcePlateConfig& cfg, std::unique_ptr<CanChannel> channel)
+    : CanForcePlate(cfg, std::move(channel)) {
+  if (cfg_.protocol != ForcePlateProtocol::ati_netcanoem) throw ConfigError("protocol", "AtiNetCanOemDriver needs protocol ati_netcanoem");
 }
 
-void AtiFtCanDriver::drain() noexcept {
+void AtiNetCanOemDriver::drain() noexcept {
   CanFrame f;
   const std::uint32_t a = ati::frame_id(cfg_.base_id, ati::kOpReadGauges);
   const std::uint32_t b = ati::frame_id(cfg_.base_id, ati::kOpGaugesSecond);
@@ -44,7 +45,7 @@ void AtiFtCanDriver::drain() noexcept {
   }
 }
 
-bool AtiFtCanDriver::transaction(std::uint8_t opcode, int arg, unsigned frames, std::array<CanFrame, 3>& out) {
+bool AtiNetCanOemDriver::transaction(std::uint8_t opcode, int arg, unsigned frames, std::array<CanFrame, 3>& out) {
   for (int attempt = 0; attempt < cfg_.startup_tries; ++attempt) {
     if (attempt > 0) ++counters_.retries;
     drain();
@@ -75,9 +76,9 @@ bool AtiFtCanDriver::transaction(std::uint8_t opcode, int arg, unsigned frames, 
   return false;
 }
 
-ForcePlateInfo AtiFtCanDriver::start() {
+ForcePlateInfo AtiNetCanOemDriver::start() {
   char where[96];
-  std::snprintf(where, sizeof where, "ATI F/T CAN (base 0x%02X) on %s", cfg_.base_id, channel_->name().c_str());
+  std::snprintf(where, sizeof where, "ATI NETCANOEM (base 0x%02X) on %s", cfg_.base_id, channel_->name().c_str());
   auto fail = [&](std::uint8_t op, const std::string& what) -> DeviceError {
     counters_.connected = false;
     return DeviceError(std::string(where) + ": " + op_name(op) + ": " + what);
@@ -87,7 +88,7 @@ ForcePlateInfo AtiFtCanDriver::start() {
                         std::to_string(static_cast<int>(cfg_.startup_timeout_s * 1000)) + " ms");
   };
   ForcePlateInfo info;
-  info.protocol = "ati_ft_can";
+  info.protocol = "ati_netcanoem";
   std::array<CanFrame, 3> r;
 
   if (!transaction(ati::kOpSerial, -1, 1, r)) throw no_answer(ati::kOpSerial);
@@ -141,7 +142,7 @@ ForcePlateInfo AtiFtCanDriver::start() {
   return info;
 }
 
-PollStatus AtiFtCanDriver::poll(WrenchSample& out) noexcept {
+PollStatus AtiNetCanOemDriver::poll(WrenchSample& out) noexcept {
   ++counters_.polls;
   if (!started_) {
     problem("poll() before start()");
@@ -238,7 +239,7 @@ PollStatus AtiFtCanDriver::poll(WrenchSample& out) noexcept {
   return PollStatus::timeout;
 }
 
-std::string AtiFtCanDriver::describe_status(const WrenchSample& s) const {
+std::string AtiNetCanOemDriver::describe_status(const WrenchSample& s) const {
   return "ATI status " + ati::describe_status(static_cast<std::uint16_t>(s.status_word));
 }
 
