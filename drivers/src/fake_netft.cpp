@@ -167,7 +167,8 @@ void FakeNetFtRdt::run() noexcept {
             streaming = true;
             client = from;
             remaining = req.sample_count;
-            per_datagram = static_cast<netft::RdtCommand>(req.command) == netft::RdtCommand::start_buffered ? I.cfg.records_per_datagram : 1;
+            per_datagram = static_cast<netft::RdtCommand>(req.command) == netft::RdtCommand::start_buffered ? I.cfg.records_per_datagram
+                                                                                                            : 1;
             rdt_seq = 0;  // a new stream counts from 1
             next = Clock::now();
             ++I.stats.starts;

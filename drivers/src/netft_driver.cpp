@@ -245,6 +245,8 @@ PollStatus NetFtRdtDriver::poll(WrenchSample& out) noexcept {
   }
 }
 
-std::string NetFtRdtDriver::describe_status(const WrenchSample& s) const { return "Net F/T status " + netft::describe_status(s.status_word); }
+std::string NetFtRdtDriver::describe_status(const WrenchSample& s) const {
+  return "Net F/T status " + netft::describe_status(s.status_word);
+}
 
 }  // namespace hil::drivers

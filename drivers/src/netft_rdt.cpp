@@ -20,7 +20,8 @@ void put32(std::uint8_t* p, std::uint32_t v) noexcept {
 }
 std::uint16_t get16(const std::uint8_t* p) noexcept { return static_cast<std::uint16_t>((p[0] << 8) | p[1]); }
 std::uint32_t get32(const std::uint8_t* p) noexcept {
-  return (static_cast<std::uint32_t>(p[0]) << 24) | (static_cast<std::uint32_t>(p[1]) << 16) | (static_cast<std::uint32_t>(p[2]) << 8) | p[3];
+  return (static_cast<std::uint32_t>(p[0]) << 24) | (static_cast<std::uint32_t>(p[1]) << 16) | (static_cast<std::uint32_t>(p[2]) << 8) |
+         p[3];
 }
 
 }  // namespace
@@ -132,7 +133,8 @@ Calibration parse_calibration_xml(std::string_view xml, const std::string& sourc
   const auto text = [&](const char* name) -> std::string {
     const tinyxml2::XMLElement* e = root->FirstChildElement(name);
     if (e == nullptr || e->GetText() == nullptr)
-      throw ConfigError("calibration_xml", source + ": <netft> has no <" + std::string(name) + "> (line " + std::to_string(root->GetLineNum()) + ")");
+      throw ConfigError("calibration_xml",
+                        source + ": <netft> has no <" + std::string(name) + "> (line " + std::to_string(root->GetLineNum()) + ")");
     return e->GetText();
   };
   const auto number = [&](const char* name) {

@@ -372,7 +372,7 @@ TEST(EndToEnd, FaultSwitchesAreReportedWithinThreePeriods) {
        [&] { fake_plate.set_faults(errors); },
        [&] { fake_plate.set_faults({}); },
        1e-3,
-       {"error frame", "0x4000"}},
+       {"error frame", "CAN bus error"}},
       {"dropped frames",
        "force_plate",
        [&] { fake_plate.set_faults(drops); },

@@ -15,7 +15,12 @@
 // the controller's readings = raw/robot.csv rows; PoseWrenchSamples published = samples.csv rows =
 // received, no index break. Exit status 4 when anything delivered is missing.
 //
-// Usage: bench_rig [--seconds N] [--output-rate HZ] [--rt-priority P] [--faults] [--fault-s S]
+// --netft: the force plate is a Net F/T box streaming RDT over UDP on 127.0.0.1 (the fake box at
+// 1 kHz) instead of the NETCANOEM board on the in-process CAN bus; latency is then from the UDP
+// receive stamp (SO_TIMESTAMPNS). Not with --faults (the RDT faults are accounted in
+// tests/drivers/test_netft.cpp and tests/acquisition/rig_service/test_netft_acquire.cpp).
+//
+// Usage: bench_rig [--seconds N] [--output-rate HZ] [--rt-priority P] [--faults] [--fault-s S] [--netft]
 //   --faults runs whole cycles of the fault list: at least one, as many as fit in --seconds.
 #include <pthread.h>
 #include <sched.h>
@@ -41,6 +46,7 @@
 #include <hil/messages/sample_msg.hpp>
 #include <hil/dds/topics.hpp>
 #include <hil/drivers/fake_devices.hpp>
+#include <hil/drivers/netft_driver.hpp>
 #include <hil/format/run.hpp>
 #include <hil/rig_service/drivers_from_rig.hpp>
 
@@ -254,10 +260,11 @@ int subscriber(int domain, int done_fd, int result_fd, int rt_priority) {
 int main(int argc, char** argv) {
   double seconds = 10.0, output_rate = 1000.0, fault_s = 5.0;
   int rt_priority = 0;
-  bool faults = false;
+  bool faults = false, netft = false;
   for (int i = 1; i < argc; ++i) {
     const bool has_value = i + 1 < argc;
     if (!std::strcmp(argv[i], "--faults")) faults = true;
+    else if (!std::strcmp(argv[i], "--netft")) netft = true;
     else if (has_value && !std::strcmp(argv[i], "--seconds")) seconds = std::atof(argv[++i]);
     else if (has_value && !std::strcmp(argv[i], "--output-rate")) output_rate = std::atof(argv[++i]);
     else if (has_value && !std::strcmp(argv[i], "--rt-priority")) rt_priority = std::atoi(argv[++i]);
@@ -299,6 +306,19 @@ int main(int argc, char** argv) {
     rc.clock.offset_s = -0.003;
   }
   drivers::FakeNetCanOemBoard fake_plate(pc, bus->open(), sc);
+  std::unique_ptr<drivers::FakeNetFtRdt> fake_netft;
+  drivers::ForcePlateConfig netft_cfg;
+  if (netft) {
+    if (faults) {
+      std::fprintf(stderr, "bench_rig: --netft runs without --faults\n");
+      return 2;
+    }
+    fake_netft = std::make_unique<drivers::FakeNetFtRdt>(drivers::FakeNetFtConfig{}, sc);
+    netft_cfg.protocol = drivers::ForcePlateProtocol::ati_netft_rdt;
+    netft_cfg.host = "127.0.0.1";
+    netft_cfg.port = fake_netft->port();
+    netft_cfg.netft_calibration = drivers::FakeNetFtConfig{}.calibration;
+  }
   drivers::FakeRobotController fake_robot(rc, sc);
   drivers::ModbusConfig mc;
   mc.port = fake_robot.port();
@@ -316,7 +336,9 @@ int main(int argc, char** argv) {
     acquisition::AcquirerOptions ao;
     ao.sync.output_rate_hz = output_rate;
     ao.rt_priority = rt_priority;
-    auto plate = drivers::make_force_plate({}, bus->open());
+    std::unique_ptr<drivers::ForcePlate> plate;
+    if (netft) plate = std::make_unique<drivers::NetFtRdtDriver>(netft_cfg);
+    else plate = drivers::make_force_plate({}, bus->open());
     auto robot = std::make_unique<drivers::RobotControllerDriver>(mc);
     const drivers::ForcePlate* plate_driver = plate.get();  // owned by acq below
     const drivers::RobotControllerDriver* robot_driver = robot.get();
@@ -327,7 +349,8 @@ int main(int argc, char** argv) {
     // must not preempt the plate before it sends the second.
     if (rt_priority > 0 && !set_fifo(std::min(99, rt_priority + 1)))
       std::fprintf(stderr, "bench_rig: real-time priority not permitted for the fakes\n");
-    fake_plate.start();
+    if (fake_netft) fake_netft->start();
+    else fake_plate.start();
     fake_robot.start();
     if (rt_priority > 0) set_fifo(0);
     std::this_thread::sleep_for(std::chrono::seconds(2));  // let the subscriber match first
@@ -366,6 +389,7 @@ int main(int argc, char** argv) {
     samples = acq.samples();
     rt_threads = acq.rt_threads();
     fake_plate.stop();
+    if (fake_netft) fake_netft->stop();
     fake_robot.stop();
     const auto ps = fake_plate.stats();
     acc.plate_delivered = ps.gauge_answers_delivered;
@@ -395,6 +419,7 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "bench_rig: the subscriber process failed\n");
     return 1;
   }
+  std::printf("force plate %s\n", netft ? "Net F/T RDT on UDP 127.0.0.1 (1 kHz)" : "NETCANOEM on the in-process CAN bus (1 kHz)");
   std::printf("seconds %.1f, output rate %.0f Hz, device threads %s\n", seconds, output_rate,
               rt_priority == 0  ? "at normal priority"
               : rt_threads == 2 ? ("at SCHED_FIFO " + std::to_string(rt_priority)).c_str()

@@ -9,6 +9,7 @@
 #include <hil/drivers/candump.hpp>
 #include <hil/drivers/can_frame.hpp>
 #include <hil/drivers/force_plate.hpp>
+#include <hil/drivers/netft_rdt.hpp>
 #include <hil/drivers/register_map.hpp>
 
 using namespace hil::drivers;
@@ -75,6 +76,29 @@ static void BM_DecodeAtiGaugeFrames(benchmark::State& state) {
 BENCHMARK(BM_DecodeAtiGaugeFrames);
 
 // A declarative frame with three 16-bit signals.
+// Net F/T RDT records (36 bytes each, as the datagram holds them) → counts → wrench (SI).
+static void BM_DecodeRdtRecords(benchmark::State& state) {
+  std::mt19937 rng(2);
+  std::vector<std::uint8_t> bytes(40 * netft::kRecordBytes);
+  for (std::size_t k = 0; k < 40; ++k) {
+    netft::RdtRecord r;
+    r.rdt_sequence = static_cast<std::uint32_t>(k + 1);
+    for (auto& c : r.counts) c = static_cast<std::int32_t>(rng() % 2'000'000) - 1'000'000;
+    netft::encode_record(r, bytes.data() + k * netft::kRecordBytes);
+  }
+  netft::RdtRecord r;
+  Vector6d w;
+  std::size_t i = 0;
+  for (auto _ : state) {
+    netft::decode_record(bytes.data() + (i % 40) * netft::kRecordBytes, r);
+    for (int k = 0; k < 6; ++k) w[k] = r.counts[static_cast<std::size_t>(k)] * 1e-6;
+    benchmark::DoNotOptimize(w);
+    ++i;
+  }
+  state.SetItemsProcessed(static_cast<std::int64_t>(state.iterations()));
+}
+BENCHMARK(BM_DecodeRdtRecords);
+
 static void BM_DecodeDeclarativeSignals(benchmark::State& state) {
   CanSignal s[3];
   for (unsigned k = 0; k < 3; ++k) {

@@ -51,8 +51,8 @@ TEST(NetFtRdt, RequestsAreEightBigEndianBytes) {
 
 TEST(NetFtRdt, RecordsAreThirtySixBigEndianBytesWithSignedCounts) {
   // Written by hand from the layout: rdt 1, ft 0x0A0B0C0D, status 0x80010000, Fx -2, Tz 0x7FFFFFFF.
-  const std::uint8_t bytes[36] = {0, 0, 0, 1, 0x0A, 0x0B, 0x0C, 0x0D, 0x80, 0x01, 0, 0, 0xFF, 0xFF, 0xFF, 0xFE, 0, 0, 0, 0, 0, 0, 0, 5,
-                                  0, 0, 0, 0, 0, 0, 0, 0, 0x7F, 0xFF, 0xFF, 0xFF};
+  const std::uint8_t bytes[36] = {0, 0, 0, 1, 0x0A, 0x0B, 0x0C, 0x0D, 0x80, 0x01, 0, 0, 0xFF, 0xFF, 0xFF, 0xFE, 0,    0,
+                                  0, 0, 0, 0, 0,    5,    0,    0,    0,    0,    0, 0, 0,    0,    0x7F, 0xFF, 0xFF, 0xFF};
   netft::RdtRecord r;
   netft::decode_record(bytes, r);
   EXPECT_EQ(r.rdt_sequence, 1U);

@@ -4,6 +4,7 @@
 
 #include <hil/rig_service/drivers_from_rig.hpp>
 #include <hil/test/drivers.hpp>
+#include <hil/test/files.hpp>
 
 using namespace hil;
 using namespace hil::drivers;
@@ -46,4 +47,33 @@ TEST(HilFakeRig, FaultOptionsAreChecked) {
   hil::test::Child fake({kHil, "fake-rig", "--run", kRun, "--no-plate", "--port", "0", "--modbus-silent", "3"});
   ASSERT_TRUE(fake.ok());
   EXPECT_NE(fake.wait(), 0);
+}
+
+// A rig whose plate is a Net F/T box: `hil fake-rig` serves the box's RDT stream on 127.0.0.1 and
+// `hil acquire --check` finds it with nothing but the rig file (the box's settings in it).
+TEST(HilFakeRig, ServesANetFtBoxThatAcquireChecks) {
+  test::TempDir tmp;
+  const auto rig_with_port = [&](int port) {
+    return tmp.file("netft_" + std::to_string(port) + ".yaml",
+                    "format_version: 1\nname: netft_bench\nframes:\n  - {name: force_plate, parent: world}\ndevices:\n  force_plate:\n"
+                    "    protocol: ati_netft_rdt\n    host: 127.0.0.1\n    port: " +
+                        std::to_string(port) + "\n    calibration_xml: " + std::string(HIL_SOURCE_DIR) +
+                        "/examples/netft/netftapi2.xml\n    rate_hz: 500\n");
+  };
+  hil::test::Child fake({kHil, "--log-level", "warn", "fake-rig", "--rig", rig_with_port(49152), "--no-robot", "--netft-port", "0",
+                         "--plate-status", "0x4@0:1000", "--duration", "60"});
+  ASSERT_TRUE(fake.ok());
+  const std::string line = fake.read_line();
+  const auto colon = line.rfind(':');
+  ASSERT_NE(line.find("Net F/T RDT on udp 127.0.0.1:"), std::string::npos) << line;
+  const int port = std::atoi(line.c_str() + colon + 1);
+  ASSERT_GT(port, 0) << line;
+  hil::test::Child check({kHil, "--log-level", "warn", "acquire", "--rig", rig_with_port(port), "--check", "--no-robot"});
+  ASSERT_TRUE(check.ok());
+  std::string out, l;
+  while (!(l = check.read_line()).empty()) out += l + "\n";
+  EXPECT_EQ(check.wait(), 1) << "a box flagging its readings fails the check\n" << out;
+  EXPECT_NE(out.find("force plate (ati_netft_rdt on udp 127.0.0.1:" + std::to_string(port) + ")"), std::string::npos) << out;
+  EXPECT_NE(out.find("Net F/T status 0x80000004 (any error, bit 2)"), std::string::npos) << out;
+  EXPECT_NE(out.find("counts_per_force"), std::string::npos) << out;
 }

@@ -108,11 +108,12 @@ TEST(FakeRigPlaysARun, DriversReadTheRunBack) {
     const DeviceClock frozen{want.t_s / speed, 0.0, speed};
 
     auto bus = CanLoopbackBus::create();
+    ForcePlateConfig pc = rig_service::force_plate_config(*run.rig);
     FakeNetCanOemConfig fc;
     fc.clock = frozen;
+    fc.base_id = pc.base_id;  // the run's board (the fake's default is the factory's 0x20)
     FakeNetCanOemBoard plate(fc, bus->open(), scenario);
     plate.start();
-    ForcePlateConfig pc = rig_service::force_plate_config(*run.rig);
     pc.response_timeout_s = 0.5;
     pc.startup_timeout_s = 0.5;
     auto drv = make_force_plate(pc, bus->open());

@@ -33,7 +33,9 @@ struct FakeRigOptions {
   double duration_s = 0.0;
   std::uint64_t seed = 1;
   // force plate faults
-  double drop = 0, corrupt = 0, error_frames_hz = 0, plate_delay_s = 0;
+  double drop = 0, corrupt = 0, duplicate = 0, error_frames_hz = 0, plate_delay_s = 0;
+  std::string netft_host = "127.0.0.1";
+  int netft_port = -1;
   std::vector<std::string> silent, bus_off, plate_status;
   double plate_clock_offset_s = 0, plate_clock_drift_ppm = 0;
   // robot faults
@@ -110,8 +112,32 @@ int fake_rig(const FakeRigOptions& o) {
   }
 
   std::unique_ptr<drivers::FakeNetCanOemBoard> plate;
+  std::unique_ptr<drivers::FakeNetFtRdt> netft;
   std::unique_ptr<drivers::FakeRobotController> robot;
-  if (!o.no_plate) {
+  const bool rdt = rig.devices.force_plate && rig.devices.force_plate->protocol == "ati_netft_rdt";
+  if (!o.no_plate && rdt) {
+    // The Net F/T box on 127.0.0.0/8 at the rig's port: the driver finds it with the rig's
+    // settings when its host is a loopback address.
+    const auto& fp = *rig.devices.force_plate;
+    drivers::FakeNetFtConfig nc;
+    nc.host = o.netft_host;
+    nc.port = o.netft_port >= 0 ? o.netft_port : fp.port;
+    nc.rate_hz = fp.rate_hz;
+    nc.calibration = rig_service::force_plate_config(rig).netft_calibration;
+    nc.T_fp_sensor = fp.T_fp_sensor.isometry();
+    nc.faults.drop_fraction = o.drop;
+    nc.faults.corrupt_fraction = o.corrupt;
+    nc.faults.duplicate_fraction = o.duplicate;
+    nc.faults.extra_delay_s = o.plate_delay_s;
+    nc.faults.silent = windows(o.silent, "--silent");
+    nc.faults.status = status_windows(o.plate_status, "--plate-status");
+    if (!o.bus_off.empty() || o.error_frames_hz > 0)
+      throw std::runtime_error("fake-rig: --bus-off and --error-frames are CAN faults; the rig's plate is a Net F/T box on UDP");
+    nc.clock = {o.plate_clock_offset_s, o.plate_clock_drift_ppm, o.speed};
+    nc.seed = o.seed;
+    netft = std::make_unique<drivers::FakeNetFtRdt>(nc, scenario);
+    std::printf("fake-rig: force plate ATI Net F/T RDT on udp %s:%d\n", nc.host.c_str(), netft->port());
+  } else if (!o.no_plate) {
     drivers::FakeNetCanOemConfig pc;
     std::string iface = o.can_iface;
     if (rig.devices.force_plate) {
@@ -162,13 +188,14 @@ int fake_rig(const FakeRigOptions& o) {
     robot = std::make_unique<drivers::FakeRobotController>(rc, scenario);
     std::printf("fake-rig: robot controller Modbus TCP %s:%d map %s\n", rc.host.c_str(), robot->port(), rc.map.name.c_str());
   }
-  if (!plate && !robot) throw std::runtime_error("fake-rig: --no-plate and --no-robot leave nothing to fake");
+  if (!plate && !netft && !robot) throw std::runtime_error("fake-rig: --no-plate and --no-robot leave nothing to fake");
   std::fflush(stdout);
 
   g_stop = false;
   std::signal(SIGINT, on_fake_rig_signal);
   std::signal(SIGTERM, on_fake_rig_signal);
   if (plate) plate->start();
+  if (netft) netft->start();
   if (robot) robot->start();
   const auto start = std::chrono::steady_clock::now();
   const double scenario_end = scenario->duration_s() / o.speed;
@@ -184,11 +211,19 @@ int fake_rig(const FakeRigOptions& o) {
     }
   }
   if (plate) plate->stop();
+  if (netft) netft->stop();
   if (robot) robot->stop();
   if (plate) {
     const auto s = plate->stats();
     spdlog::info("fake-rig: plate requests {}, gauge answers {}, frames sent {}, dropped {}, corrupted {}, error frames {}, ignored {}",
                  s.requests, s.gauge_answers, s.frames_sent, s.frames_dropped, s.answers_corrupted, s.error_frames_sent, s.ignored_silent);
+  }
+  if (netft) {
+    const auto s = netft->stats();
+    spdlog::info("fake-rig: Net F/T requests {} (starts {}, stops {}, biases {}), records {}, sent {}, dropped {}, silenced {}, "
+                 "datagrams corrupted {}, duplicated {}, flagged {}",
+                 s.requests, s.starts, s.stops, s.biases, s.records, s.records_sent, s.records_dropped, s.records_silenced,
+                 s.datagrams_corrupted, s.datagrams_duplicated, s.records_flagged);
   }
   if (robot) {
     const auto s = robot->stats();
@@ -202,8 +237,8 @@ int fake_rig(const FakeRigOptions& o) {
 
 void add_fake_rig(CLI::App& app) {
   static FakeRigOptions o;
-  auto* cmd = app.add_subcommand("fake-rig", "Fake force plate (ATI NETCANOEM on SocketCAN) and robot controller (Modbus TCP on "
-                                             "127.0.0.1) playing a recorded run, with fault injection");
+  auto* cmd = app.add_subcommand("fake-rig", "Fake force plate (ATI NETCANOEM on SocketCAN, or a Net F/T box's RDT on UDP 127.0.0.1) "
+                                             "and robot controller (Modbus TCP on 127.0.0.1) playing a recorded run, with fault injection");
   cmd->add_option("--rig", o.rig, "rig file (default: the run's rig.yaml)");
   cmd->add_option("--run", o.run, "run folder to replay (default: a still rig)");
   cmd->add_option("--speed", o.speed, "playback speed factor")->check(CLI::PositiveNumber)->capture_default_str();
@@ -215,7 +250,12 @@ void add_fake_rig(CLI::App& app) {
   g_plate->add_option("--can", o.can_iface, "SocketCAN interface (default: the rig's, else vcan0)");
   g_plate->add_option("--base-id", o.base_id, "ATI base id (default: the rig's)")->check(CLI::Range(0, 0x7F));
   g_plate->add_option("--drop", o.drop, "share of answer frames dropped")->check(CLI::Range(0.0, 1.0));
-  g_plate->add_option("--corrupt", o.corrupt, "share of answers sent corrupt (wrong length)")->check(CLI::Range(0.0, 1.0));
+  g_plate->add_option("--corrupt", o.corrupt, "share of answers (CAN) or datagrams (Net F/T) sent corrupt (wrong length)")
+      ->check(CLI::Range(0.0, 1.0));
+  g_plate->add_option("--duplicate", o.duplicate, "Net F/T: share of datagrams sent twice")->check(CLI::Range(0.0, 1.0));
+  g_plate->add_option("--netft-host", o.netft_host, "Net F/T: listen address (127.0.0.0/8 only)")->capture_default_str();
+  g_plate->add_option("--netft-port", o.netft_port, "Net F/T: UDP port (default: the rig's; 0: any free port)")
+      ->check(CLI::Range(0, 65535));
   g_plate->add_option("--silent", o.silent, "START:DURATION (s) without answers; repeatable");
   g_plate->add_option("--bus-off", o.bus_off, "START:DURATION (s) of bus-off (error frames, silence, restart); repeatable");
   g_plate->add_option("--plate-status", o.plate_status,

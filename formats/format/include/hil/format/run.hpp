@@ -12,7 +12,7 @@ namespace hil::format {
 
 struct SourceSpec {
   std::string name;      ///< e.g. force_plate, robot
-  std::string kind;      ///< can | modbus | simulation | import | other
+  std::string kind;      ///< can | modbus | udp | simulation | import | other
   double rate_hz = 0.0;  ///< nominal device rate; 0 = unknown
   std::string raw;       ///< file under raw/ holding this source's stream, if recorded
   /// What the device said about itself when the run started (serial, firmware, counts, server
