@@ -265,7 +265,8 @@ void Acquirer::plate_loop() {
       check_health(now, true);
     }
     if (st == drivers::PollStatus::closed) break;
-    pacer.wait();
+    // A device that pushes its readings is read as they come: poll() waits for the next one.
+    if (plate_->paced()) pacer.wait();
   }
   cpu_ns_ += thread_cpu_ns();
 }

@@ -7,6 +7,7 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstring>
@@ -132,10 +133,13 @@ void FakeNetFtRdt::run() noexcept {
   };
 
   while (!I.stop.load()) {
+    // Wait for a request or the next record's deadline, to the nanosecond (a millisecond poll()
+    // would spin through every sub-millisecond wait at 1 kHz).
     const auto now = Clock::now();
-    const auto wait = streaming ? std::max<std::int64_t>(0, std::chrono::duration_cast<std::chrono::milliseconds>(next - now).count()) : 20;
+    const std::int64_t wait_ns = streaming ? std::clamp<std::int64_t>((next - now).count(), 0, 20'000'000) : 20'000'000;
+    const timespec ts{0, static_cast<long>(wait_ns)};
     pollfd p{I.fd, POLLIN, 0};
-    if (::poll(&p, 1, static_cast<int>(std::min<std::int64_t>(wait, 20))) > 0) {
+    if (::ppoll(&p, 1, &ts, nullptr) > 0) {
       std::uint8_t in[64];
       sockaddr_in from{};
       socklen_t flen = sizeof from;

@@ -125,6 +125,10 @@ class ForcePlate {
   std::string describe_fault(const WrenchSample& s) const;
   /// The link, for messages: "can0", "udp 127.0.0.1:49152".
   virtual std::string link() const = 0;
+  /// True when the device answers requests and the caller paces the polls at rate_hz; false for a
+  /// device that pushes its readings (poll() then waits for the next one and must be called again
+  /// at once, or a backlog builds up behind the pacing).
+  virtual bool paced() const noexcept { return true; }
 
   /// Averages the next `samples` raw wrenches (0 = config.tare_samples) and subtracts them from then
   /// on (sensor frame). Thread-safe.
@@ -212,6 +216,7 @@ class DeclarativeForcePlate final : public CanForcePlate {
   DeclarativeForcePlate(const ForcePlateConfig& cfg, std::unique_ptr<CanChannel> channel);
   ForcePlateInfo start() override;
   PollStatus poll(WrenchSample& out) noexcept override;
+  bool paced() const noexcept override { return false; }  ///< the plate sends on its own
   /// Decodes one frame into the pending sample; true when the sample is complete. Pure, fast.
   bool feed(const CanFrame& f, WrenchSample& out) noexcept;
 

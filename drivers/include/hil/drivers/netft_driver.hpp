@@ -26,6 +26,7 @@ class NetFtRdtDriver final : public ForcePlate {
   PollStatus poll(WrenchSample& out) noexcept override;
   std::string describe_status(const WrenchSample& s) const override;
   std::string link() const override;
+  bool paced() const noexcept override { return false; }  ///< the box pushes at its RDT rate
 
   /// Asks the box to bias its readings at the present load (RDT 0x0042). False if not sent.
   bool bias_on_device() noexcept;
