@@ -52,6 +52,27 @@ void expect_state(const RobotSample& s, double tol_q, double tol_p, double tol_r
   EXPECT_NEAR(s.q_base_tcp.angularDistance(kQ), 0.0, tol_r);
 }
 
+/// The fake UR controller in lock-step (one scenario second per request) and a driver on it.
+struct LockStep {
+  FakeRobotController fake;
+  RobotControllerDriver drv;
+  explicit LockStep(std::vector<ScenarioPoint> pts) : fake(config(), std::make_shared<Scenario>(std::move(pts))), drv(modbus(fake)) {
+    drv.connect();
+  }
+  static FakeRobotConfig config() {
+    FakeRobotConfig fc;
+    fc.scenario_step_per_request_s = 1.0;
+    return fc;
+  }
+  static ModbusConfig modbus(FakeRobotController& f) {
+    f.start();
+    ModbusConfig mc;
+    mc.port = f.port();
+    mc.timeout_s = 1.0;
+    return mc;
+  }
+};
+
 }  // namespace
 
 TEST(RobotDriver, ReadsTheUrMapFromTheFake) {
@@ -186,15 +207,8 @@ TEST(RobotDriver, AJointCrossingZeroBetweenAngleAndCounterReadsHasNoSpike) {
     pts[1] = pts[0];
     pts[1].t_s = 1000;
     pts[1].joints_rad[0] += direction * 1.0;  // 1 mrad per request
-    FakeRobotConfig fc;
-    fc.scenario_step_per_request_s = 1.0;
-    FakeRobotController fake(fc, std::make_shared<Scenario>(pts));
-    fake.start();
-    ModbusConfig mc;
-    mc.port = fake.port();
-    mc.timeout_s = 1.0;
-    RobotControllerDriver drv(mc);
-    drv.connect();
+    LockStep rig(pts);
+    auto& drv = rig.drv;
     RobotSample s;
     double previous = pts[0].joints_rad[0];
     for (int k = 0; k < 12; ++k) {
@@ -226,21 +240,14 @@ TEST(RobotDriver, AnAngleFlickeringAcrossZeroAtEveryReadIsABadFrameNotAGuess) {
     p.q_base_tcp = kQ;
     pts.push_back(p);
   }
-  FakeRobotConfig fc;
-  fc.scenario_step_per_request_s = 1.0;
-  FakeRobotController fake(fc, std::make_shared<Scenario>(pts));
-  fake.start();
-  ModbusConfig mc;
-  mc.port = fake.port();
-  mc.timeout_s = 1.0;
-  RobotControllerDriver drv(mc);
-  drv.connect();
+  LockStep rig(pts);
+  auto& drv = rig.drv;
   RobotSample s;
   EXPECT_EQ(drv.poll(s), PollStatus::bad_frame);
   EXPECT_NE(drv.last_problem().find("wrapping"), std::string::npos) << drv.last_problem();
   EXPECT_EQ(drv.counters().samples, 0U);
   EXPECT_EQ(drv.counters().torn_reads, 4U);
-  EXPECT_EQ(fake.stats().requests, 10U);
+  EXPECT_EQ(rig.fake.stats().requests, 10U);
 }
 
 TEST(RobotDriver, UnreachableControllerThrowsThenBacksOff) {

@@ -29,6 +29,16 @@ ForcePlateConfig rdt_config(int port, double rate_hz = 1000.0) {
   return c;
 }
 
+/// The fake box streaming and a started driver on it.
+struct BoxAndDriver {
+  FakeNetFtRdt box;
+  NetFtRdtDriver drv;
+  explicit BoxAndDriver(const FakeNetFtConfig& fc) : box(fc), drv(rdt_config(box.port(), fc.rate_hz)) {
+    box.start();
+    drv.start();
+  }
+};
+
 }  // namespace
 
 TEST(NetFtRdt, RequestsAreEightBigEndianBytes) {
@@ -189,10 +199,9 @@ TEST(NetFtDriver, EveryRecordIsHandedOutOrCountedLostUnderDropsCorruptionAndDupl
   fc.faults.corrupt_fraction = 0.02;
   fc.faults.duplicate_fraction = 0.03;
   fc.seed = 7;
-  FakeNetFtRdt box(fc);
-  box.start();
-  NetFtRdtDriver drv(rdt_config(box.port(), fc.rate_hz));
-  drv.start();
+  BoxAndDriver bd(fc);
+  auto& box = bd.box;
+  auto& drv = bd.drv;
   WrenchSample s;
   std::uint64_t ok = 0, bad = 0;
   std::uint32_t previous = 0;
@@ -225,10 +234,9 @@ TEST(NetFtDriver, EveryRecordIsHandedOutOrCountedLostUnderDropsCorruptionAndDupl
 
 TEST(NetFtDriver, ASilentBoxTimesOutThenIsAskedAgainAndRecovers) {
   FakeNetFtConfig fc;
-  FakeNetFtRdt box(fc);
-  box.start();
-  NetFtRdtDriver drv(rdt_config(box.port()));
-  drv.start();
+  BoxAndDriver bd(fc);
+  auto& box = bd.box;
+  auto& drv = bd.drv;
   WrenchSample s;
   ASSERT_EQ(drv.poll(s), PollStatus::ok);
   // The box reboots: it forgets the stream, and ignores requests for a while.
@@ -248,10 +256,9 @@ TEST(NetFtDriver, ASilentBoxTimesOutThenIsAskedAgainAndRecovers) {
 TEST(NetFtDriver, StatusWindowsOfTheFakeAreDeviceFaultsAndTheLatchIsReset) {
   FakeNetFtConfig fc;
   fc.faults.status_now = netft::kStatusMonitorLatched;
-  FakeNetFtRdt box(fc);
-  box.start();
-  NetFtRdtDriver drv(rdt_config(box.port()));
-  drv.start();
+  BoxAndDriver bd(fc);
+  auto& box = bd.box;
+  auto& drv = bd.drv;
   WrenchSample s;
   ASSERT_EQ(drv.poll(s), PollStatus::ok);
   EXPECT_TRUE(s.device_fault);

@@ -30,8 +30,8 @@ std::string netft_rig(const test::TempDir& tmp) {
   std::string rig = read(std::string(HIL_SOURCE_DIR) + "/examples/rigs/press_bench.yaml");
   const std::regex plate(R"(  force_plate:\n(    .*\n)+)");
   const std::string page = std::string(HIL_SOURCE_DIR) + "/examples/netft/netftapi2.xml";
-  const std::string with = "  force_plate:\n    protocol: ati_netft_rdt\n    host: 127.0.0.1\n    port: 49152\n    calibration_xml: " + page +
-                           "\n    rate_hz: 1000\n    saturation_limits: [660, 660, 1980, 60, 60, 60]\n";
+  const std::string with = "  force_plate:\n    protocol: ati_netft_rdt\n    host: 127.0.0.1\n    port: 49152\n    calibration_xml: " +
+                           page + "\n    rate_hz: 1000\n    saturation_limits: [660, 660, 1980, 60, 60, 60]\n";
   const std::string out = std::regex_replace(rig, plate, with, std::regex_constants::format_first_only);
   EXPECT_NE(out, rig) << "the example rig's force_plate section was not found";
   return tmp.file("netft_bench.yaml", out);

@@ -90,6 +90,16 @@ std::vector<drivers::StatusWindow> status_windows(const std::vector<std::string>
   return out;
 }
 
+/// The faults both plates' fakes share (CanFaults, StreamFaults), from the command line.
+template <typename Faults>
+void plate_faults(const FakeRigOptions& o, Faults& f) {
+  f.drop_fraction = o.drop;
+  f.corrupt_fraction = o.corrupt;
+  f.extra_delay_s = o.plate_delay_s;
+  f.silent = windows(o.silent, "--silent");
+  f.status = status_windows(o.plate_status, "--plate-status");
+}
+
 int fake_rig(const FakeRigOptions& o) {
   if (o.rig.empty() && o.run.empty()) throw std::runtime_error("fake-rig: give --rig RIG and/or --run RUN");
   std::optional<format::Run> run;
@@ -125,12 +135,8 @@ int fake_rig(const FakeRigOptions& o) {
     nc.rate_hz = fp.rate_hz;
     nc.calibration = rig_service::force_plate_config(rig).netft_calibration;
     nc.T_fp_sensor = fp.T_fp_sensor.isometry();
-    nc.faults.drop_fraction = o.drop;
-    nc.faults.corrupt_fraction = o.corrupt;
+    plate_faults(o, nc.faults);
     nc.faults.duplicate_fraction = o.duplicate;
-    nc.faults.extra_delay_s = o.plate_delay_s;
-    nc.faults.silent = windows(o.silent, "--silent");
-    nc.faults.status = status_windows(o.plate_status, "--plate-status");
     if (!o.bus_off.empty() || o.error_frames_hz > 0)
       throw std::runtime_error("fake-rig: --bus-off and --error-frames are CAN faults; the rig's plate is a Net F/T box on UDP");
     nc.clock = {o.plate_clock_offset_s, o.plate_clock_drift_ppm, o.speed};
@@ -150,13 +156,9 @@ int fake_rig(const FakeRigOptions& o) {
     }
     if (iface.empty()) iface = "vcan0";
     if (o.base_id >= 0) pc.base_id = static_cast<std::uint32_t>(o.base_id);
-    pc.faults.drop_fraction = o.drop;
-    pc.faults.corrupt_fraction = o.corrupt;
+    plate_faults(o, pc.faults);
     pc.faults.error_frame_rate_hz = o.error_frames_hz;
-    pc.faults.extra_delay_s = o.plate_delay_s;
-    pc.faults.silent = windows(o.silent, "--silent");
     pc.faults.bus_off = windows(o.bus_off, "--bus-off");
-    pc.faults.status = status_windows(o.plate_status, "--plate-status");
     pc.clock = {o.plate_clock_offset_s, o.plate_clock_drift_ppm, o.speed};
     pc.seed = o.seed;
     drivers::SocketCanOptions so;
