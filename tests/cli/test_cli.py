@@ -185,6 +185,25 @@ class Cli(unittest.TestCase):
         self.assertIsNotNone(m, r.stdout)
         self.assertLess(abs(float(m.group(3))), 5.0)  # no contact yet at the run's start
 
+    def test_acquire_check_scan_finds_a_board_at_the_factory_base_id(self):
+        # The example rig with its board at 0x20 (a new board's id): the played fake answers there,
+        # and the scan over 0x00-0x7F finds it and nothing else.
+        out = tempfile.mkdtemp()
+        try:
+            with open(EXAMPLE_RIG) as f:
+                text = f.read()
+            self.assertIn("base_id: 0x00", text)
+            rig = os.path.join(out, "rig.yaml")
+            with open(rig, "w") as f:
+                f.write(text.replace("base_id: 0x00", "base_id: 0x20"))
+            r = hil("acquire", "--rig", rig, "--play", EXAMPLE_RUN, "--check", "--scan", "--no-robot")
+            self.assertEqual(r.returncode, 0, r.stdout + r.stderr)
+            self.assertIn("1 board(s) answered", r.stdout)
+            self.assertIn("base id 0x20 (ids 0x200-0x20F)  serial 'FT-FAKE1'", r.stdout)
+            self.assertNotIn("set devices.force_plate.base_id", r.stdout)
+        finally:
+            shutil.rmtree(out)
+
     def test_acquire_check_names_the_device_that_does_not_answer(self):
         import socket
         s = socket.socket()

@@ -497,3 +497,28 @@ TEST(AtiProtocol, StatusWordsAreNamedBitByBitWithReservedBitsByNumber) {
   EXPECT_EQ(ati::describe_status(0x8200), "0x8200 (any error, reserved bit 9)");
   EXPECT_EQ(ati::describe_status(0x0001), "0x0001 (watchdog reset)");
 }
+
+// The base-id scan: two boards on one bus, at the factory's 0x20 and at 0x05, answer their serial
+// request; nothing else does. An empty bus gives an empty list after the window.
+TEST(NetCanOem, ScanFindsBoardsByBaseId) {
+  auto bus = CanLoopbackBus::create();
+  FakeNetCanOemConfig a;  // the factory's base id
+  FakeNetCanOemConfig b;
+  b.base_id = 0x05;
+  b.serial = "FT-OTHER";
+  FakeNetCanOemBoard board_a(a, bus->open());
+  FakeNetCanOemBoard board_b(b, bus->open());
+  board_a.start();
+  board_b.start();
+  auto ch = bus->open();
+  const auto found = scan_netcanoem(*ch, 0.2);
+  ASSERT_EQ(found.size(), 2U);
+  EXPECT_EQ(found[0].base_id, 0x05U);
+  EXPECT_EQ(found[0].serial, "FT-OTHER");
+  EXPECT_EQ(found[1].base_id, 0x20U);
+  EXPECT_EQ(found[1].serial, "FT-FAKE1");
+  EXPECT_EQ(a.base_id, ati::kFactoryBase);
+  board_a.stop();
+  board_b.stop();
+  EXPECT_TRUE(scan_netcanoem(*ch, 0.05).empty());
+}
