@@ -265,8 +265,10 @@ void Acquirer::plate_loop() {
       check_health(now, true);
     }
     if (st == drivers::PollStatus::closed) break;
-    // A device that pushes its readings is read as they come: poll() waits for the next one.
-    if (plate_->paced()) pacer.wait();
+    // A device that pushes its readings is read as they come: poll() waits for the next one. A
+    // failing poll waits out the period whatever the device (a CAN interface that is down fails at
+    // once, and must not spin a core).
+    if (plate_->paced() || st != drivers::PollStatus::ok) pacer.wait();
   }
   cpu_ns_ += thread_cpu_ns();
 }
