@@ -77,3 +77,20 @@ TEST(HilFakeRig, ServesANetFtBoxThatAcquireChecks) {
   EXPECT_NE(out.find("Net F/T status 0x80000004 (any error, bit 2)"), std::string::npos) << out;
   EXPECT_NE(out.find("counts_per_force"), std::string::npos) << out;
 }
+
+TEST(HilFakeRig, StatusWindowsAreChecked) {
+  test::TempDir tmp;
+  const auto rig = tmp.file("netft.yaml", "format_version: 1\nname: n\nframes:\n  - {name: force_plate, parent: world}\ndevices:\n"
+                                          "  force_plate: {protocol: ati_netft_rdt, host: 127.0.0.1, counts_per_force: 1e6, "
+                                          "counts_per_torque: 1e6}\n");
+  for (const char* bad : {"0x0@1:1", "0x4@1", "4@-1:1", "x@1:1", "0x4@1:0"}) {
+    hil::test::Child fake({kHil, "--log-level", "warn", "fake-rig", "--rig", rig, "--no-robot", "--netft-port", "0", "--plate-status", bad,
+                           "--duration", "0.2"});
+    ASSERT_TRUE(fake.ok());
+    EXPECT_NE(fake.wait(), 0) << "--plate-status " << bad << " was accepted";
+  }
+  hil::test::Child good({kHil, "--log-level", "warn", "fake-rig", "--rig", rig, "--no-robot", "--netft-port", "0", "--plate-status",
+                         "0x4@1:1", "--duration", "0.2"});
+  ASSERT_TRUE(good.ok());
+  EXPECT_EQ(good.wait(), 0) << "a well-formed status window";
+}

@@ -118,3 +118,38 @@ TEST(Rig, DeviceSections) {
   EXPECT_TRUE(fails_with(parse(replace(ok, "component: fx", "component: fq")), 0, "", "expected one of fx"));
   EXPECT_TRUE(fails_with(parse(replace(ok, "frame_id: 0x1A0", "frame_id: 0x1000")), 0, "", "CAN id out of range"));
 }
+
+TEST(Rig, NetCanOemDefaultsToTheFactoryBaseIdAndReadsItsEarlierName) {
+  const auto rig = parse_rig(kRig + "devices:\n  force_plate: {protocol: ati_ft_can}\n", "rig.yaml");
+  EXPECT_EQ(rig.devices.force_plate->protocol, "ati_netcanoem");
+  EXPECT_EQ(rig.devices.force_plate->base_id, 0x20u);
+  EXPECT_TRUE(fails_with(parse(kRig + "devices:\n  force_plate: {base_id: 0x80}\n"), 0, "devices.force_plate.base_id", "0..127"));
+}
+
+TEST(Rig, NetFtBoxSectionsAndTheirMistakes) {
+  const std::string head = kRig + "devices:\n  force_plate:\n    protocol: ati_netft_rdt\n";
+  const auto rig = parse_rig(head + "    host: 192.168.1.1\n    calibration_xml: box.xml\n", "rig.yaml");
+  EXPECT_EQ(rig.devices.force_plate->host, "192.168.1.1");
+  EXPECT_EQ(rig.devices.force_plate->port, 49152);
+  EXPECT_EQ(rig.devices.force_plate->calibration_xml, "box.xml");
+  const auto counts =
+      parse_rig(head +
+                    "    host: 10.0.0.2\n    port: 50000\n    counts_per_force: 1e6\n    counts_per_torque: 1e3\n    torque_unit: N-mm\n",
+                "rig.yaml");
+  EXPECT_EQ(counts.devices.force_plate->counts_per_torque, 1e3);
+  EXPECT_EQ(counts.devices.force_plate->torque_unit, "N-mm");
+  EXPECT_TRUE(fails_with(parse(head + "    calibration_xml: box.xml\n"), 0, "devices.force_plate.host", "box's address"));
+  EXPECT_TRUE(fails_with(parse(head + "    host: h\n"), 0, "devices.force_plate.counts_per_force", "counts per unit are needed"));
+  EXPECT_TRUE(fails_with(parse(head + "    host: h\n    calibration_xml: a.xml\n    counts_per_force: 1\n    counts_per_torque: 1\n"), 0,
+                         "devices.force_plate.calibration_xml", "not both"));
+  EXPECT_TRUE(fails_with(parse(head + "    host: h\n    counts_per_force: 1e6\n"), 0, "devices.force_plate.counts_per_torque",
+                         "give both"));
+  EXPECT_TRUE(fails_with(parse(head + "    host: h\n    calibration_xml: a.xml\n    port: 0\n"), 0, "devices.force_plate.port",
+                         "1..65535"));
+  EXPECT_TRUE(fails_with(parse(head + "    host: h\n    calibration_xml: a.xml\n    interface: can0\n"), 0, "devices.force_plate.interface",
+                         "UDP"));
+  EXPECT_TRUE(fails_with(parse(kRig + "devices:\n  force_plate: {protocol: ati_netcanoem, host: h}\n"), 0, "devices.force_plate.host",
+                         "only the ati_netft_rdt protocol"));
+  EXPECT_TRUE(fails_with(parse(kRig + "devices:\n  force_plate: {protocol: ati_netft}\n"), 0, "devices.force_plate.protocol",
+                         "'ati_netft_rdt'"));
+}
