@@ -180,7 +180,7 @@ void Acquirer::stop() {
   if (recorder_) recorder_->flush();
   const auto now = realtime_ns();
   std::vector<DeviceHealth> last{merged(plate_mon_.health(now), plate_counters_)};
-  if (robot_) last.push_back(robot_mon_.health(now));
+  if (robot_) last.push_back(merged(robot_mon_.health(now), robot_counters_));
   publish_status(last, now);
   // Subscribers get the last samples before the writers go away with this object.
   if (w_sample_) w_sample_->wait_for_acknowledgments(std::chrono::seconds(2));
@@ -194,7 +194,7 @@ std::vector<DeviceHealth> Acquirer::health() const {
   std::lock_guard<std::mutex> lock(mutex_);
   const auto now = realtime_ns();
   std::vector<DeviceHealth> out{merged(plate_mon_.health(now), plate_counters_)};
-  if (robot_) out.push_back(robot_mon_.health(now));
+  if (robot_) out.push_back(merged(robot_mon_.health(now), robot_counters_));
   return out;
 }
 
@@ -216,6 +216,7 @@ void Acquirer::plate_loop() {
   enter_rt(opt_.force_plate_name.c_str());
   drivers::RatePacer pacer(plate_->config().rate_hz);
   drivers::WrenchSample s;
+  bool refused = false;  // a Modbus plate (FT 300) refused polls since its last reading
   while (running_) {
     const auto st = plate_->poll(s);
     const auto now = realtime_ns();
@@ -225,7 +226,10 @@ void Acquirer::plate_loop() {
       r.seq = s.sequence;
       r.wrench_fp = s.w_fp;
       if (s.saturated_axes || s.gauge_saturated) r.quality |= kWrenchSaturated;
-      if (s.device_fault || s.error_frames > 0) r.quality |= kDeviceFault;
+      // The first reading after refusals marks the samples filtered across them, as a refused
+      // robot poll marks the samples interpolated across it.
+      if (s.device_fault || s.error_frames > 0 || refused) r.quality |= kDeviceFault;
+      refused = false;
       // The live stream goes out first, outside the lock: the robot thread holds the lock while it
       // synchronises, records and publishes samples (a CSV flush among them), and a monitor's
       // wrench must not wait behind that. Only this thread uses the wrench writer.
@@ -248,9 +252,9 @@ void Acquirer::plate_loop() {
           // seen by the monitor after a few periods.
           plate_mon_.dropped(1, now);
           break;
+        case drivers::PollStatus::exception: refused = true; [[fallthrough]];
         case drivers::PollStatus::bad_frame:
         case drivers::PollStatus::bus_error:
-        case drivers::PollStatus::exception:
           plate_mon_.error(fmt::format("{}: {}", drivers::to_string(st), plate_->last_problem()), now);
           break;
         case drivers::PollStatus::disconnected:
@@ -314,14 +318,18 @@ void Acquirer::robot_loop() {
           sync_.push_pose(r);
           break;
         case drivers::PollStatus::timeout: break;
+        case drivers::PollStatus::exception:
+          // The controller answered and refused: its samples meanwhile are device faults.
+          sync_.pose_refused();
+          [[fallthrough]];
         case drivers::PollStatus::bad_frame:
         case drivers::PollStatus::bus_error:
-        case drivers::PollStatus::exception:
           robot_mon_.error(fmt::format("{}: {}", drivers::to_string(st), robot_->last_problem()), now);
           break;
         case drivers::PollStatus::disconnected:
         case drivers::PollStatus::closed: robot_mon_.link(false, now); break;
       }
+      robot_counters_ = robot_->counters();  // as plate_counters_: read by the other threads under the lock
       check_health(now, false);
     }
     pacer.wait();
@@ -385,7 +393,7 @@ void Acquirer::check_health(std::int64_t now_ns, bool periodic) {
     log_state(plate_mon_, opt_.force_plate_name, held_back);
   }
   if (robot_changed) {
-    const auto h = robot_mon_.health(now_ns);
+    const auto h = merged(robot_mon_.health(now_ns), robot_counters_);
     if (robot_log_.change(robot_mon_.state(), now_ns, held_back, robot_mon_.reason())) log_state(robot_mon_, h.device, held_back);
     publish_status({h}, now_ns);
   } else if (robot_ && periodic && robot_log_.flush(now_ns, held_back, robot_mon_.state(), robot_mon_.reason())) {
@@ -394,7 +402,7 @@ void Acquirer::check_health(std::int64_t now_ns, bool periodic) {
   if (periodic && now_ns - last_status_ns_ >= static_cast<std::int64_t>(opt_.status_period_s * 1e9)) {
     last_status_ns_ = now_ns;
     std::vector<DeviceHealth> all{merged(plate_mon_.health(now_ns), plate_counters_)};
-    if (robot_) all.push_back(robot_mon_.health(now_ns));
+    if (robot_) all.push_back(merged(robot_mon_.health(now_ns), robot_counters_));
     publish_status(all, now_ns);
     if (recorder_) recorder_->flush();
     if (raw_) raw_->flush();

@@ -99,8 +99,12 @@ void Synchronizer::push_grid(std::int64_t t_ns, const Vector6d& w, std::uint32_t
 void Synchronizer::push_pose(const PoseReading& r) {
   if (!poses_.empty() && r.t_ns <= poses_.back().t_ns) return;  // out of order or duplicate: keep the first
   poses_.push_back(r);
+  if (refused_) poses_.back().quality |= kDeviceFault;
+  refused_ = false;
   emit_ready(last_wrench_ns_, false);
 }
+
+void Synchronizer::pose_refused() { refused_ = true; }
 
 void Synchronizer::flush() { emit_ready(last_wrench_ns_, true); }
 
@@ -121,12 +125,12 @@ bool Synchronizer::fill_pose(SyncedSample& s, bool force) const {
     const auto& p = poses_.front();
     s.p_world_ee_m = p.p_world_ee_m, s.q_world_ee = p.q_world_ee, s.joints_rad = p.joints_rad, s.pose_seq = p.seq;
     s.pose_age_s = (s.t_ns - p.t_ns) * 1e-9;
-    s.quality |= kPoseExtrapolated;
+    s.quality |= kPoseExtrapolated | (p.quality & kDeviceFault);
   } else if (b == poses_.size()) {
     const auto& p = poses_.back();
     s.p_world_ee_m = p.p_world_ee_m, s.q_world_ee = p.q_world_ee, s.joints_rad = p.joints_rad, s.pose_seq = p.seq;
     s.pose_age_s = (s.t_ns - p.t_ns) * 1e-9;
-    s.quality |= kPoseExtrapolated;
+    s.quality |= kPoseExtrapolated | (refused_ ? kDeviceFault : 0U);
   } else {
     const auto& p0 = poses_[b - 1];
     const auto& p1 = poses_[b];
@@ -136,6 +140,9 @@ bool Synchronizer::fill_pose(SyncedSample& s, bool force) const {
     if (p0.joints_rad.size() == p1.joints_rad.size()) s.joints_rad = (1.0 - a) * p0.joints_rad + a * p1.joints_rad;
     s.pose_seq = p1.seq;
     s.pose_age_s = std::min(s.t_ns - p0.t_ns, p1.t_ns - s.t_ns) * 1e-9;
+    // A pose that follows refused polls (a Modbus exception burst) marks the samples interpolated
+    // across the refusal: the motion in between was not read.
+    s.quality |= p1.quality & kDeviceFault;
   }
   if (s.pose_age_s > cfg_.pose_stale_s) s.quality |= kPoseStale;
 

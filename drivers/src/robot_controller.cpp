@@ -184,6 +184,7 @@ PollStatus RobotControllerDriver::read_block(const ReadBlock& b, std::uint16_t* 
     const int err = rc < 0 ? errno : EMBBADDATA;
     if (err > MODBUS_ENOBASE && err <= MODBUS_ENOBASE + MODBUS_EXCEPTION_GATEWAY_TARGET) {
       ++counters_.exceptions;
+      ++counters_.device_faults;  // the device refused: a fault it reports, like a status bit
       ++counters_.consecutive_failures;
       set_problem("exception response", err);
       return PollStatus::exception;

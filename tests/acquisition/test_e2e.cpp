@@ -238,6 +238,13 @@ TEST(EndToEnd, InjectedFaultsAreReportedAndRecoveredFrom) {
   const auto csv = format::read_csv(dir + "/samples.csv", requiring({"t", "quality"}));
   for (double v : csv.numeric("quality")) flagged += (static_cast<std::uint32_t>(v) & acquisition::kGapBefore) != 0;
   EXPECT_GE(flagged, 2) << "the silent and bus-off holes must be marked in the recording";
+  // The samples whose pose spans the robot's exception burst (1.5-1.8 s) are device faults.
+  const auto t = csv.numeric("t");
+  const auto quality = csv.numeric("quality");
+  int refused = 0;
+  for (std::size_t i = 0; i < t.size(); ++i)
+    refused += t[i] > 1.4 && t[i] < 2.0 && (static_cast<std::uint32_t>(quality[i]) & acquisition::kDeviceFault) != 0;
+  EXPECT_GE(refused, 8) << "0.3 s of refused robot polls at 50 Hz output";
 }
 
 // The plate flags its readings (ATI status bits: supply too low, then temperature too high) in two

@@ -155,3 +155,37 @@ TEST(Sync, MissingPoseTimesOutAndIsFlagged) {
   EXPECT_TRUE(out.back().quality & kPoseStale);
   EXPECT_GT(out.back().pose_age_s, 0.2);
 }
+
+TEST(Sync, SamplesAcrossARefusedPollAreDeviceFaultsAndOnlyThose) {
+  // The robot answers every 8 ms, refuses (Modbus exceptions) from 200 ms to 300 ms, then answers
+  // again. The samples whose pose spans the refusal are device faults; those well before and
+  // after are not.
+  std::vector<SyncedSample> out;
+  Synchronizer sync({1000.0, 100.0}, [&](const SyncedSample& s) { out.push_back(s); });
+  for (int i = 0; i < 600; ++i) {
+    const std::int64_t t = kT0 + i * 1'000'000LL;
+    if (i % 8 == 0) {
+      if (i >= 200 && i < 300) sync.pose_refused();
+      else sync.push_pose(pose_at(t, static_cast<std::uint64_t>(i)));
+    }
+    WrenchReading w;
+    w.t_ns = t;
+    sync.push_wrench(w);
+  }
+  sync.flush();
+  ASSERT_GT(out.size(), 50u);
+  int faults = 0;
+  for (const auto& s : out) {
+    const double t_ms = (s.t_ns - kT0) * 1e-6;
+    const bool fault = (s.quality & kDeviceFault) != 0;
+    faults += fault ? 1 : 0;
+    // The last pose before the refusal is at 192 ms, the first after it at 304 ms.
+    if (t_ms > 193.0 && t_ms < 303.0) {
+      EXPECT_TRUE(fault) << "sample at " << t_ms << " ms spans the refusal";
+    }
+    if (t_ms < 191.0 || t_ms > 305.0) {
+      EXPECT_FALSE(fault) << "sample at " << t_ms << " ms was read normally";
+    }
+  }
+  EXPECT_GE(faults, 10);
+}

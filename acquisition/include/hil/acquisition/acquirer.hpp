@@ -102,6 +102,7 @@ class Acquirer {
   DeviceMonitor plate_mon_, robot_mon_;
   StateLog plate_log_, robot_log_;          ///< which state changes reach the log (all reach the bus)
   drivers::DeviceCounters plate_counters_;  ///< the plate driver's counters after its last poll
+  drivers::DeviceCounters robot_counters_;  ///< the robot driver's counters after its last poll
   std::unique_ptr<dds::Writer<hil_msgs::msg::PoseWrenchSample>> w_sample_;
   std::unique_ptr<dds::Writer<hil_msgs::msg::DeviceStatus>> w_status_;
   std::unique_ptr<dds::Writer<geometry_msgs::msg::WrenchStamped>> w_wrench_;

@@ -45,6 +45,10 @@ class Synchronizer {
   /// Feed readings in arrival order (each stream's times non-decreasing).
   void push_wrench(const WrenchReading& r);
   void push_pose(const PoseReading& r);
+  /// The robot controller refused a poll (a Modbus exception): the pose was not read. Samples
+  /// extrapolated while it refuses, and those interpolated across the refusal once a pose comes
+  /// again, carry kDeviceFault.
+  void pose_refused();
   /// Emits every pending output with what is there (end of run).
   void flush();
 
@@ -77,6 +81,7 @@ class Synchronizer {
   bool gap_pending_ = false;
   std::uint64_t gaps_ = 0;
   std::deque<PoseReading> poses_;
+  bool refused_ = false;  ///< a poll was refused since the last pose
   std::deque<SyncedSample> pending_;
   std::uint64_t next_index_ = 0;
   std::int64_t last_wrench_ns_ = 0;
