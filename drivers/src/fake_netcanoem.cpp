@@ -1,3 +1,5 @@
+#include <algorithm>
+#include <cmath>
 #include <deque>
 #include <random>
 
@@ -88,7 +90,12 @@ struct FakeNetCanOemBoard::Impl {
 FakeNetCanOemBoard::FakeNetCanOemBoard(FakeNetCanOemConfig cfg, std::unique_ptr<CanChannel> channel,
                                        std::shared_ptr<const Scenario> scenario) {
   if (!channel) throw ConfigError("channel", "no CAN channel given");
-  if (cfg.base_id > ati::kMaxBase) throw ConfigError("base_id", "ATI base id must be 0..0x7F");
+  if (!cfg.netft_box && cfg.base_id > ati::kMaxBase) throw ConfigError("base_id", "ATI base id must be 0..0x7F");
+  if (cfg.netft_box && cfg.base_id > netft_can::kMaxBase) throw ConfigError("base_id", "the Net F/T's CAN base address must be 0..0x7F9");
+  if (cfg.netft_box) {
+    (void)cfg.box_calibration.newtons_per_count();  // names a bad count or unit
+    (void)cfg.box_calibration.newton_metres_per_count();
+  }
   if (!(cfg.clock.speed > 0.0)) throw ConfigError("speed", "must be > 0");
   impl_ = std::make_unique<Impl>(std::move(cfg), std::move(channel), std::move(scenario));
 }
@@ -129,6 +136,26 @@ void FakeNetCanOemBoard::run() noexcept {
   bool in_bus_off = false;
   Clock::time_point next_error = Clock::now();
   ScenarioPoint point;
+  // The Net F/T box's state: its bias (counts) and sample number.
+  Vector6d box_bias = Vector6d::Zero();
+  std::uint16_t box_sample = 0;
+  const Matrix6d X_sensor_fp = plate_to_sensor_wrench(I.cfg.T_fp_sensor);
+  Vector6d box_per_si = Vector6d::Zero();
+  if (I.cfg.netft_box) {
+    const double fc = 1.0 / I.cfg.box_calibration.newtons_per_count(), tc = 1.0 / I.cfg.box_calibration.newton_metres_per_count();
+    box_per_si << fc, fc, fc, tc, tc, tc;
+  }
+  const auto box_counts = [&](double t_s) {
+    Vector6d w;
+    if (I.scenario) {
+      I.scenario->at(I.cfg.clock.scenario_time(t_s), point);
+      w = point.w_fp;
+    } else {
+      std::lock_guard lk(I.m);
+      w = I.wrench;
+    }
+    return Vector6d(box_per_si.cwiseProduct(X_sensor_fp * w));
+  };
   std::uniform_real_distribution<double> uni(0.0, 1.0);
   // Sends one frame; `completes_answer`: it is the last frame of an intact gauge answer, which is
   // then counted as delivered (the fault soak reconciles that count with what was recorded).
@@ -184,7 +211,7 @@ void FakeNetCanOemBoard::run() noexcept {
     const auto r = I.channel->receive(req, wait);
     if (r == IoStatus::closed) break;
     if (r != IoStatus::ok || req.error || req.extended || req.rtr || req.fd) continue;
-    if (ati::base_of(req.id) != base) continue;
+    if (I.cfg.netft_box ? req.id != base || req.len != 1 : ati::base_of(req.id) != base) continue;
     {
       // Faults as they are now (they may have been switched while we waited).
       std::lock_guard lk(I.m);
@@ -195,10 +222,37 @@ void FakeNetCanOemBoard::run() noexcept {
     for (const auto& w : f.silent) silent = silent || w.contains(t_req);
     bus_off = false;
     for (const auto& w : f.bus_off) bus_off = bus_off || w.contains(t_req);
-    const std::uint8_t op = ati::opcode_of(req.id);
+    // The Net F/T box's commands are mapped onto the board's opcodes: short data is a reading
+    // (kOpReadGauges), bias has no answer.
+    const std::uint8_t op = I.cfg.netft_box ? (req.data[0] == netft_can::kRequestShortData ? ati::kOpReadGauges : std::uint8_t{0xFF})
+                                            : ati::opcode_of(req.id);
+    if (I.cfg.netft_box && req.data[0] == netft_can::kRequestBias) {
+      box_bias = box_counts(t_req);  // the load now (reads set_wrench's value under the lock itself)
+      std::lock_guard lk(I.m);
+      ++I.stats.requests;
+      continue;
+    }
     std::array<CanFrame, 3> answer;
     std::size_t n = 0;
-    switch (op) {
+    if (I.cfg.netft_box && op == ati::kOpReadGauges) {
+      netft_can::ShortData d;
+      const Vector6d c = box_counts(t_req) - box_bias;
+      for (int i = 0; i < 6; ++i)
+        d.counts[static_cast<std::size_t>(i)] = static_cast<std::int16_t>(std::clamp(std::nearbyint(c[i]), -32768.0, 32767.0));
+      std::uint32_t bits = f.status_now;
+      for (const auto& sw : f.status) bits |= sw.window.contains(t_req) ? sw.bits : 0U;
+      if ((bits & 0x7FFFU) != 0) bits |= 0x8000U;  // the top bit joins any other, as bit 31 of the box's status word
+      d.status = static_cast<std::uint16_t>(bits);
+      d.sample = ++box_sample;
+      const auto fr = netft_can::encode_short(base, d);
+      answer[0] = fr[0];
+      answer[1] = fr[1];
+      n = 2;
+    }
+    switch (I.cfg.netft_box ? std::uint8_t{0xFE} : op) {
+      case 0xFE:
+        if (n == 0) continue;  // a box command the fake does not know
+        break;
       case ati::kOpReadGauges: {
         if (req.len != 0) continue;  // another device's answer
         Vector6d w;

@@ -5,6 +5,7 @@
 
 #include <hil/drivers/error.hpp>
 #include <hil/drivers/force_plate.hpp>
+#include <hil/drivers/netft_driver.hpp>
 
 namespace hil::drivers {
 
@@ -143,11 +144,28 @@ void ForcePlateConfig::validate() const {
   if (startup_tries < 1) throw ConfigError("startup_tries", "must be ≥ 1");
   if (tare_samples < 1) throw ConfigError("tare_samples", "must be ≥ 1");
   if (protocol == ForcePlateProtocol::declarative) validate_signals(signals);
+  if (protocol == ForcePlateProtocol::ati_netft_can) {
+    if (base_id > netft_can::kMaxBase)
+      throw ConfigError("base_id", "the Net F/T's CAN base address must be 0..0x7F9 (answers on base+5, base+6)");
+    (void)netft_calibration.newtons_per_count();
+    (void)netft_calibration.newton_metres_per_count();
+  }
   if (protocol == ForcePlateProtocol::ati_netft_rdt) {
     if (host.empty()) throw ConfigError("host", "the Net F/T box's address is needed (its web page shows it; factory 192.168.1.1)");
     if (port < 1 || port > 65535) throw ConfigError("port", "must be 1..65535, got " + std::to_string(port));
     (void)netft_calibration.newtons_per_count();  // names counts_per_force / force_unit
     (void)netft_calibration.newton_metres_per_count();
+  }
+  if (protocol == ForcePlateProtocol::robotiq_ft300) {
+    if (serial_device.empty()) throw ConfigError("device", "the FT 300's serial port is needed (e.g. /dev/ttyUSB0)");
+    if (serial_baud != robotiq::kBaud)
+      throw ConfigError("baud", "the FT 300 speaks at 19200 baud only, got " + std::to_string(serial_baud));
+    if (modbus_slave < 1 || modbus_slave > 247)
+      throw ConfigError("slave", "must be 1..247 (the FT 300's is 9), got " + std::to_string(modbus_slave));
+    // 19200 baud carries one 6-register read (25 bytes each way, with the gaps) about every 15 ms.
+    if (!robotiq_stream && rate_hz > 50.0)
+      throw ConfigError("rate_hz",
+                        "polling the FT 300 over Modbus reaches 50 Hz at most; allow the stream-start write for its 100 Hz stream");
   }
 }
 
@@ -156,13 +174,18 @@ const char* to_string(ForcePlateProtocol p) noexcept {
     case ForcePlateProtocol::ati_netcanoem: return "ati_netcanoem";
     case ForcePlateProtocol::declarative: return "declarative";
     case ForcePlateProtocol::ati_netft_rdt: return "ati_netft_rdt";
+    case ForcePlateProtocol::robotiq_ft300: return "robotiq_ft300";
+    case ForcePlateProtocol::ati_netft_can: return "ati_netft_can";
   }
   return "?";
 }
 
 double ForcePlateConfig::response_timeout() const noexcept {
   if (response_timeout_s > 0.0) return response_timeout_s;
-  return protocol == ForcePlateProtocol::ati_netcanoem ? 0.9 / rate_hz : 3.0 / rate_hz;
+  if (protocol == ForcePlateProtocol::robotiq_ft300 && !robotiq_stream) return 0.1;  // a Modbus RTU answer at 19200 baud
+  // Request and answer within the period on CAN; a pushed stream may be a few periods late.
+  const bool request_answer = protocol == ForcePlateProtocol::ati_netcanoem || protocol == ForcePlateProtocol::ati_netft_can;
+  return request_answer ? 0.9 / rate_hz : 3.0 / rate_hz;
 }
 
 // ---- common part -------------------------------------------------------------------------------
@@ -279,6 +302,7 @@ void ForcePlate::problem(const char* what) noexcept {
 
 std::unique_ptr<CanForcePlate> make_force_plate(const ForcePlateConfig& cfg, std::unique_ptr<CanChannel> channel) {
   if (cfg.protocol == ForcePlateProtocol::declarative) return std::make_unique<DeclarativeForcePlate>(cfg, std::move(channel));
+  if (cfg.protocol == ForcePlateProtocol::ati_netft_can) return std::make_unique<NetFtCanDriver>(cfg, std::move(channel));
   return std::make_unique<AtiNetCanOemDriver>(cfg, std::move(channel));
 }
 

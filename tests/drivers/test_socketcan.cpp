@@ -5,6 +5,9 @@
 #include <net/if.h>
 #include <sys/socket.h>
 
+#include <unistd.h>
+
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 
@@ -329,4 +332,75 @@ TEST_F(SocketCan, HilFakeRigPlateCapturedByCandump) {
     EXPECT_EQ(format_candump_line(f, name), line);
     if (!f.error && f.id == ati::frame_id(0x33, ati::kOpReadGauges) && f.len == 8) ++gauge_answers;
   }
+}
+
+// `hil fake-rig` playing a Net F/T box in CAN mode: can-utils' cansend (an independent peer) asks
+// for short data and candump sees the two little-endian answers on base+5 and base+6; then the
+// driver reads the same box through SocketCAN.
+TEST_F(SocketCan, HilFakeRigNetFtBoxAnswersCansend) {
+  if (!have_tool("candump") || !have_tool("cansend")) GTEST_SKIP() << "can-utils not installed";
+  const std::string hil = HIL_EXECUTABLE;
+  const std::string dir = std::filesystem::temp_directory_path() / ("hil-netft-can-" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const std::string rig = dir + "/box.yaml";
+  {
+    std::FILE* f = std::fopen(rig.c_str(), "w");
+    ASSERT_NE(f, nullptr);
+    std::fprintf(f,
+                 "format_version: 1\nname: box\nframes:\n  - {name: force_plate, parent: world}\ndevices:\n  force_plate:\n"
+                 "    protocol: ati_netft_can\n    interface: %s\n    base_id: 0x120\n    counts_per_force: 100\n"
+                 "    counts_per_torque: 1000\n    rate_hz: 100\n",
+                 can_iface().c_str());
+    std::fclose(f);
+  }
+  hil::test::Child dump({tool("candump"), "-L", can_iface()});
+  auto tx = open();
+  std::string line;
+  std::thread t([&] {
+    for (int i = 0; i < 200 && line.empty(); ++i) {
+      tx->send(text("7FE#"), 100ms);
+      std::this_thread::sleep_for(20ms);
+    }
+  });
+  line = dump.read_line();
+  t.join();
+  ASSERT_FALSE(line.empty());
+  // Speed ~0 holds the first sample of the example run: fx 0.1 N, fz 0.05 N (10 and 5 counts).
+  hil::test::Child fake({hil, "--log-level", "warn", "fake-rig", "--rig", rig, "--run",
+                         std::string(HIL_SOURCE_DIR) + "/examples/runs/press_slide", "--no-robot", "--speed", "1e-9", "--duration", "120"});
+  ASSERT_TRUE(fake.ok());
+  ASSERT_NE(fake.read_line().find("Net F/T CAN base address 0x120"), std::string::npos);
+  hil::test::Child send({tool("cansend"), can_iface(), "120#02"});
+  ASSERT_EQ(send.wait(), 0);
+  CanFrame first, second;
+  std::string name;
+  bool have_first = false, have_second = false;
+  while (!(have_first && have_second)) {
+    line = dump.read_line();
+    ASSERT_FALSE(line.empty()) << "candump ended before the box answered";
+    CanFrame f;
+    ASSERT_EQ(parse_candump_line(line, f, name), "") << line;
+    if (f.id == 0x125) first = f, have_first = true;
+    if (f.id == 0x126) second = f, have_second = true;
+  }
+  ASSERT_EQ(first.len, 8U);
+  ASSERT_EQ(second.len, 8U);
+  EXPECT_EQ(first.data[0] | (first.data[1] << 8), 10) << "Fx, least significant byte first";
+  EXPECT_EQ(second.data[0] | (second.data[1] << 8), 5) << "Fz";
+  EXPECT_EQ(second.data[4] | (second.data[5] << 8), 0) << "status";
+  ForcePlateConfig pc;
+  pc.protocol = ForcePlateProtocol::ati_netft_can;
+  pc.base_id = 0x120;
+  pc.netft_calibration = {100.0, 1000.0, "N", "Nm"};
+  pc.rate_hz = 100.0;
+  pc.response_timeout_s = 0.5;
+  pc.startup_timeout_s = 1.0;
+  auto plate = make_force_plate(pc, open());
+  plate->start();
+  WrenchSample s;
+  ASSERT_EQ(plate->poll(s), PollStatus::ok) << plate->last_problem();
+  EXPECT_NEAR(s.w_fp[0], 0.1, 1e-9);
+  EXPECT_NEAR(s.w_fp[2], 0.05, 1e-9);
+  EXPECT_NE(s.stamp, StampSource::none) << "kernel receive stamps";
+  std::filesystem::remove_all(dir);
 }

@@ -17,6 +17,7 @@
 #include <hil/acquisition/acquirer.hpp>
 #include <hil/acquisition/identity.hpp>
 #include <hil/drivers/netft_driver.hpp>
+#include <hil/drivers/robotiq_driver.hpp>
 #include <hil/drivers/socketcan.hpp>
 #include <hil/error/error.hpp>
 #include <hil/format/ros_frames.hpp>
@@ -43,26 +44,39 @@ struct RigDevices {
   std::shared_ptr<drivers::CanLoopbackBus> loop;
   std::unique_ptr<drivers::FakeNetCanOemBoard> fake_plate;
   std::unique_ptr<drivers::FakeNetFtRdt> fake_netft;
+  std::unique_ptr<drivers::FakeRobotiqFt300> fake_ft300;
   std::unique_ptr<drivers::FakeRobotController> fake_robot;
   std::unique_ptr<drivers::CanChannel> channel;  ///< CAN protocols only
 
-  bool can() const { return plate_cfg.protocol != drivers::ForcePlateProtocol::ati_netft_rdt; }
+  bool rdt() const { return plate_cfg.protocol == drivers::ForcePlateProtocol::ati_netft_rdt; }
+  bool ft300() const { return plate_cfg.protocol == drivers::ForcePlateProtocol::robotiq_ft300; }
+  bool can() const { return !rdt() && !ft300(); }
   void start_fakes() {
     if (fake_plate) fake_plate->start();
     if (fake_netft) fake_netft->start();
+    if (fake_ft300) fake_ft300->start();
     if (fake_robot) fake_robot->start();
   }
   void stop_fakes() {
     if (fake_plate) fake_plate->stop();
     if (fake_netft) fake_netft->stop();
+    if (fake_ft300) fake_ft300->stop();
     if (fake_robot) fake_robot->stop();
   }
-  /// The plate's driver, on the channel for CAN protocols (consumed), on its own UDP socket for RDT.
+  /// The plate's driver: on the channel for CAN protocols (consumed), on its own UDP socket for
+  /// RDT, on its serial port for the FT 300.
   std::unique_ptr<drivers::ForcePlate> make_plate() {
-    if (!can()) return std::make_unique<drivers::NetFtRdtDriver>(plate_cfg);
+    if (rdt()) return std::make_unique<drivers::NetFtRdtDriver>(plate_cfg);
+    if (ft300()) return std::make_unique<drivers::RobotiqFt300Driver>(plate_cfg);
     return drivers::make_force_plate(plate_cfg, std::move(channel));
   }
-  std::string link() const { return can() ? channel->name() : "udp " + plate_cfg.host + ":" + std::to_string(plate_cfg.port); }
+  std::string link() const {
+    if (rdt()) return "udp " + plate_cfg.host + ":" + std::to_string(plate_cfg.port);
+    if (ft300()) return plate_cfg.serial_device;
+    return channel->name();
+  }
+  /// The run's source kind for the plate.
+  const char* source_kind() const { return rdt() ? "udp" : ft300() ? "serial" : "can"; }
 };
 
 RigDevices open_rig_devices(const AcquireOptions& o) {
@@ -85,19 +99,32 @@ RigDevices open_rig_devices(const AcquireOptions& o) {
     const auto played = format::load_run(o.play);
     auto scenario = std::make_shared<const drivers::Scenario>(rig_service::scenario_from_run(played, d.T_world_base, false));
     d.play_duration_s = scenario->duration_s() / o.play_speed;
-    if (!d.can()) {
+    if (d.ft300()) {
+      // The fake sensor on a pseudo-terminal; the driver opens its slave side.
+      drivers::FakeFt300Config fc;
+      fc.stream_rate_hz = d.plate_cfg.robotiq_stream ? d.plate_cfg.rate_hz : drivers::robotiq::kStreamRateHz;
+      fc.T_fp_sensor = d.plate_cfg.T_fp_sensor;
+      fc.clock.speed = o.play_speed;
+      fc.stream = o.stream_faults;
+      fc.modbus = o.plate_modbus_faults;
+      d.fake_ft300 = std::make_unique<drivers::FakeRobotiqFt300>(fc, scenario);
+      d.plate_cfg.serial_device = d.fake_ft300->device_path();
+    }
+    if (d.rdt()) {
       // The fake box on 127.0.0.1 (an ephemeral port); the driver is pointed at it.
       drivers::FakeNetFtConfig nc;
       nc.rate_hz = d.plate_cfg.rate_hz;
       nc.calibration = d.plate_cfg.netft_calibration;
       nc.T_fp_sensor = d.plate_cfg.T_fp_sensor;
       nc.clock.speed = o.play_speed;
-      nc.faults = o.netft_faults;
+      nc.faults = o.stream_faults;
       d.fake_netft = std::make_unique<drivers::FakeNetFtRdt>(nc, scenario);
       d.plate_cfg.host = "127.0.0.1";
       d.plate_cfg.port = d.fake_netft->port();
     }
     drivers::FakeNetCanOemConfig fc;
+    fc.netft_box = d.plate_cfg.protocol == drivers::ForcePlateProtocol::ati_netft_can;
+    if (fc.netft_box) fc.box_calibration = d.plate_cfg.netft_calibration;
     fc.base_id = d.plate_cfg.base_id;
     fc.T_fp_sensor = d.plate_cfg.T_fp_sensor;
     fc.clock.speed = o.play_speed;
@@ -148,7 +175,7 @@ AcquireResult run_acquisition(const AcquireOptions& o, const std::function<void(
   info.rig = rig.name;
   info.output_rate_hz = o.output_rate_hz;
   if (d.can()) info.sources.push_back({"force_plate", "can", pcfg.rate_hz, "raw/force_plate.candump.log"});
-  else info.sources.push_back({"force_plate", "udp", pcfg.rate_hz, "raw/force_plate.csv"});
+  else info.sources.push_back({"force_plate", d.source_kind(), pcfg.rate_hz, "raw/force_plate.csv"});
   if (with_robot) info.sources.push_back({"robot", "modbus", mcfg.rate_hz, "raw/robot.csv"});
   info.notes = o.play.empty() ? "Recorded by hil acquire." : "Recorded by hil acquire from the fake rig playing " + o.play + ".";
   const auto start_ns = acquisition::realtime_ns();

@@ -1,5 +1,6 @@
 #include <hil/rig_service/drivers_from_rig.hpp>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -41,7 +42,12 @@ drivers::ForcePlateConfig force_plate_config(const format::RigSpec& rig) {
     if (d.protocol == "ati_netcanoem") c.protocol = drivers::ForcePlateProtocol::ati_netcanoem;
     else if (d.protocol == "declarative") c.protocol = drivers::ForcePlateProtocol::declarative;
     else if (d.protocol == "ati_netft_rdt") c.protocol = drivers::ForcePlateProtocol::ati_netft_rdt;
-    else throw drivers::ConfigError("protocol", "'" + d.protocol + "' is not a protocol (ati_netcanoem, declarative, ati_netft_rdt)");
+    else if (d.protocol == "robotiq_ft300") c.protocol = drivers::ForcePlateProtocol::robotiq_ft300;
+    else if (d.protocol == "ati_netft_can") c.protocol = drivers::ForcePlateProtocol::ati_netft_can;
+    else
+      throw drivers::ConfigError("protocol",
+                                 "'" + d.protocol +
+                                     "' is not a protocol (ati_netcanoem, declarative, ati_netft_rdt, ati_netft_can, robotiq_ft300)");
     c.interface = d.interface;
     c.base_id = d.base_id;
     c.host = d.host;
@@ -58,6 +64,10 @@ drivers::ForcePlateConfig force_plate_config(const format::RigSpec& rig) {
     } else {
       c.netft_calibration = {d.counts_per_force, d.counts_per_torque, d.force_unit, d.torque_unit};
     }
+    c.serial_device = d.serial_device;
+    c.serial_baud = d.baud;
+    c.modbus_slave = d.slave;
+    c.robotiq_stream = std::find(d.allowed_writes.begin(), d.allowed_writes.end(), "stream_start") != d.allowed_writes.end();
     c.rate_hz = d.rate_hz;
     c.T_fp_sensor = d.T_fp_sensor.isometry();
     c.saturation_limits = d.saturation_limits;

@@ -39,9 +39,9 @@ RunInfo parse_run_info(const std::string& text, const std::string& display_name)
       SourceSpec src;
       src.name = s.req("name").str();
       src.kind = s.req("kind").str();
-      static const std::vector<std::string> kinds{"can", "modbus", "udp", "simulation", "import", "other"};
+      static const std::vector<std::string> kinds{"can", "modbus", "udp", "serial", "simulation", "import", "other"};
       if (std::find(kinds.begin(), kinds.end(), src.kind) == kinds.end())
-        s.child("kind").fail("expected can, modbus, udp, simulation, import or other, found '" + src.kind + "'");
+        s.child("kind").fail("expected can, modbus, udp, serial, simulation, import or other, found '" + src.kind + "'");
       if (s.has("rate_hz")) src.rate_hz = s.child("rate_hz").num_positive();
       src.raw = s.str("raw", "");
       if (s.has("identity")) {

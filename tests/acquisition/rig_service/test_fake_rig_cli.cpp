@@ -94,3 +94,33 @@ TEST(HilFakeRig, StatusWindowsAreChecked) {
   ASSERT_TRUE(good.ok());
   EXPECT_EQ(good.wait(), 0) << "a well-formed status window";
 }
+
+// A rig whose plate is a Robotiq FT 300: `hil fake-rig --serial-link` plays the sensor on a
+// pseudo-terminal linked where the rig's serial_device says, and `hil acquire --check` reads its
+// identity and a wrench through it; the link is gone when the fake stops.
+TEST(HilFakeRig, ServesAnFt300ThatAcquireChecks) {
+  test::TempDir tmp;
+  const std::string link = tmp.path() + "/ft300";
+  const auto rig = tmp.file("ft300.yaml", "format_version: 1\nname: ft300_bench\nframes:\n  - {name: force_plate, parent: world}\n"
+                                          "devices:\n  force_plate:\n    protocol: robotiq_ft300\n    serial_device: " +
+                                              link + "\n    allowed_writes: [stream_start]\n");
+  hil::test::Child fake({kHil, "--log-level", "warn", "fake-rig", "--rig", rig, "--no-robot", "--serial-link", link, "--duration", "60"});
+  ASSERT_TRUE(fake.ok());
+  const std::string line = fake.read_line();
+  ASSERT_NE(line.find("Robotiq FT 300 on /dev/pts/"), std::string::npos) << line;
+  ASSERT_NE(line.find(" as " + link), std::string::npos) << line;
+  hil::test::Child check({kHil, "--log-level", "warn", "acquire", "--rig", rig, "--check", "--no-robot"});
+  ASSERT_TRUE(check.ok());
+  std::string out, l;
+  while (!(l = check.read_line()).empty()) out += l + "\n";
+  EXPECT_EQ(check.wait(), 0) << out;
+  EXPECT_NE(out.find("force plate (robotiq_ft300 on " + link + ")"), std::string::npos) << out;
+  EXPECT_NE(out.find("FTS-3.1.4"), std::string::npos) << out;
+  EXPECT_NE(out.find("FAK-0300 (2026)"), std::string::npos) << out;
+  EXPECT_NE(out.find("wrench"), std::string::npos) << out;
+  // Options that do not apply to a serial sensor are refused, by name.
+  hil::test::Child wrong({kHil, "--log-level", "warn", "fake-rig", "--rig", rig, "--no-robot", "--plate-status", "0x4@0:1", "--duration",
+                          "0.2"});
+  ASSERT_TRUE(wrong.ok());
+  EXPECT_NE(wrong.wait(), 0);
+}

@@ -4,37 +4,23 @@
 // never good samples, and the losses are counted where the run says so.
 #include <gtest/gtest.h>
 
-#include <fstream>
-#include <regex>
-#include <sstream>
-
 #include <hil/acquisition/streams.hpp>
 #include <hil/format/csv.hpp>
 #include <hil/format/run.hpp>
 #include <hil/rig_service/acquire.hpp>
 #include <hil/test/files.hpp>
+#include "bench_rigs.hpp"
 
 using namespace hil;
 
 namespace {
 
-std::string read(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
 /// The shipped bench with its force plate replaced by a Net F/T box reading the shipped page.
 std::string netft_rig(const test::TempDir& tmp) {
-  std::string rig = read(std::string(HIL_SOURCE_DIR) + "/examples/rigs/press_bench.yaml");
-  const std::regex plate(R"(  force_plate:\n(    .*\n)+)");
   const std::string page = std::string(HIL_SOURCE_DIR) + "/examples/netft/netftapi2.xml";
-  const std::string with = "  force_plate:\n    protocol: ati_netft_rdt\n    host: 127.0.0.1\n    port: 49152\n    calibration_xml: " +
-                           page + "\n    rate_hz: 1000\n    saturation_limits: [660, 660, 1980, 60, 60, 60]\n";
-  const std::string out = std::regex_replace(rig, plate, with, std::regex_constants::format_first_only);
-  EXPECT_NE(out, rig) << "the example rig's force_plate section was not found";
-  return tmp.file("netft_bench.yaml", out);
+  return test::bench_with_plate(tmp, "netft_bench.yaml",
+                                "    protocol: ati_netft_rdt\n    host: 127.0.0.1\n    port: 49152\n    calibration_xml: " + page +
+                                    "\n    rate_hz: 1000\n    saturation_limits: [660, 660, 1980, 60, 60, 60]\n");
 }
 
 }  // namespace
@@ -48,10 +34,10 @@ TEST(NetFtAcquire, ARunThroughTheBoxsStreamLosesNothingDeliveredAndFlagsStatusBi
   o.duration_s = 3.0;
   o.no_bus = true;
   o.progress = false;
-  o.netft_faults.drop_fraction = 0.02;
-  o.netft_faults.corrupt_fraction = 0.01;
-  o.netft_faults.duplicate_fraction = 0.01;
-  o.netft_faults.status.push_back({{1.0, 0.3}, 0x00000004});
+  o.stream_faults.drop_fraction = 0.02;
+  o.stream_faults.corrupt_fraction = 0.01;
+  o.stream_faults.duplicate_fraction = 0.01;
+  o.stream_faults.status.push_back({{1.0, 0.3}, 0x00000004});
   const auto r = rig_service::run_acquisition(o, nullptr);
   ASSERT_GT(r.samples, 100U);
   const acquisition::DeviceHealth* plate = nullptr;
@@ -76,5 +62,45 @@ TEST(NetFtAcquire, ARunThroughTheBoxsStreamLosesNothingDeliveredAndFlagsStatusBi
   bool udp = false;
   for (const auto& s : run.info.sources) udp = udp || (s.name == "force_plate" && s.kind == "udp");
   EXPECT_TRUE(udp);
-  EXPECT_NE(read(o.out + "/run.yaml").find("ati_netft_rdt"), std::string::npos);
+  EXPECT_NE(test::read_text(o.out + "/run.yaml").find("ati_netft_rdt"), std::string::npos);
+}
+
+// The same box in CAN mode (short data), polled over the in-process bus as `hil acquire --play`
+// does: answers dropped and cut short, a status window. Every reading the driver delivered is
+// recorded; flagged readings are device faults in the recording.
+TEST(NetFtAcquire, ARunThroughTheBoxsCanModeRecordsEveryReadingAndFlagsStatusBits) {
+  test::TempDir tmp;
+  rig_service::AcquireOptions o;
+  o.rig = test::bench_with_plate(tmp, "netft_can_bench.yaml",
+                                 "    protocol: ati_netft_can\n    interface: can0\n    base_id: 0x120\n    counts_per_force: 50\n"
+                                 "    counts_per_torque: 1000\n    rate_hz: 500\n");
+  o.out = tmp.path() + "/run";
+  o.play = std::string(HIL_SOURCE_DIR) + "/examples/runs/press_slide";
+  o.duration_s = 3.0;
+  o.no_bus = true;
+  o.progress = false;
+  o.plate_faults.drop_fraction = 0.02;
+  o.plate_faults.corrupt_fraction = 0.02;
+  o.plate_faults.status.push_back({{1.0, 0.3}, 0x0004});
+  const auto r = rig_service::run_acquisition(o, nullptr);
+  ASSERT_GT(r.samples, 100U);
+  const acquisition::DeviceHealth* plate = nullptr;
+  for (const auto& h : r.health)
+    if (h.device == "force_plate") plate = &h;
+  ASSERT_NE(plate, nullptr);
+  const auto raw = format::read_csv(o.out + "/raw/force_plate.csv", format::CsvOptions{});
+  EXPECT_EQ(raw.rows(), plate->samples) << "every reading the driver delivered is recorded";
+  EXPECT_GT(plate->samples, 1000U);
+  EXPECT_GT(plate->errors, 0U) << "cut answers are reported";
+  EXPECT_GT(plate->device_faults, 50U) << "0.3 s of flagged readings at 500 Hz";
+  format::CsvOptions with_quality;
+  with_quality.required = {"t", "quality"};
+  const auto samples = format::read_csv(o.out + "/samples.csv", with_quality);
+  std::size_t flagged = 0;
+  for (double q : samples.numeric("quality")) flagged += (static_cast<std::uint32_t>(q) & acquisition::kDeviceFault) != 0;
+  EXPECT_GT(flagged, 5U);
+  EXPECT_LT(flagged, samples.rows() / 2);
+  EXPECT_NE(test::read_text(o.out + "/run.yaml").find("ati_netft_can"), std::string::npos);
+  // The CAN frames both ways are recorded as candump -L beside the readings.
+  EXPECT_NE(test::read_text(o.out + "/raw/force_plate.candump.log").find(" 120#02"), std::string::npos);
 }

@@ -126,6 +126,44 @@ TEST(Rig, NetCanOemDefaultsToTheFactoryBaseIdAndReadsItsEarlierName) {
   EXPECT_TRUE(fails_with(parse(kRig + "devices:\n  force_plate: {base_id: 0x80}\n"), 0, "devices.force_plate.base_id", "0..127"));
 }
 
+TEST(Rig, Ft300SectionsAndTheirMistakes) {
+  const std::string head = kRig + "devices:\n  force_plate:\n    protocol: robotiq_ft300\n";
+  const auto ro = parse_rig(head + "    serial_device: /dev/ttyUSB0\n", "rig.yaml");
+  EXPECT_EQ(ro.devices.force_plate->serial_device, "/dev/ttyUSB0");
+  EXPECT_EQ(ro.devices.force_plate->slave, 9);
+  EXPECT_TRUE(ro.devices.force_plate->allowed_writes.empty()) << "read-only unless the rig says otherwise";
+  EXPECT_EQ(ro.devices.force_plate->rate_hz, 50.0);
+  const auto st = parse_rig(head + "    serial_device: /dev/ttyUSB1\n    allowed_writes: [stream_start]\n    slave: 10\n", "rig.yaml");
+  ASSERT_EQ(st.devices.force_plate->allowed_writes.size(), 1U);
+  EXPECT_EQ(st.devices.force_plate->rate_hz, 100.0);
+  EXPECT_EQ(st.devices.force_plate->slave, 10);
+  EXPECT_TRUE(fails_with(parse(head + "    rate_hz: 100\n"), 0, "devices.force_plate.serial_device", "serial port"));
+  EXPECT_TRUE(fails_with(parse(head + "    serial_device: /dev/x\n    allowed_writes: [zero_sensor]\n"), 0,
+                         "devices.force_plate.allowed_writes[0]", "'stream_start'"));
+  EXPECT_TRUE(fails_with(parse(head + "    serial_device: /dev/x\n    baud: 115200\n"), 0, "devices.force_plate.baud", "19200"));
+  EXPECT_TRUE(fails_with(parse(head + "    serial_device: /dev/x\n    slave: 0\n"), 0, "devices.force_plate.slave", "1..247"));
+  EXPECT_TRUE(fails_with(parse(head + "    serial_device: /dev/x\n    interface: can0\n"), 0, "devices.force_plate.interface",
+                         "serial line"));
+  EXPECT_TRUE(fails_with(parse(kRig + "devices:\n  force_plate: {protocol: ati_netcanoem, allowed_writes: [stream_start]}\n"), 0,
+                         "devices.force_plate.allowed_writes", "only the robotiq_ft300 protocol"));
+}
+
+TEST(Rig, NetFtCanSectionsAndTheirMistakes) {
+  const std::string head = kRig + "devices:\n  force_plate:\n    protocol: ati_netft_can\n";
+  const auto rig = parse_rig(head + "    interface: can1\n    base_id: 0x7F9\n    counts_per_force: 50\n    counts_per_torque: 1000\n",
+                             "rig.yaml");
+  EXPECT_EQ(rig.devices.force_plate->base_id, 0x7F9U);
+  EXPECT_EQ(rig.devices.force_plate->counts_per_force, 50.0);
+  EXPECT_TRUE(fails_with(parse(head + "    counts_per_force: 50\n    counts_per_torque: 1000\n"), 0, "devices.force_plate.base_id",
+                         "base address"));
+  EXPECT_TRUE(fails_with(parse(head + "    base_id: 0x7FA\n    counts_per_force: 50\n    counts_per_torque: 1000\n"), 0,
+                         "devices.force_plate.base_id", "0..0x7F9"));
+  EXPECT_TRUE(fails_with(parse(head + "    base_id: 0x100\n    counts_per_force: 50\n"), 0, "devices.force_plate.counts_per_torque",
+                         "16-bit CAN values"));
+  EXPECT_TRUE(fails_with(parse(head + "    base_id: 0x100\n    calibration_xml: box.xml\n"), 0, "devices.force_plate.calibration_xml",
+                         "is CAN"));
+}
+
 TEST(Rig, NetFtBoxSectionsAndTheirMistakes) {
   const std::string head = kRig + "devices:\n  force_plate:\n    protocol: ati_netft_rdt\n";
   const auto rig = parse_rig(head + "    host: 192.168.1.1\n    calibration_xml: box.xml\n", "rig.yaml");

@@ -1,11 +1,13 @@
-// `hil fake-rig`: a fake ATI NETCANOEM force plate on a SocketCAN interface and a fake robot
-// controller (Modbus TCP on 127.0.0.1), playing a recorded run, with fault injection.
+// `hil fake-rig`: a fake force plate (ATI NETCANOEM on a SocketCAN interface, a Net F/T box on
+// UDP, a Robotiq FT 300 on a pseudo-terminal) and a fake robot controller (Modbus TCP on 127.0.0.1), playing a recorded run, with fault
+// injection.
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
 #include <atomic>
 #include <csignal>
 #include <cstdio>
+#include <filesystem>
 #include <optional>
 #include <thread>
 
@@ -36,6 +38,9 @@ struct FakeRigOptions {
   double drop = 0, corrupt = 0, duplicate = 0, error_frames_hz = 0, plate_delay_s = 0;
   std::string netft_host = "127.0.0.1";
   int netft_port = -1;
+  std::string serial_link;  ///< FT 300: a symlink to the pseudo-terminal, for the rig's serial_device
+  double noise = 0;
+  std::vector<std::string> plate_exception_windows;
   std::vector<std::string> silent, bus_off, plate_status;
   double plate_clock_offset_s = 0, plate_clock_drift_ppm = 0;
   // robot faults
@@ -123,9 +128,38 @@ int fake_rig(const FakeRigOptions& o) {
 
   std::unique_ptr<drivers::FakeNetCanOemBoard> plate;
   std::unique_ptr<drivers::FakeNetFtRdt> netft;
+  std::unique_ptr<drivers::FakeRobotiqFt300> ft300;
   std::unique_ptr<drivers::FakeRobotController> robot;
   const bool rdt = rig.devices.force_plate && rig.devices.force_plate->protocol == "ati_netft_rdt";
-  if (!o.no_plate && rdt) {
+  const bool serial = rig.devices.force_plate && rig.devices.force_plate->protocol == "robotiq_ft300";
+  if (!serial && (!o.serial_link.empty() || o.noise > 0 || !o.plate_exception_windows.empty()))
+    throw std::runtime_error("fake-rig: --serial-link, --noise and --plate-exception-window are the FT 300's; the rig's plate is not one");
+  if (!o.no_plate && serial) {
+    // The FT 300 on a pseudo-terminal; --serial-link names it as the rig's serial_device does.
+    const auto& fp = *rig.devices.force_plate;
+    drivers::FakeFt300Config fc;
+    fc.stream_rate_hz = fp.allowed_writes.empty() ? drivers::robotiq::kStreamRateHz : fp.rate_hz;
+    fc.slave = fp.slave;
+    fc.T_fp_sensor = fp.T_fp_sensor.isometry();
+    plate_faults(o, fc.stream);
+    fc.stream.status.clear();
+    if (!o.plate_status.empty() || !o.bus_off.empty() || o.error_frames_hz > 0 || o.duplicate > 0)
+      throw std::runtime_error(
+          "fake-rig: --plate-status, --bus-off, --error-frames and --duplicate do not apply to an FT 300 on a serial line");
+    fc.noise_fraction = o.noise;
+    fc.modbus.exception_windows = windows(o.plate_exception_windows, "--plate-exception-window");
+    fc.clock = {o.plate_clock_offset_s, o.plate_clock_drift_ppm, o.speed};
+    fc.seed = o.seed;
+    ft300 = std::make_unique<drivers::FakeRobotiqFt300>(fc, scenario);
+    if (!o.serial_link.empty()) {
+      std::error_code ec;
+      std::filesystem::remove(o.serial_link, ec);
+      std::filesystem::create_symlink(ft300->device_path(), o.serial_link, ec);
+      if (ec) throw std::runtime_error("fake-rig: --serial-link " + o.serial_link + ": " + ec.message());
+    }
+    std::printf("fake-rig: force plate Robotiq FT 300 on %s%s%s\n", ft300->device_path().c_str(), o.serial_link.empty() ? "" : " as ",
+                o.serial_link.c_str());
+  } else if (!o.no_plate && rdt) {
     // The Net F/T box on 127.0.0.0/8 at the rig's port: the driver finds it with the rig's
     // settings when its host is a loopback address.
     const auto& fp = *rig.devices.force_plate;
@@ -148,8 +182,11 @@ int fake_rig(const FakeRigOptions& o) {
     std::string iface = o.can_iface;
     if (rig.devices.force_plate) {
       const auto& fp = *rig.devices.force_plate;
-      if (fp.protocol != "ati_netcanoem")
-        throw std::runtime_error("fake-rig: the fake force plate speaks ati_netcanoem; the rig's plate is " + fp.protocol);
+      if (fp.protocol != "ati_netcanoem" && fp.protocol != "ati_netft_can")
+        throw std::runtime_error("fake-rig: a fake CAN force plate speaks ati_netcanoem or ati_netft_can; the rig's plate is " +
+                                 fp.protocol);
+      pc.netft_box = fp.protocol == "ati_netft_can";
+      if (pc.netft_box) pc.box_calibration = rig_service::force_plate_config(rig).netft_calibration;
       pc.base_id = fp.base_id;
       pc.T_fp_sensor = fp.T_fp_sensor.isometry();
       if (iface.empty()) iface = fp.interface;
@@ -164,10 +201,13 @@ int fake_rig(const FakeRigOptions& o) {
     drivers::SocketCanOptions so;
     so.interface = iface;
     so.channel.error_mask = 0;
-    so.channel.filters = {drivers::CanFilter::masked(pc.base_id << 4, 0x7F0)};
+    // Only the requests addressed to the fake: a NETCANOEM board's 16 ids, or the box's one.
+    so.channel.filters = {pc.netft_box ? drivers::CanFilter::masked(pc.base_id, 0x7FF)
+                                       : drivers::CanFilter::masked(pc.base_id << 4, 0x7F0)};
     so.timestamps = false;
     plate = std::make_unique<drivers::FakeNetCanOemBoard>(pc, drivers::SocketCanChannel::open(so), scenario);
-    std::printf("fake-rig: force plate ATI NETCANOEM base 0x%02X on %s\n", pc.base_id, iface.c_str());
+    if (pc.netft_box) std::printf("fake-rig: force plate ATI Net F/T CAN base address 0x%03X on %s\n", pc.base_id, iface.c_str());
+    else std::printf("fake-rig: force plate ATI NETCANOEM base 0x%02X on %s\n", pc.base_id, iface.c_str());
   }
   if (!o.no_robot) {
     drivers::FakeRobotConfig rc;
@@ -190,7 +230,7 @@ int fake_rig(const FakeRigOptions& o) {
     robot = std::make_unique<drivers::FakeRobotController>(rc, scenario);
     std::printf("fake-rig: robot controller Modbus TCP %s:%d map %s\n", rc.host.c_str(), robot->port(), rc.map.name.c_str());
   }
-  if (!plate && !netft && !robot) throw std::runtime_error("fake-rig: --no-plate and --no-robot leave nothing to fake");
+  if (!plate && !netft && !ft300 && !robot) throw std::runtime_error("fake-rig: --no-plate and --no-robot leave nothing to fake");
   std::fflush(stdout);
 
   g_stop = false;
@@ -198,6 +238,7 @@ int fake_rig(const FakeRigOptions& o) {
   std::signal(SIGTERM, on_fake_rig_signal);
   if (plate) plate->start();
   if (netft) netft->start();
+  if (ft300) ft300->start();
   if (robot) robot->start();
   const auto start = std::chrono::steady_clock::now();
   const double scenario_end = scenario->duration_s() / o.speed;
@@ -214,7 +255,12 @@ int fake_rig(const FakeRigOptions& o) {
   }
   if (plate) plate->stop();
   if (netft) netft->stop();
+  if (ft300) ft300->stop();
   if (robot) robot->stop();
+  if (ft300 && !o.serial_link.empty()) {
+    std::error_code ec;
+    std::filesystem::remove(o.serial_link, ec);
+  }
   if (plate) {
     const auto s = plate->stats();
     spdlog::info("fake-rig: plate requests {}, gauge answers {}, frames sent {}, dropped {}, corrupted {}, error frames {}, ignored {}",
@@ -226,6 +272,13 @@ int fake_rig(const FakeRigOptions& o) {
                  "datagrams corrupted {}, duplicated {}, flagged {}",
                  s.requests, s.starts, s.stops, s.biases, s.records, s.records_sent, s.records_dropped, s.records_silenced,
                  s.datagrams_corrupted, s.datagrams_duplicated, s.records_flagged);
+  }
+  if (ft300) {
+    const auto s = ft300->stats();
+    spdlog::info("fake-rig: FT 300 requests {} (bad {}, exceptions {}), stream starts {}, stops {}, frames {}, sent {}, dropped {}, "
+                 "corrupted {}, silenced {}, noise bytes {}, overruns {}",
+                 s.requests, s.bad_requests, s.exceptions, s.stream_starts, s.stream_stops, s.frames, s.frames_sent, s.frames_dropped,
+                 s.frames_corrupted, s.frames_silenced, s.noise_bytes, s.overruns);
   }
   if (robot) {
     const auto s = robot->stats();
@@ -239,8 +292,10 @@ int fake_rig(const FakeRigOptions& o) {
 
 void add_fake_rig(CLI::App& app) {
   static FakeRigOptions o;
-  auto* cmd = app.add_subcommand("fake-rig", "Fake force plate (ATI NETCANOEM on SocketCAN, or a Net F/T box's RDT on UDP 127.0.0.1) "
-                                             "and robot controller (Modbus TCP on 127.0.0.1) playing a recorded run, with fault injection");
+  auto* cmd = app.add_subcommand(
+      "fake-rig",
+      "Fake force plate (ATI NETCANOEM on SocketCAN, a Net F/T box's RDT on UDP 127.0.0.1, or a Robotiq FT 300 on a pseudo-terminal) "
+      "and robot controller (Modbus TCP on 127.0.0.1) playing a recorded run, with fault injection");
   cmd->add_option("--rig", o.rig, "rig file (default: the run's rig.yaml)");
   cmd->add_option("--run", o.run, "run folder to replay (default: a still rig)");
   cmd->add_option("--speed", o.speed, "playback speed factor")->check(CLI::PositiveNumber)->capture_default_str();
@@ -250,7 +305,8 @@ void add_fake_rig(CLI::App& app) {
   auto* g_plate = cmd->add_option_group("force plate");
   g_plate->add_flag("--no-plate", o.no_plate, "no fake force plate");
   g_plate->add_option("--can", o.can_iface, "SocketCAN interface (default: the rig's, else vcan0)");
-  g_plate->add_option("--base-id", o.base_id, "ATI base id (default: the rig's)")->check(CLI::Range(0, 0x7F));
+  g_plate->add_option("--base-id", o.base_id, "ATI NETCANOEM base id 0..0x7F, or a Net F/T box's CAN base address (default: the rig's)")
+      ->check(CLI::Range(0, 0x7F9));
   g_plate->add_option("--drop", o.drop, "share of answer frames dropped")->check(CLI::Range(0.0, 1.0));
   g_plate->add_option("--corrupt", o.corrupt, "share of answers (CAN) or datagrams (Net F/T) sent corrupt (wrong length)")
       ->check(CLI::Range(0.0, 1.0));
@@ -258,6 +314,11 @@ void add_fake_rig(CLI::App& app) {
   g_plate->add_option("--netft-host", o.netft_host, "Net F/T: listen address (127.0.0.0/8 only)")->capture_default_str();
   g_plate->add_option("--netft-port", o.netft_port, "Net F/T: UDP port (default: the rig's; 0: any free port)")
       ->check(CLI::Range(0, 65535));
+  g_plate->add_option("--serial-link", o.serial_link,
+                      "FT 300: a symlink to its pseudo-terminal (the rig's serial_device), removed at exit");
+  g_plate->add_option("--noise", o.noise, "FT 300: share of stream frames preceded by stray bytes")->check(CLI::Range(0.0, 1.0));
+  g_plate->add_option("--plate-exception-window", o.plate_exception_windows,
+                      "FT 300: START:DURATION (s) of Modbus exception answers; repeatable");
   g_plate->add_option("--silent", o.silent, "START:DURATION (s) without answers; repeatable");
   g_plate->add_option("--bus-off", o.bus_off, "START:DURATION (s) of bus-off (error frames, silence, restart); repeatable");
   g_plate->add_option("--plate-status", o.plate_status,

@@ -5,6 +5,7 @@
 /// Product features: users test their setups with them; the tests use them as real peers.
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <array>
 #include <atomic>
 #include <chrono>
 #include <cstdint>
@@ -16,10 +17,12 @@
 #include <vector>
 
 #include <hil/drivers/ati_protocol.hpp>
+#include <hil/drivers/netft_can.hpp>
 #include <hil/drivers/netft_rdt.hpp>
 #include <hil/drivers/can_channel.hpp>
 #include <hil/drivers/force_plate.hpp>
 #include <hil/drivers/register_map.hpp>
+#include <hil/drivers/robotiq_ft300.hpp>
 
 namespace hil::drivers {
 
@@ -100,6 +103,11 @@ struct ModbusFaults {
 Matrix6d default_ati_calibration();
 
 struct FakeNetCanOemConfig {
+  /// Answer as a Net F/T box in CAN mode instead (short data on base+5 and base+6, little-endian
+  /// F/T counts at `box_calibration`; base_id is then its 11-bit base address). The faults are
+  /// the same.
+  bool netft_box = false;
+  netft::Calibration box_calibration{100.0, 1000.0, "N", "Nm"};
   std::uint32_t base_id = ati::kFactoryBase;
   Matrix6d calibration = default_ati_calibration();
   std::int32_t counts_per_force = 1000;
@@ -251,6 +259,65 @@ class FakeRobotController {
 
   struct Stats {
     std::uint64_t connections = 0, requests = 0, replies = 0, exceptions = 0, slow = 0, ignored_silent = 0, writes_refused = 0;
+  };
+  Stats stats() const;
+
+ private:
+  void run() noexcept;
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+  std::jthread thread_;
+};
+
+// ---- fake Robotiq FT 300 -------------------------------------------------------------------------
+
+struct FakeFt300Config {
+  int slave = robotiq::kSlave;
+  double stream_rate_hz = robotiq::kStreamRateHz;
+  std::string serial_prefix = "FAK";
+  std::uint32_t serial_number = 300;
+  std::uint16_t production_year = 2026;
+  std::string firmware_prefix = "FTS";
+  std::array<std::uint8_t, 3> firmware{3, 1, 4};
+  Eigen::Isometry3d T_fp_sensor = Eigen::Isometry3d::Identity();
+  bool streaming_at_start = false;  ///< a sensor a previous client left streaming
+  /// The stream: drop (frames not sent), corrupt (a byte flipped: the CRC fails), silent, deaf (the
+  /// stream-start write ignored), extra_delay_s (every frame late). A serial line neither
+  /// duplicates nor carries a status word: duplicate_fraction and status are refused.
+  StreamFaults stream;
+  double noise_fraction = 0.0;  ///< share of frames preceded by stray bytes on the line
+  ModbusFaults modbus;          ///< the Modbus side: exceptions, silence, slow answers
+  DeviceClock clock;
+  std::uint64_t seed = 1;
+};
+
+/// A Robotiq FT 300 on a pseudo-terminal pair: the driver opens device_path() as it would
+/// /dev/ttyUSB0. Modbus RTU as slave 9 (FC03 on its documented registers, FC16 to register 410
+/// starts the stream; anything else an exception), the 100 Hz stream on absolute deadlines, stopped
+/// by 50 bytes 0xFF. Bytes are checked as the sensor would: a request failing its CRC is ignored.
+class FakeRobotiqFt300 {
+ public:
+  /// Opens the pseudo-terminal. 	hrows DeviceError or ConfigError (refused faults).
+  explicit FakeRobotiqFt300(FakeFt300Config cfg, std::shared_ptr<const Scenario> scenario = nullptr);
+  ~FakeRobotiqFt300();
+  FakeRobotiqFt300(const FakeRobotiqFt300&) = delete;
+  FakeRobotiqFt300& operator=(const FakeRobotiqFt300&) = delete;
+
+  /// The port's path (/dev/pts/N).
+  const std::string& device_path() const noexcept;
+  void start();
+  void stop() noexcept;
+  void set_wrench(const Vector6d& w_fp);
+  void set_faults(const StreamFaults& stream, const ModbusFaults& modbus);
+  bool streaming() const noexcept;
+
+  struct Stats {
+    std::uint64_t requests = 0, bad_requests = 0, other_slave = 0, replies = 0, exceptions = 0, ignored_silent = 0, ignored_deaf = 0;
+    std::uint64_t stream_starts = 0, stream_stops = 0;
+    std::uint64_t frames = 0;       ///< frames made
+    std::uint64_t frames_sent = 0;  ///< frames that went out whole and intact: what a reader can receive
+    std::uint64_t frames_dropped = 0, frames_corrupted = 0, frames_silenced = 0, noise_bytes = 0;
+    std::uint64_t overruns = 0;  ///< frames the line's buffer had no room for (nobody reading)
   };
   Stats stats() const;
 

@@ -16,6 +16,7 @@
 #include <hil/drivers/ati_protocol.hpp>
 #include <hil/drivers/can_channel.hpp>
 #include <hil/drivers/netft_rdt.hpp>
+#include <hil/drivers/robotiq_ft300.hpp>
 #include <hil/drivers/status.hpp>
 #include <hil/so3/so3.hpp>
 
@@ -51,17 +52,25 @@ unsigned bytes_needed(const CanSignal& s) noexcept;
 /// \throws ConfigError naming `signals[i].<field>`.
 void validate_signals(const std::vector<CanSignal>& signals);
 
-/// ati_netcanoem and declarative speak CAN; ati_netft_rdt is the Net F/T box's UDP stream.
-enum class ForcePlateProtocol : std::uint8_t { ati_netcanoem, declarative, ati_netft_rdt };
+/// ati_netcanoem, declarative and ati_netft_can (the Net F/T box's CAN mode) speak CAN;
+/// ati_netft_rdt is the Net F/T box's UDP stream; robotiq_ft300 is Modbus RTU (and its stream) on a
+/// serial line.
+enum class ForcePlateProtocol : std::uint8_t { ati_netcanoem, declarative, ati_netft_rdt, robotiq_ft300, ati_netft_can };
 const char* to_string(ForcePlateProtocol p) noexcept;
 
 struct ForcePlateConfig {
   ForcePlateProtocol protocol = ForcePlateProtocol::ati_netcanoem;
-  std::string interface = "vcan0";                                ///< SocketCAN interface (used by whoever opens the channel)
-  std::uint32_t base_id = ati::kFactoryBase;                      ///< NETCANOEM base id (0..0x7F), factory 0x20
-  std::string host;                                               ///< ati_netft_rdt: the box's IPv4 address
-  int port = netft::kRdtPort;                                     ///< ati_netft_rdt: UDP port
-  netft::Calibration netft_calibration;                           ///< ati_netft_rdt: counts per unit (rig file or the box's netftapi2.xml)
+  std::string interface = "vcan0";            ///< SocketCAN interface (used by whoever opens the channel)
+  std::uint32_t base_id = ati::kFactoryBase;  ///< NETCANOEM base id (0..0x7F), factory 0x20
+  std::string host;                           ///< ati_netft_rdt: the box's IPv4 address
+  int port = netft::kRdtPort;                 ///< ati_netft_rdt: UDP port
+  netft::Calibration netft_calibration;       ///< ati_netft_rdt: counts per unit (rig file or the box's netftapi2.xml)
+  std::string serial_device;                  ///< robotiq_ft300: the serial port (/dev/ttyUSB0)
+  int serial_baud = robotiq::kBaud;           ///< robotiq_ft300: 19200 only
+  int modbus_slave = robotiq::kSlave;         ///< robotiq_ft300: slave id, 9
+  /// robotiq_ft300: the rig file allows the one write the driver may make (0x0200 to register
+  /// 410, which starts the 100 Hz stream). Without it the driver only reads registers 180-185.
+  bool robotiq_stream = false;
   double rate_hz = 1000.0;                                        ///< polling rate (CAN); the box's RDT output rate (ati_netft_rdt)
   Eigen::Isometry3d T_fp_sensor = Eigen::Isometry3d::Identity();  ///< sensor frame in the plate frame
   std::vector<CanSignal> signals;                                 ///< declarative only

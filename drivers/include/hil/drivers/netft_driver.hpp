@@ -9,6 +9,7 @@
 #include <vector>
 
 #include <hil/drivers/force_plate.hpp>
+#include <hil/drivers/netft_can.hpp>
 #include <hil/drivers/netft_rdt.hpp>
 
 namespace hil::drivers {
@@ -52,6 +53,29 @@ class NetFtRdtDriver final : public ForcePlate {
   double n_per_count_ = 0.0, nm_per_count_ = 0.0;
   std::int64_t last_restart_ns_ = 0;  ///< steady clock
   std::int64_t last_record_ns_ = 0;   ///< steady clock
+  bool started_ = false;
+};
+
+/// The Net F/T box in CAN mode, short data (netft_can.hpp): one request per poll, two answers. The
+/// 16-bit values are scaled by the rig's counts per unit (ForcePlateConfig::netft_calibration);
+/// any status bit marks the reading a device fault.
+class NetFtCanDriver final : public CanForcePlate {
+ public:
+  /// \throws ConfigError on a bad configuration (protocol ati_netft_can, base address, counts).
+  NetFtCanDriver(const ForcePlateConfig& cfg, std::unique_ptr<CanChannel> channel);
+  /// Asks for one reading until the box answers. \throws DeviceError naming the base address.
+  ForcePlateInfo start() override;
+  PollStatus poll(WrenchSample& out) noexcept override;
+  std::string describe_status(const WrenchSample& s) const override;
+  /// Asks the box to bias its readings at the present load (0x04). False if not sent.
+  bool bias_on_device() noexcept;
+  /// The box's sample number in the last reading handed out.
+  std::uint16_t last_sample_number() const noexcept { return last_sample_; }
+
+ private:
+  void drain() noexcept;
+  double n_per_count_ = 0.0, nm_per_count_ = 0.0;
+  std::uint16_t last_sample_ = 0;
   bool started_ = false;
 };
 

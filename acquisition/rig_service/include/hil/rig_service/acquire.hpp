@@ -30,7 +30,8 @@ struct AcquireOptions {
   double play_speed = 1.0;
   bool play_over_socketcan = false;  ///< the fake plate talks on the SocketCAN interface instead of loopback
   drivers::CanFaults plate_faults;
-  drivers::StreamFaults netft_faults;  ///< --play with an ati_netft_rdt plate
+  drivers::StreamFaults stream_faults;        ///< --play with an ati_netft_rdt or robotiq_ft300 plate (its stream)
+  drivers::ModbusFaults plate_modbus_faults;  ///< --play with a robotiq_ft300 plate: its Modbus side
   drivers::ModbusFaults robot_faults;
   bool mcap = false;                      ///< also record run.mcap (docs/mcap.md)
   std::string mcap_compression = "zstd";  ///< none | zstd | lz4

@@ -108,16 +108,22 @@ struct CanSignalSpec {
 };
 
 struct ForcePlateDeviceSpec {
-  std::string protocol = "ati_netcanoem";  ///< ati_netcanoem | declarative | ati_netft_rdt
+  std::string protocol = "ati_netcanoem";  ///< ati_netcanoem | declarative | ati_netft_rdt | ati_netft_can | robotiq_ft300
   std::string interface = "vcan0";         ///< SocketCAN interface name (CAN protocols)
   std::uint32_t base_id = 0x20;            ///< NETCANOEM base id (11-bit id = base << 4 | opcode); factory 0x20
   std::string host;                        ///< ati_netft_rdt: the box's IPv4 address
   int port = 49152;                        ///< ati_netft_rdt: RDT UDP port
   std::string calibration_xml;             ///< ati_netft_rdt: the box's netftapi2.xml saved to a file (rig-relative)
-  double counts_per_force = 0.0;           ///< ati_netft_rdt, without calibration_xml
+  double counts_per_force = 0.0;           ///< ati_netft_rdt without calibration_xml; ati_netft_can (required)
   double counts_per_torque = 0.0;
   std::string force_unit = "N", torque_unit = "Nm";
-  double rate_hz = 1000.0;
+  std::string serial_device;  ///< robotiq_ft300: the serial port
+  int baud = 19200;           ///< robotiq_ft300
+  int slave = 9;              ///< robotiq_ft300: Modbus slave id
+  /// robotiq_ft300: the writes hil may make, by name; only "stream_start" (0x0200 to register
+  /// 410) exists. Without it the sensor is only read.
+  std::vector<std::string> allowed_writes;
+  double rate_hz = 1000.0;                ///< robotiq_ft300: 100 streaming (the sensor's), 50 polling, by default
   Pose T_fp_sensor;                       ///< sensor frame in the force-plate frame
   std::vector<CanSignalSpec> signals;     ///< declarative protocol only
   std::vector<double> saturation_limits;  ///< |fx..mz| limits (N, N·m); empty = unknown
