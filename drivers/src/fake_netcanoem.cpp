@@ -70,9 +70,9 @@ struct FakeNetCanOemBoard::Impl {
   std::unique_ptr<CanChannel> channel;
   std::shared_ptr<const Scenario> scenario;
   AtiGaugeModel model;
-  mutable std::mutex m;  // guards faults, wrench, stats
+  mutable std::mutex m;  // guards faults, stats
   CanFaults faults;
-  Vector6d wrench = Vector6d::Zero();
+  WrenchSource source;
   Stats stats;
   std::atomic<bool> stop{false};
   std::chrono::steady_clock::time_point start;
@@ -84,7 +84,8 @@ struct FakeNetCanOemBoard::Impl {
   };
   std::deque<Pending> pending;
   Impl(FakeNetCanOemConfig c, std::unique_ptr<CanChannel> ch, std::shared_ptr<const Scenario> s)
-      : cfg(std::move(c)), channel(std::move(ch)), scenario(std::move(s)), model(cfg), faults(cfg.faults), rng(cfg.seed) {}
+      : cfg(std::move(c)), channel(std::move(ch)), scenario(std::move(s)), model(cfg), faults(cfg.faults), source(scenario, cfg.clock),
+        rng(cfg.seed) {}
 };
 
 FakeNetCanOemBoard::FakeNetCanOemBoard(FakeNetCanOemConfig cfg, std::unique_ptr<CanChannel> channel,
@@ -114,10 +115,7 @@ void FakeNetCanOemBoard::stop() noexcept {
   if (thread_.joinable()) thread_.join();
 }
 
-void FakeNetCanOemBoard::set_wrench(const Vector6d& w_fp) {
-  std::lock_guard lk(impl_->m);
-  impl_->wrench = w_fp;
-}
+void FakeNetCanOemBoard::set_wrench(const Vector6d& w_fp) { impl_->source.set(w_fp); }
 
 void FakeNetCanOemBoard::set_faults(const CanFaults& f) {
   std::lock_guard lk(impl_->m);
@@ -135,7 +133,6 @@ void FakeNetCanOemBoard::run() noexcept {
   const std::uint32_t base = I.cfg.base_id;
   bool in_bus_off = false;
   Clock::time_point next_error = Clock::now();
-  ScenarioPoint point;
   // The Net F/T box's state: its bias (counts) and sample number.
   Vector6d box_bias = Vector6d::Zero();
   std::uint16_t box_sample = 0;
@@ -145,17 +142,7 @@ void FakeNetCanOemBoard::run() noexcept {
     const double fc = 1.0 / I.cfg.box_calibration.newtons_per_count(), tc = 1.0 / I.cfg.box_calibration.newton_metres_per_count();
     box_per_si << fc, fc, fc, tc, tc, tc;
   }
-  const auto box_counts = [&](double t_s) {
-    Vector6d w;
-    if (I.scenario) {
-      I.scenario->at(I.cfg.clock.scenario_time(t_s), point);
-      w = point.w_fp;
-    } else {
-      std::lock_guard lk(I.m);
-      w = I.wrench;
-    }
-    return Vector6d(box_per_si.cwiseProduct(X_sensor_fp * w));
-  };
+  const auto box_counts = [&](double t_s) { return Vector6d(box_per_si.cwiseProduct(X_sensor_fp * I.source.at(t_s))); };
   std::uniform_real_distribution<double> uni(0.0, 1.0);
   // Sends one frame; `completes_answer`: it is the last frame of an intact gauge answer, which is
   // then counted as delivered (the fault soak reconciles that count with what was recorded).
@@ -255,14 +242,7 @@ void FakeNetCanOemBoard::run() noexcept {
         break;
       case ati::kOpReadGauges: {
         if (req.len != 0) continue;  // another device's answer
-        Vector6d w;
-        if (I.scenario) {
-          I.scenario->at(I.cfg.clock.scenario_time(std::chrono::duration<double>(Clock::now() - I.start).count()), point);
-          w = point.w_fp;
-        } else {
-          std::lock_guard lk(I.m);
-          w = I.wrench;
-        }
+        const Vector6d w = I.source.at(std::chrono::duration<double>(Clock::now() - I.start).count());
         bool sat = false;
         const ati::Gauges g = I.model.gauges(w, sat);
         std::uint32_t bits = f.status_now;

@@ -25,8 +25,8 @@ struct FakeNetFtRdt::Impl {
   std::shared_ptr<const Scenario> scenario;
   int fd = -1;
   int port = 0;
-  mutable std::mutex m;  // guards wrench, faults, stats
-  Vector6d wrench = Vector6d::Zero();
+  mutable std::mutex m;  // guards faults, stats
+  std::unique_ptr<WrenchSource> source;
   StreamFaults faults;
   Stats stats;
   std::atomic<bool> stop{false};
@@ -52,6 +52,7 @@ FakeNetFtRdt::FakeNetFtRdt(FakeNetFtConfig cfg, std::shared_ptr<const Scenario> 
   const double fc = 1.0 / I.cfg.calibration.newtons_per_count(), tc = 1.0 / I.cfg.calibration.newton_metres_per_count();
   I.counts_per_si << fc, fc, fc, tc, tc, tc;
   I.X_sensor_fp = plate_to_sensor_wrench(I.cfg.T_fp_sensor);
+  I.source = std::make_unique<WrenchSource>(I.scenario, I.cfg.clock);
   I.fd = ::socket(AF_INET, SOCK_DGRAM | SOCK_CLOEXEC, 0);
   if (I.fd < 0) throw DeviceError(std::string("fake Net F/T: socket: ") + std::strerror(errno));
   sockaddr_in sa{};
@@ -80,10 +81,7 @@ void FakeNetFtRdt::stop() noexcept {
   if (thread_.joinable()) thread_.join();
 }
 
-void FakeNetFtRdt::set_wrench(const Vector6d& w_fp) {
-  std::lock_guard lk(impl_->m);
-  impl_->wrench = w_fp;
-}
+void FakeNetFtRdt::set_wrench(const Vector6d& w_fp) { impl_->source->set(w_fp); }
 
 void FakeNetFtRdt::set_faults(const StreamFaults& f) {
   std::lock_guard lk(impl_->m);
@@ -112,19 +110,8 @@ void FakeNetFtRdt::run() noexcept {
   auto next = Clock::now();
   std::vector<std::uint8_t> datagram;
   std::vector<netft::RdtRecord> batch;
-  ScenarioPoint point;
 
-  const auto counts_now = [&](double t_s) {
-    Vector6d w;
-    if (I.scenario) {
-      I.scenario->at(I.cfg.clock.scenario_time(t_s), point);
-      w = point.w_fp;
-    } else {
-      std::lock_guard lk(I.m);
-      w = I.wrench;
-    }
-    return Vector6d(I.counts_per_si.cwiseProduct(I.X_sensor_fp * w));
-  };
+  const auto counts_now = [&](double t_s) { return Vector6d(I.counts_per_si.cwiseProduct(I.X_sensor_fp * I.source->at(t_s))); };
   const auto to_int32 = [](double v) {
     if (!(v == v)) return std::int32_t{0};
     const double r = std::nearbyint(v);

@@ -25,8 +25,8 @@ struct FakeRobotiqFt300::Impl {
   int master = -1;
   int slave = -1;  // kept open: the line keeps its raw settings and the master never sees a hang-up
   std::string path;
-  mutable std::mutex m;  // guards wrench, faults, stats
-  Vector6d wrench = Vector6d::Zero();
+  mutable std::mutex m;  // guards faults, stats
+  std::unique_ptr<WrenchSource> source;
   StreamFaults stream;
   ModbusFaults modbus;
   Stats stats;
@@ -57,6 +57,7 @@ FakeRobotiqFt300::FakeRobotiqFt300(FakeFt300Config cfg, std::shared_ptr<const Sc
   if (!(I.cfg.stream_rate_hz > 0.0) || I.cfg.stream_rate_hz > 1000.0) throw ConfigError("stream_rate_hz", "must be in (0, 1000]");
   if (!(I.cfg.clock.speed > 0.0)) throw ConfigError("speed", "must be > 0");
   I.X_sensor_fp = plate_to_sensor_wrench(I.cfg.T_fp_sensor);
+  I.source = std::make_unique<WrenchSource>(I.scenario, I.cfg.clock);
   I.master = ::posix_openpt(O_RDWR | O_NOCTTY | O_CLOEXEC);
   if (I.master < 0 || ::grantpt(I.master) != 0 || ::unlockpt(I.master) != 0)
     throw DeviceError(std::string("fake FT 300: pseudo-terminal: ") + std::strerror(errno));
@@ -90,10 +91,7 @@ void FakeRobotiqFt300::stop() noexcept {
   if (thread_.joinable()) thread_.join();
 }
 
-void FakeRobotiqFt300::set_wrench(const Vector6d& w_fp) {
-  std::lock_guard lk(impl_->m);
-  impl_->wrench = w_fp;
-}
+void FakeRobotiqFt300::set_wrench(const Vector6d& w_fp) { impl_->source->set(w_fp); }
 
 void FakeRobotiqFt300::set_faults(const StreamFaults& stream, const ModbusFaults& modbus) {
   check_faults(stream);
@@ -117,21 +115,12 @@ void FakeRobotiqFt300::run() noexcept {
   auto next = Clock::now();
   std::vector<std::uint8_t> in;
   std::size_t ff_run = 0;
-  ScenarioPoint point;
   const auto serial = robotiq::encode_serial(I.cfg.serial_prefix, I.cfg.serial_number);
   const auto firmware = robotiq::encode_firmware(I.cfg.firmware_prefix, I.cfg.firmware[0], I.cfg.firmware[1], I.cfg.firmware[2]);
 
   const auto now_s = [&] { return std::chrono::duration<double>(Clock::now() - t0).count(); };
   const auto reading_at = [&](double t_s) {
-    Vector6d w;
-    if (I.scenario) {
-      I.scenario->at(I.cfg.clock.scenario_time(t_s), point);
-      w = point.w_fp;
-    } else {
-      std::lock_guard lk(I.m);
-      w = I.wrench;
-    }
-    const Vector6d ws = I.X_sensor_fp * w;
+    const Vector6d ws = I.X_sensor_fp * I.source->at(t_s);
     robotiq::Reading r;
     for (int i = 0; i < 6; ++i) {
       const double scale = i < 3 ? robotiq::kCountsPerNewton : robotiq::kCountsPerNewtonMetre;

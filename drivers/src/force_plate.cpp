@@ -263,6 +263,39 @@ void CanForcePlate::book_error_frame(const CanFrame& f) noexcept {
   }
 }
 
+PollStatus CanForcePlate::send_request(const CanFrame& request, std::chrono::nanoseconds timeout, const char* what) noexcept {
+  const auto st = channel_->send(request, timeout);
+  if (st == IoStatus::ok) return PollStatus::ok;
+  if (st == IoStatus::closed) {
+    problem("CAN channel closed");
+    return PollStatus::closed;
+  }
+  ++counters_.consecutive_failures;
+  ++counters_.timeouts;
+  char msg[128];
+  std::snprintf(msg, sizeof msg, "%s %s", what, st == IoStatus::timeout ? "request: transmit queue full" : "request could not be sent");
+  problem(msg);
+  return counters_.bus_off ? PollStatus::bus_error : PollStatus::timeout;
+}
+
+PollStatus CanForcePlate::answer_missing(const WrenchSample& out, const char* missing) noexcept {
+  ++counters_.timeouts;
+  ++counters_.consecutive_failures;
+  char msg[128];
+  if (counters_.bus_off) {
+    std::snprintf(msg, sizeof msg, "%s: bus-off", missing);
+    problem(msg);
+    return PollStatus::bus_error;
+  }
+  if (out.error_frames != 0) {
+    std::snprintf(msg, sizeof msg, "%s: CAN error frames", missing);
+    problem(msg);
+    return PollStatus::bus_error;
+  }
+  problem(missing);
+  return PollStatus::timeout;
+}
+
 PollStatus CanForcePlate::next_data_frame(std::chrono::steady_clock::time_point deadline, CanFrame& f, WrenchSample& out,
                                           const char* context) noexcept {
   for (;;) {

@@ -154,17 +154,7 @@ PollStatus AtiNetCanOemDriver::poll(WrenchSample& out) noexcept {
   const std::uint32_t id_b = ati::frame_id(cfg_.base_id, ati::kOpGaugesSecond);
   const auto timeout = seconds(cfg_.response_timeout());
   const auto deadline = Clock::now() + timeout;
-  const auto sst = channel_->send(ati::request(cfg_.base_id, ati::kOpReadGauges), timeout);
-  if (sst == IoStatus::closed) {
-    problem("CAN channel closed");
-    return PollStatus::closed;
-  }
-  if (sst != IoStatus::ok) {
-    ++counters_.consecutive_failures;
-    ++counters_.timeouts;
-    problem(sst == IoStatus::timeout ? "gauge request: transmit queue full" : "gauge request could not be sent");
-    return counters_.bus_off ? PollStatus::bus_error : PollStatus::timeout;
-  }
+  if (const auto sst = send_request(ati::request(cfg_.base_id, ati::kOpReadGauges), timeout, "gauge"); sst != PollStatus::ok) return sst;
   bool have_a = false, have_b = false;
   CanFrame f;
   char msg[128];
@@ -225,18 +215,7 @@ PollStatus AtiNetCanOemDriver::poll(WrenchSample& out) noexcept {
       return PollStatus::ok;
     }
   }
-  ++counters_.timeouts;
-  ++counters_.consecutive_failures;
-  if (counters_.bus_off) {
-    problem("no gauge answer: bus-off");
-    return PollStatus::bus_error;
-  }
-  if (out.error_frames != 0) {
-    problem("no gauge answer: CAN error frames");
-    return PollStatus::bus_error;
-  }
-  problem(have_a ? "gauge frame 2 missing" : have_b ? "gauge frame 1 missing" : "no gauge answer");
-  return PollStatus::timeout;
+  return answer_missing(out, have_a ? "gauge frame 2 missing" : have_b ? "gauge frame 1 missing" : "no gauge answer");
 }
 
 std::string AtiNetCanOemDriver::describe_status(const WrenchSample& s) const {

@@ -52,7 +52,8 @@ ForcePlateInfo NetFtCanDriver::start() {
   if (st != PollStatus::ok) {
     started_ = false;
     throw DeviceError(std::string(where) + ": no short-data answer (ids base+5, base+6) to " + std::to_string(cfg_.startup_tries) +
-                      " requests (" + last_problem_ + "; is CAN Bus selected on the box's Communications page, and the DIP switches' "
+                      " requests (" + last_problem_ +
+                      "; is CAN Bus selected on the box's Communications page, and the DIP switches' "
                       "base address and bit rate the rig's?)");
   }
   counters_.connected = true;
@@ -79,17 +80,9 @@ PollStatus NetFtCanDriver::poll(WrenchSample& out) noexcept {
   const std::uint32_t id_a = cfg_.base_id + netft_can::kShortFirst, id_b = cfg_.base_id + netft_can::kShortSecond;
   const auto timeout = seconds(cfg_.response_timeout());
   const auto deadline = Clock::now() + timeout;
-  const auto sst = channel_->send(netft_can::request(cfg_.base_id, netft_can::kRequestShortData), timeout);
-  if (sst == IoStatus::closed) {
-    problem("CAN channel closed");
-    return PollStatus::closed;
-  }
-  if (sst != IoStatus::ok) {
-    ++counters_.consecutive_failures;
-    ++counters_.timeouts;
-    problem(sst == IoStatus::timeout ? "short-data request: transmit queue full" : "short-data request could not be sent");
-    return counters_.bus_off ? PollStatus::bus_error : PollStatus::timeout;
-  }
+  if (const auto sst = send_request(netft_can::request(cfg_.base_id, netft_can::kRequestShortData), timeout, "short-data");
+      sst != PollStatus::ok)
+    return sst;
   netft_can::ShortData d;
   bool have_a = false, have_b = false;
   CanFrame f;
@@ -127,20 +120,7 @@ PollStatus NetFtCanDriver::poll(WrenchSample& out) noexcept {
     have_b = true;
     break;
   }
-  if (!(have_a && have_b)) {
-    ++counters_.timeouts;
-    ++counters_.consecutive_failures;
-    if (counters_.bus_off) {
-      problem("no short-data answer: bus-off");
-      return PollStatus::bus_error;
-    }
-    if (out.error_frames != 0) {
-      problem("no short-data answer: CAN error frames");
-      return PollStatus::bus_error;
-    }
-    problem(have_a ? "short-data answer 2 missing" : "no short-data answer");
-    return PollStatus::timeout;
-  }
+  if (!(have_a && have_b)) return answer_missing(out, have_a ? "short-data answer 2 missing" : "no short-data answer");
   last_sample_ = d.sample;
   bool sat = false;
   for (std::size_t i = 0; i < 6; ++i) {

@@ -24,14 +24,6 @@
 namespace hil::drivers {
 namespace {
 
-std::int64_t steady_ns() noexcept {
-  return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch()).count();
-}
-std::int64_t realtime_now_ns() noexcept {
-  timespec ts{};
-  ::clock_gettime(CLOCK_REALTIME, &ts);
-  return static_cast<std::int64_t>(ts.tv_sec) * 1'000'000'000 + ts.tv_nsec;
-}
 // The box sends one record per datagram in real-time mode and up to a few dozen buffered.
 constexpr std::size_t kMaxDatagram = 64 * 1024;
 // A box silent this long (and at least 20 periods) is asked to stream again, at most this often. A
@@ -173,7 +165,7 @@ PollStatus NetFtRdtDriver::receive(std::int64_t deadline_ns) noexcept {
     pending_.resize(records);
     for (std::size_t k = 0; k < records; ++k) netft::decode_record(buffer_.data() + k * netft::kRecordBytes, pending_[k]);
     next_ = 0;
-    pending_t_ns_ = t_ns != 0 ? t_ns : realtime_now_ns();
+    pending_t_ns_ = t_ns != 0 ? t_ns : realtime_ns();
     pending_stamp_ = t_ns != 0 ? StampSource::software : StampSource::none;
     return PollStatus::ok;
   }

@@ -23,14 +23,6 @@
 namespace hil::drivers {
 namespace {
 
-std::int64_t steady_ns() noexcept {
-  return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch()).count();
-}
-std::int64_t realtime_now_ns() noexcept {
-  timespec ts{};
-  ::clock_gettime(CLOCK_REALTIME, &ts);
-  return static_cast<std::int64_t>(ts.tv_sec) * 1'000'000'000 + ts.tv_nsec;
-}
 // Robotiq's driver waits this long after the stop signal before its first Modbus request.
 constexpr auto kSwitchToModbus = std::chrono::milliseconds(100);
 // A stream silent this long (and at least 20 periods) is asked for again, at most this often.
@@ -118,7 +110,8 @@ ForcePlateInfo RobotiqFt300Driver::start() {
   info.firmware = robotiq::decode_firmware(std::span<const std::uint16_t, 3>(fw, 3));
   if (info.firmware.empty()) {
     char buf[96];
-    std::snprintf(buf, sizeof buf, ": registers 500-502 read 0x%04x 0x%04x 0x%04x, not a firmware version starting 'F'", fw[0], fw[1], fw[2]);
+    std::snprintf(buf, sizeof buf, ": registers 500-502 read 0x%04x 0x%04x 0x%04x, not a firmware version starting 'F'", fw[0], fw[1],
+                  fw[2]);
     throw DeviceError(where + buf + " (not an FT 300?)");
   }
   if (modbus_read_registers(mb_->ctx, robotiq::kRegSerial, 4, sn) == 4)
@@ -173,7 +166,7 @@ bool RobotiqFt300Driver::start_stream() noexcept {
     const ssize_t n = ::read(fd, bytes, sizeof bytes);
     if (n <= 0) break;
     framer_.push({bytes, static_cast<std::size_t>(n)});
-    read_t_ns_ = realtime_now_ns();
+    read_t_ns_ = realtime_ns();
     read_steady_ns_ = steady_ns();
     if (framer_.next(first_)) {
       // The stream runs; poll() hands this frame out first. Noise before it is the switch-over.
@@ -234,9 +227,9 @@ PollStatus RobotiqFt300Driver::poll(WrenchSample& out) noexcept {
 
 PollStatus RobotiqFt300Driver::poll_registers(WrenchSample& out) noexcept {
   std::uint16_t regs[6] = {};
-  const std::int64_t t0 = realtime_now_ns();
+  const std::int64_t t0 = realtime_ns();
   const int rc = modbus_read_registers(mb_->ctx, robotiq::kRegWrench, 6, regs);
-  const std::int64_t t1 = realtime_now_ns();
+  const std::int64_t t1 = realtime_ns();
   if (rc != 6) {
     const int err = rc < 0 ? errno : EMBBADDATA;
     ++counters_.consecutive_failures;
@@ -335,7 +328,7 @@ PollStatus RobotiqFt300Driver::poll_stream(WrenchSample& out) noexcept {
       mb_->close();
       return PollStatus::disconnected;
     }
-    read_t_ns_ = realtime_now_ns();
+    read_t_ns_ = realtime_ns();
     read_steady_ns_ = steady_ns();
     framer_.push({bytes, static_cast<std::size_t>(n)});
   }

@@ -10,7 +10,8 @@ std::uint16_t crc16(std::span<const std::uint8_t> bytes) noexcept {
   std::uint16_t crc = 0xFFFF;
   for (const std::uint8_t b : bytes) {
     crc ^= b;
-    for (int k = 0; k < 8; ++k) crc = (crc & 1U) != 0 ? static_cast<std::uint16_t>((crc >> 1) ^ 0xA001U) : static_cast<std::uint16_t>(crc >> 1);
+    for (int k = 0; k < 8; ++k)
+      crc = (crc & 1U) != 0 ? static_cast<std::uint16_t>((crc >> 1) ^ 0xA001U) : static_cast<std::uint16_t>(crc >> 1);
   }
   return crc;
 }
@@ -39,7 +40,8 @@ bool decode_frame(const std::uint8_t* in, Reading& out) noexcept {
   if (in[0] != kFrameHeader0 || in[1] != kFrameHeader1) return false;
   const std::uint16_t crc = static_cast<std::uint16_t>(in[14] | (in[15] << 8));
   if (crc16({in, kFrameBytes - 2}) != crc) return false;
-  for (std::size_t i = 0; i < 6; ++i) out.counts[i] = static_cast<std::int16_t>(static_cast<std::uint16_t>(in[2 + 2 * i] | (in[3 + 2 * i] << 8)));
+  for (std::size_t i = 0; i < 6; ++i)
+    out.counts[i] = static_cast<std::int16_t>(static_cast<std::uint16_t>(in[2 + 2 * i] | (in[3 + 2 * i] << 8)));
   return true;
 }
 
@@ -105,8 +107,8 @@ std::string decode_serial(std::span<const std::uint16_t, 4> r) {
 
 std::array<std::uint16_t, 4> encode_serial(const std::string& p, std::uint32_t number) {
   const auto c = [&](std::size_t i) { return static_cast<std::uint16_t>(i < p.size() ? static_cast<unsigned char>(p[i]) : ' '); };
-  return {static_cast<std::uint16_t>((c(0) << 8) | c(1)), static_cast<std::uint16_t>(c(2) << 8), static_cast<std::uint16_t>(number & 0xFFFF),
-          static_cast<std::uint16_t>(number >> 16)};
+  return {static_cast<std::uint16_t>((c(0) << 8) | c(1)), static_cast<std::uint16_t>(c(2) << 8),
+          static_cast<std::uint16_t>(number & 0xFFFF), static_cast<std::uint16_t>(number >> 16)};
 }
 
 std::array<std::uint16_t, 3> encode_firmware(const std::string& p, std::uint8_t major, std::uint8_t minor, std::uint8_t patch) {

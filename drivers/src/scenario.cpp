@@ -80,4 +80,16 @@ void encode_state(const RegisterMap& map, std::span<const double> joints, const 
   }
 }
 
+void WrenchSource::set(const Vector6d& w_fp) {
+  std::lock_guard lk(m_);
+  wrench_ = w_fp;
+}
+
+Vector6d WrenchSource::at(double t_s) const {
+  std::lock_guard lk(m_);
+  if (!scenario_) return wrench_;
+  scenario_->at(clock_.scenario_time(t_s), point_);
+  return point_.w_fp;
+}
+
 }  // namespace hil::drivers

@@ -107,8 +107,8 @@ TEST(Ft300Codec, IdentityRegistersDecodeAsRobotiqsDriverPrintsThem) {
 
 TEST(Ft300Driver, ReadsAnIndependentPythonSensorAndWritesOnlyTheStreamStart) {
   // 6 frames: Fx = (250 + k) / 100 N, Fy -1.5 N, Fz 300 N, Mx 2 N·m, My -0.001 N·m, Mz 0.
-  hil::test::Child sensor(
-      {HIL_PYTHON3, std::string(HIL_SOURCE_DIR) + "/tests/drivers/ft300_sensor.py", "6", "250", "-150", "30000", "2000", "-1", "0"});
+  hil::test::Child sensor({HIL_PYTHON3, std::string(HIL_SOURCE_DIR) + "/tests/drivers/ft300_sensor.py", "6", "250", "-150", "30000", "2000",
+                           "-1", "0"});
   ASSERT_TRUE(sensor.ok());
   const std::string path = sensor.read_line();
   ASSERT_EQ(path.rfind("/dev/pts/", 0), 0U) << "the Python sensor did not start: '" << path << "'";

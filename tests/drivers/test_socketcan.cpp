@@ -7,6 +7,7 @@
 
 #include <unistd.h>
 
+#include <atomic>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -46,6 +47,24 @@ class SocketCan : public ::testing::Test {
     o.interface = can_iface();
     o.channel = std::move(ch);
     return SocketCanChannel::open(o);
+  }
+  /// Sends 7FE# until `dump` (candump on the bus) prints it: from then on candump sees every
+  /// frame. \returns that first line (empty if candump never printed one).
+  std::string candump_listening(hil::test::Child& dump) {
+    auto tx = open();
+    CanFrame marker;
+    EXPECT_EQ(parse_frame_text("7FE#", marker), "");
+    std::atomic<bool> printed{false};
+    std::thread t([&] {
+      for (int i = 0; i < 200 && !printed; ++i) {
+        tx->send(marker, 100ms);
+        std::this_thread::sleep_for(20ms);
+      }
+    });
+    std::string line = dump.read_line();
+    printed = true;
+    t.join();
+    return line;
   }
   /// Reads until a frame with this id arrives (other traffic on the bus is skipped).
   static bool receive_id(CanChannel& c, std::uint32_t id, CanFrame& out) {
@@ -288,17 +307,8 @@ TEST_F(SocketCan, HilFakeRigPlateCapturedByCandump) {
   const std::string hil = HIL_EXECUTABLE;
   ASSERT_TRUE(std::filesystem::exists(hil)) << hil;
   hil::test::Child dump({tool("candump"), "-L", can_iface()});
-  auto tx = open();
-  std::string line;
-  std::thread t([&] {
-    for (int i = 0; i < 200 && line.empty(); ++i) {
-      tx->send(text("7FE#"), 100ms);
-      std::this_thread::sleep_for(20ms);
-    }
-  });
-  line = dump.read_line();
-  t.join();
-  ASSERT_FALSE(line.empty());
+  std::string line = candump_listening(dump);
+  ASSERT_FALSE(line.empty()) << "candump never printed a frame";
 
   // Speed ~0 holds the first sample of the example run.
   hil::test::Child fake({hil, "--log-level", "warn", "fake-rig", "--run", std::string(HIL_SOURCE_DIR) + "/examples/runs/press_slide",
@@ -347,24 +357,15 @@ TEST_F(SocketCan, HilFakeRigNetFtBoxAnswersCansend) {
     std::FILE* f = std::fopen(rig.c_str(), "w");
     ASSERT_NE(f, nullptr);
     std::fprintf(f,
-                 "format_version: 1\nname: box\nframes:\n  - {name: force_plate, parent: world}\ndevices:\n  force_plate:\n"
+                 "format_version: 1\nname: press_bench\nframes:\n  - {name: force_plate, parent: world}\ndevices:\n  force_plate:\n"
                  "    protocol: ati_netft_can\n    interface: %s\n    base_id: 0x120\n    counts_per_force: 100\n"
                  "    counts_per_torque: 1000\n    rate_hz: 100\n",
                  can_iface().c_str());
     std::fclose(f);
   }
   hil::test::Child dump({tool("candump"), "-L", can_iface()});
-  auto tx = open();
-  std::string line;
-  std::thread t([&] {
-    for (int i = 0; i < 200 && line.empty(); ++i) {
-      tx->send(text("7FE#"), 100ms);
-      std::this_thread::sleep_for(20ms);
-    }
-  });
-  line = dump.read_line();
-  t.join();
-  ASSERT_FALSE(line.empty());
+  std::string line = candump_listening(dump);
+  ASSERT_FALSE(line.empty()) << "candump never printed a frame";
   // Speed ~0 holds the first sample of the example run: fx 0.1 N, fz 0.05 N (10 and 5 counts).
   hil::test::Child fake({hil, "--log-level", "warn", "fake-rig", "--rig", rig, "--run",
                          std::string(HIL_SOURCE_DIR) + "/examples/runs/press_slide", "--no-robot", "--speed", "1e-9", "--duration", "120"});

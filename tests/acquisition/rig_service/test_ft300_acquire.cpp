@@ -14,39 +14,18 @@
 
 using namespace hil;
 
-namespace {
-
-rig_service::AcquireOptions played(const test::TempDir& tmp, const std::string& rig) {
-  rig_service::AcquireOptions o;
-  o.rig = rig;
-  o.out = tmp.path() + "/run";
-  o.play = std::string(HIL_SOURCE_DIR) + "/examples/runs/press_slide";
-  o.duration_s = 3.0;
-  o.no_bus = true;
-  o.progress = false;
-  return o;
-}
-
-const acquisition::DeviceHealth& plate_health(const rig_service::AcquireResult& r) {
-  for (const auto& h : r.health)
-    if (h.device == "force_plate") return h;
-  throw std::runtime_error("no force_plate health");
-}
-
-}  // namespace
-
 TEST(Ft300Acquire, AStreamedRunLosesNothingDeliveredAndCountsWhatTheLineLost) {
   test::TempDir tmp;
-  auto o = played(tmp, test::bench_with_plate(tmp, "ft300_bench.yaml",
-                                              "    protocol: robotiq_ft300\n    serial_device: /dev/ttyUSB0\n"
-                                              "    allowed_writes: [stream_start]\n    rate_hz: 100\n"));
+  auto o = test::played_options(tmp, test::bench_with_plate(tmp, "ft300_bench.yaml",
+                                                            "    protocol: robotiq_ft300\n    serial_device: /dev/ttyUSB0\n"
+                                                            "    allowed_writes: [stream_start]\n    rate_hz: 100\n"));
   o.output_rate_hz = 50.0;
   o.stream_faults.drop_fraction = 0.03;
   o.stream_faults.corrupt_fraction = 0.03;
   o.stream_faults.silent.push_back({1.5, 0.2});
   const auto r = rig_service::run_acquisition(o, nullptr);
   ASSERT_GT(r.samples, 60U);
-  const auto& plate = plate_health(r);
+  const auto& plate = test::plate_health(r);
   const auto raw = format::read_csv(o.out + "/raw/force_plate.csv", format::CsvOptions{});
   EXPECT_EQ(raw.rows(), plate.samples) << "every reading the driver delivered is recorded";
   EXPECT_GT(plate.samples, 200U);
@@ -63,18 +42,16 @@ TEST(Ft300Acquire, AStreamedRunLosesNothingDeliveredAndCountsWhatTheLineLost) {
 
 TEST(Ft300Acquire, ReadOnlyRunMarksTheSamplesAcrossAModbusExceptionBurst) {
   test::TempDir tmp;
-  auto o = played(tmp, test::bench_with_plate(tmp, "ft300_ro.yaml", "    protocol: robotiq_ft300\n    serial_device: /dev/ttyUSB0\n"));
+  auto o = test::played_options(tmp, test::bench_with_plate(tmp, "ft300_ro.yaml",
+                                                            "    protocol: robotiq_ft300\n    serial_device: /dev/ttyUSB0\n"));
   o.output_rate_hz = 25.0;  // divides the 50 Hz polling
   o.plate_modbus_faults.exception_windows.push_back({1.2, 0.3});
   const auto r = rig_service::run_acquisition(o, nullptr);
-  const auto& plate = plate_health(r);
+  const auto& plate = test::plate_health(r);
   EXPECT_GT(plate.device_faults, 5U) << "each refused poll is a device fault";
-  format::CsvOptions with_quality;
-  with_quality.required = {"t", "quality"};
-  const auto samples = format::read_csv(o.out + "/samples.csv", with_quality);
-  ASSERT_GT(samples.rows(), 40U);
-  std::size_t flagged = 0;
-  for (double q : samples.numeric("quality")) flagged += (static_cast<std::uint32_t>(q) & acquisition::kDeviceFault) != 0;
+  std::size_t rows = 0;
+  const std::size_t flagged = test::device_fault_samples(o.out, rows);
+  ASSERT_GT(rows, 40U);
   EXPECT_GE(flagged, 1U) << "the samples across the burst";
-  EXPECT_LT(flagged, samples.rows() / 4) << "only those";
+  EXPECT_LT(flagged, rows / 4) << "only those";
 }

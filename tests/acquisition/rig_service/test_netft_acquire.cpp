@@ -27,23 +27,14 @@ std::string netft_rig(const test::TempDir& tmp) {
 
 TEST(NetFtAcquire, ARunThroughTheBoxsStreamLosesNothingDeliveredAndFlagsStatusBits) {
   test::TempDir tmp;
-  rig_service::AcquireOptions o;
-  o.rig = netft_rig(tmp);
-  o.out = tmp.path() + "/run";
-  o.play = std::string(HIL_SOURCE_DIR) + "/examples/runs/press_slide";
-  o.duration_s = 3.0;
-  o.no_bus = true;
-  o.progress = false;
+  auto o = test::played_options(tmp, netft_rig(tmp));
   o.stream_faults.drop_fraction = 0.02;
   o.stream_faults.corrupt_fraction = 0.01;
   o.stream_faults.duplicate_fraction = 0.01;
   o.stream_faults.status.push_back({{1.0, 0.3}, 0x00000004});
   const auto r = rig_service::run_acquisition(o, nullptr);
   ASSERT_GT(r.samples, 100U);
-  const acquisition::DeviceHealth* plate = nullptr;
-  for (const auto& h : r.health)
-    if (h.device == "force_plate") plate = &h;
-  ASSERT_NE(plate, nullptr);
+  const acquisition::DeviceHealth* plate = &test::plate_health(r);
   // Delivered = recorded: every reading the driver handed out is a row of the raw stream.
   const auto raw = format::read_csv(o.out + "/raw/force_plate.csv", format::CsvOptions{});
   EXPECT_EQ(raw.rows(), plate->samples);
@@ -51,13 +42,10 @@ TEST(NetFtAcquire, ARunThroughTheBoxsStreamLosesNothingDeliveredAndFlagsStatusBi
   // The box flagged readings in its status window: counted, and the output samples around them
   // are marked; the run's device identity says what it was.
   EXPECT_GT(plate->device_faults, 100U);
-  format::CsvOptions with_quality;
-  with_quality.required = {"t", "quality"};
-  const auto samples = format::read_csv(o.out + "/samples.csv", with_quality);
-  std::size_t flagged = 0;
-  for (double q : samples.numeric("quality")) flagged += (static_cast<std::uint32_t>(q) & acquisition::kDeviceFault) != 0;
+  std::size_t rows = 0;
+  const std::size_t flagged = test::device_fault_samples(o.out, rows);
   EXPECT_GT(flagged, 5U);
-  EXPECT_LT(flagged, samples.rows() / 2) << "only the window's samples";
+  EXPECT_LT(flagged, rows / 2) << "only the window's samples";
   const auto run = format::load_run(o.out);
   bool udp = false;
   for (const auto& s : run.info.sources) udp = udp || (s.name == "force_plate" && s.kind == "udp");
@@ -70,36 +58,24 @@ TEST(NetFtAcquire, ARunThroughTheBoxsStreamLosesNothingDeliveredAndFlagsStatusBi
 // recorded; flagged readings are device faults in the recording.
 TEST(NetFtAcquire, ARunThroughTheBoxsCanModeRecordsEveryReadingAndFlagsStatusBits) {
   test::TempDir tmp;
-  rig_service::AcquireOptions o;
-  o.rig = test::bench_with_plate(tmp, "netft_can_bench.yaml",
-                                 "    protocol: ati_netft_can\n    interface: can0\n    base_id: 0x120\n    counts_per_force: 50\n"
-                                 "    counts_per_torque: 1000\n    rate_hz: 500\n");
-  o.out = tmp.path() + "/run";
-  o.play = std::string(HIL_SOURCE_DIR) + "/examples/runs/press_slide";
-  o.duration_s = 3.0;
-  o.no_bus = true;
-  o.progress = false;
+  auto o = test::played_options(tmp, test::bench_with_plate(tmp, "netft_can_bench.yaml",
+                                                            "    protocol: ati_netft_can\n    interface: can0\n    base_id: 0x120\n"
+                                                            "    counts_per_force: 50\n    counts_per_torque: 1000\n    rate_hz: 500\n"));
   o.plate_faults.drop_fraction = 0.02;
   o.plate_faults.corrupt_fraction = 0.02;
   o.plate_faults.status.push_back({{1.0, 0.3}, 0x0004});
   const auto r = rig_service::run_acquisition(o, nullptr);
   ASSERT_GT(r.samples, 100U);
-  const acquisition::DeviceHealth* plate = nullptr;
-  for (const auto& h : r.health)
-    if (h.device == "force_plate") plate = &h;
-  ASSERT_NE(plate, nullptr);
+  const acquisition::DeviceHealth* plate = &test::plate_health(r);
   const auto raw = format::read_csv(o.out + "/raw/force_plate.csv", format::CsvOptions{});
   EXPECT_EQ(raw.rows(), plate->samples) << "every reading the driver delivered is recorded";
   EXPECT_GT(plate->samples, 1000U);
   EXPECT_GT(plate->errors, 0U) << "cut answers are reported";
   EXPECT_GT(plate->device_faults, 50U) << "0.3 s of flagged readings at 500 Hz";
-  format::CsvOptions with_quality;
-  with_quality.required = {"t", "quality"};
-  const auto samples = format::read_csv(o.out + "/samples.csv", with_quality);
-  std::size_t flagged = 0;
-  for (double q : samples.numeric("quality")) flagged += (static_cast<std::uint32_t>(q) & acquisition::kDeviceFault) != 0;
+  std::size_t rows = 0;
+  const std::size_t flagged = test::device_fault_samples(o.out, rows);
   EXPECT_GT(flagged, 5U);
-  EXPECT_LT(flagged, samples.rows() / 2);
+  EXPECT_LT(flagged, rows / 2);
   EXPECT_NE(test::read_text(o.out + "/run.yaml").find("ati_netft_can"), std::string::npos);
   // The CAN frames both ways are recorded as candump -L beside the readings.
   EXPECT_NE(test::read_text(o.out + "/raw/force_plate.candump.log").find(" 120#02"), std::string::npos);

@@ -33,7 +33,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
           if (!robotiq::decode_frame(back, again) || again.counts != r.counts)
             hil::fuzz::violated("fuzz_robotiq", "a framed reading encodes to a frame that decodes to it");
           for (double v : r.si())
-            if (!std::isfinite(v) || std::fabs(v) > 32768.0 / robotiq::kCountsPerNewton) hil::fuzz::violated("fuzz_robotiq", "readings in range");
+            if (!std::isfinite(v) || std::fabs(v) > 32768.0 / robotiq::kCountsPerNewton)
+              hil::fuzz::violated("fuzz_robotiq", "readings in range");
         }
         if (framer.buffered() >= robotiq::kFrameBytes) hil::fuzz::violated("fuzz_robotiq", "next() leaves less than a frame");
       }

@@ -60,6 +60,23 @@ struct DeviceClock {
   double scenario_time(double wall_s) const noexcept { return (wall_s * (1.0 + drift_ppm * 1e-6) + offset_s) * speed; }
 };
 
+/// The wrench a fake force plate plays: the scenario's at the device clock's time, else the value
+/// of set(). Thread-safe (the fake's thread reads, the test or CLI thread sets).
+class WrenchSource {
+ public:
+  WrenchSource(std::shared_ptr<const Scenario> scenario, DeviceClock clock) : scenario_(std::move(scenario)), clock_(clock) {}
+  void set(const Vector6d& w_fp);
+  /// The wrench on the plate (plate frame) at `t_s` seconds of wall time since the fake started.
+  Vector6d at(double t_s) const;
+
+ private:
+  std::shared_ptr<const Scenario> scenario_;
+  DeviceClock clock_;
+  mutable std::mutex m_;  // guards wrench_ and point_
+  Vector6d wrench_ = Vector6d::Zero();
+  mutable ScenarioPoint point_;
+};
+
 /// A time window relative to the fake's start.
 struct TimeWindow {
   double start_s = 0.0;

@@ -194,6 +194,12 @@ class CanForcePlate : public ForcePlate {
   /// at once on a bus-off error frame, or bad_frame on a channel error (`context` names what was
   /// awaited). Real-time safe.
   PollStatus next_data_frame(std::chrono::steady_clock::time_point deadline, CanFrame& f, WrenchSample& out, const char* context) noexcept;
+  /// Sends a reading's request. \returns ok, or what the poll returns when it could not be sent
+  /// (counted; `what` names the request in the problem text). Real-time safe.
+  PollStatus send_request(const CanFrame& request, std::chrono::nanoseconds timeout, const char* what) noexcept;
+  /// The poll's deadline passed without a whole answer: counted, and named by `missing` unless the
+  /// bus's state (bus-off, error frames seen during the poll) explains it. Real-time safe.
+  PollStatus answer_missing(const WrenchSample& out, const char* missing) noexcept;
 
   std::unique_ptr<CanChannel> channel_;
   CanErrorInfo last_bus_error_;

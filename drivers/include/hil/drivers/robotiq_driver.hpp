@@ -49,7 +49,7 @@ class RobotiqFt300Driver final : public ForcePlate {
   std::int64_t read_steady_ns_ = 0;   ///< the same read on the steady clock
   robotiq::Reading first_;            ///< the frame that showed the stream had started
   bool have_first_ = false;
-  std::uint64_t gap_pending_ = 0;     ///< frames a gap says were lost, unless a burst of late ones follows
+  std::uint64_t gap_pending_ = 0;  ///< frames a gap says were lost, unless a burst of late ones follows
   bool started_ = false;
 };
 

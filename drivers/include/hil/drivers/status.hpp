@@ -42,6 +42,11 @@ struct DeviceCounters {
   bool bus_off = false;  ///< last error frame said bus-off and nothing valid came since
 };
 
+/// The steady clock in nanoseconds: deadlines and silences (never jumps).
+inline std::int64_t steady_ns() noexcept {
+  return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+
 /// Paces a polling loop at a fixed rate on absolute deadlines (no drift); counts overruns.
 class RatePacer {
  public:
