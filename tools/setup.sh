@@ -23,6 +23,7 @@ deps() {
     openssl
     clang libclang-rt-14-dev lld  # libFuzzer targets (tests/fuzz)
     clang-format  # the tree's style, checked by tests/architecture/format (tools/format.sh)
+    chromium fonts-dejavu-core  # the reports opened in a real browser (tests/formats/report/browser_check.py)
   )
   # Node and npm for the independent MCAP reader's tests (tests/formats/mcap); kept when already there (Node 20).
   command -v npm >/dev/null 2>&1 || pkgs+=(nodejs npm)

@@ -119,13 +119,17 @@ class JsonOutputs(unittest.TestCase):
         self.assertEqual({c["name"] for c in d["candidates"]}, {"sensor_bias", "time_offset"})
         self.assertIn("cause:", r.stderr)  # the summary went to stderr
         self.assertIn("report:", r.stderr)
-        # Every figure has its data beside it; the first one (a component over time) holds every
-        # sample, not the drawing's decimated points.
+        # Every figure has its data beside it; a component over time (measured and predicted)
+        # holds every sample, not the drawing's decimated points.
         svgs = sorted(glob.glob(os.path.join(rep, "figures", "*.svg")))
         self.assertTrue(svgs)
         for svg in svgs:
             self.assertTrue(os.path.exists(svg[:-4] + ".csv"), svg)
-        with open(svgs[0][:-4] + ".csv") as f:
+        # The figures after the candidates' bars, the parameters' forest and the residual structure:
+        # the six components, named by their component.
+        series = [s for s in svgs if os.path.basename(s)[3:] in ("fx.svg", "fy.svg", "fz.svg", "mx.svg", "my.svg", "mz.svg")]
+        self.assertEqual(len(series), 6, svgs)
+        with open(series[0][:-4] + ".csv") as f:
             rows = list(csv.reader(f))
         self.assertEqual(rows[0][0], "t (s)")
         self.assertIn("measured", rows[0][1])

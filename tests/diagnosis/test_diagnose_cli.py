@@ -85,7 +85,9 @@ class Diagnose(unittest.TestCase):
         self.assertNotIn("gain_fy", gain["parameters"])
         with open(os.path.join(rep, "index.html")) as f:
             html = f.read()
-        self.assertIn("Candidate ranking", html)
+        self.assertIn("<section id='verdict' class='verdict cause'>", html)  # the verdict first
+        self.assertLess(html.index("id='verdict'"), html.index("<h2"))
+        self.assertIn("Named cause: sensor_bias", html)
         self.assertIn("<svg", html)
 
     def test_clean_run_is_none(self):

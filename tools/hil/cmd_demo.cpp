@@ -165,7 +165,8 @@ int demo(const DemoOptions& o) {
   diagnose::print_summary(summary, diag);
   std::istringstream lines(summary.str());
   for (std::string line; std::getline(lines, line);) std::cout << "      " << line << "\n";
-  diagnose::write_report(base + "-diagnosis", diag);
+  // The report marks the hidden truth beside the intervals; the diagnosis above never read it.
+  diagnose::write_report(base + "-diagnosis", diag, diagnose::read_truth(truth_file, diag));
   std::cout << "      report: " << (fs::path(base + "-diagnosis") / "index.html").string() << "\n";
 
   const bool named = diag.result.cause == effect;

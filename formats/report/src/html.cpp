@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <set>
 #include <stdexcept>
 
 namespace hil::report {
@@ -88,6 +89,42 @@ std::vector<std::pair<double, double>> pixel_path(const Series& sr, std::size_t 
   return out;
 }
 
+/// An SVG element's opening tag: its size for a standalone file, a viewBox so that a page can
+/// scale it to its column.
+std::string svg_open(double W, double H) {
+  return "<svg xmlns='http://www.w3.org/2000/svg' width='" + px(W) + "' height='" + px(H) + "' viewBox='0 0 " + px(W) + " " + px(H) +
+         "' font-family='sans-serif' font-size='11'>\n";
+}
+
+std::string text_at(double x, double y, const std::string& text, const char* anchor = "start", const char* extra = "") {
+  return "<text x='" + px(x) + "' y='" + px(y) + "' text-anchor='" + anchor + "'" + extra + ">" + escape(text) + "</text>";
+}
+
+/// A legend label within `room` pixels: a label longer than the room (at ~6.2 px a character of
+/// the 11 px font) is condensed to fit rather than cut at the figure's edge.
+std::string legend_text(double x, double y, const std::string& text, double room) {
+  std::size_t chars = 0;
+  for (unsigned char c : text) chars += (c & 0xC0) != 0x80 ? 1 : 0;  // UTF-8 code points
+  if (6.2 * static_cast<double>(chars) <= room) return text_at(x, y, text);
+  return text_at(x, y, text, "start", (" textLength='" + px(room) + "' lengthAdjust='spacingAndGlyphs'").c_str());
+}
+
+/// Percent-encodes text for a data: URL.
+std::string url_encode(const std::string& s) {
+  static const char* hex = "0123456789ABCDEF";
+  std::string o;
+  for (unsigned char c : s) {
+    if (std::isalnum(c) || c == '-' || c == '_' || c == '.' || c == '~') {
+      o += static_cast<char>(c);
+    } else {
+      o += '%';
+      o += hex[c >> 4];
+      o += hex[c & 15];
+    }
+  }
+  return o;
+}
+
 /// A file name from a plot title: lower case letters and digits, '-' between words.
 std::string slug(const std::string& title) {
   std::string s;
@@ -118,8 +155,12 @@ std::string csv_cell(const std::string& s) {
   return q + "\"";
 }
 
-/// "name (unit)" for a column; the plot's axis label is the unit or the quantity.
-std::string column(const std::string& name, const std::string& label) {
+/// "name (unit)" for a column; the plot's axis label is the unit, the quantity, or both as
+/// "quantity (unit)" (then the unit is the column's).
+std::string column(const std::string& name, const std::string& axis_label) {
+  std::string label = axis_label;
+  if (const auto open = label.rfind(" ("); open != std::string::npos && !label.empty() && label.back() == ')')
+    label = label.substr(open + 2, label.size() - open - 3);
   if (label.empty()) return name;
   return name.empty() ? label : name + " (" + label + ")";
 }
@@ -195,8 +236,7 @@ std::string svg_plot(const std::vector<Series>& series, const PlotOptions& o) {
   if (o.logx) x0 = std::floor(x0 * 1e9) / 1e9, x1 = std::ceil(x1 * 1e9) / 1e9;
   auto X = [&](double v) { return ml + (tx(v) - x0) / (x1 - x0) * (W - ml - mr); };
   auto Y = [&](double v) { return H - mb - (ty(v) - y0) / (y1 - y0) * (H - mt - mb); };
-  std::string s = "<svg xmlns='http://www.w3.org/2000/svg' width='" + px(W) + "' height='" + px(H) +
-                  "' font-family='sans-serif' font-size='11'>\n";
+  std::string s = svg_open(W, H);
   s += "<rect x='" + px(ml) + "' y='" + px(mt) + "' width='" + px(W - ml - mr) + "' height='" + px(H - mt - mb) +
        "' fill='white' stroke='#888'/>\n";
   if (!o.title.empty()) s += "<text x='" + px(ml) + "' y='16' font-weight='bold'>" + escape(o.title) + "</text>\n";
@@ -212,14 +252,16 @@ std::string svg_plot(const std::vector<Series>& series, const PlotOptions& o) {
   }
   s += "<text x='" + px((ml + W - mr) / 2) + "' y='" + px(H - 8) + "' text-anchor='middle'>" + escape(o.xlabel) + "</text>\n";
   s += "<text transform='translate(14," + px((mt + H - mb) / 2) + ") rotate(-90)' text-anchor='middle'>" + escape(o.ylabel) + "</text>\n";
+  int legend = 0;
   for (std::size_t k = 0; k < series.size(); ++k) {
     const auto& sr = series[k];
     const std::string col = sr.color.empty() ? kPalette[k % 8] : sr.color;
     const std::size_t n = std::min(sr.x.size(), sr.y.size());
     if (sr.points) {
+      std::set<std::pair<long, long>> drawn;  // one circle per pixel: a cloud of 10^5 samples stays a small page
       for (std::size_t i = 0; i < n; ++i) {
         const double a = X(sr.x[i]), b = Y(sr.y[i]);
-        if (std::isfinite(a) && std::isfinite(b))
+        if (std::isfinite(a) && std::isfinite(b) && drawn.insert({std::lround(a), std::lround(b)}).second)
           s += "<circle cx='" + px(a) + "' cy='" + px(b) + "' r='" + px(sr.point_radius) + "' fill='" + col + "'/>";
       }
     } else {
@@ -235,9 +277,10 @@ std::string svg_plot(const std::vector<Series>& series, const PlotOptions& o) {
       }
       s += "<path d='" + d + "' fill='none' stroke='" + col + "' stroke-width='1.3'" + (sr.dashed ? " stroke-dasharray='5,3'" : "") + "/>";
     }
-    const double ly = mt + 14 + 16 * static_cast<double>(k);
+    if (sr.name.empty()) continue;  // unnamed: a second line of a named series (e.g. a bound's lower side)
+    const double ly = mt + 14 + 16 * static_cast<double>(legend++);
     s += "\n<rect x='" + px(W - mr + 10) + "' y='" + px(ly - 8) + "' width='12' height='8' fill='" + col + "'/>";
-    s += "<text x='" + px(W - mr + 26) + "' y='" + px(ly) + "'>" + escape(sr.name) + "</text>\n";
+    s += legend_text(W - mr + 26, ly, sr.name, mr - 30) + "\n";
   }
   for (const auto& m : o.marks) {
     const double a = X(m.x), b = Y(m.y);
@@ -249,40 +292,257 @@ std::string svg_plot(const std::vector<Series>& series, const PlotOptions& o) {
   return s;
 }
 
+std::string svg_forest(const std::vector<Interval>& rows, const std::string& title, const std::string& reference_label) {
+  // Label column, interval column (each row on its own scale), value column.
+  const double W = 720, ml = 190, mr = 200, mt = 30, row_h = 36, mb = 34;
+  const double H = mt + row_h * static_cast<double>(std::max<std::size_t>(rows.size(), 1)) + mb;
+  const double x0 = ml, x1 = W - mr;
+  std::string s = svg_open(W, H);
+  if (!title.empty()) s += text_at(ml, 18, title, "start", " font-weight='bold'") + "\n";
+  bool any_reference = false, any_truth = false;
+  for (std::size_t k = 0; k < rows.size(); ++k) {
+    const auto& r = rows[k];
+    const double y = mt + row_h * (static_cast<double>(k) + 0.5);
+    double lo = std::min(r.lower, r.value), hi = std::max(r.upper, r.value);
+    for (double v : {r.reference, r.truth})
+      if (std::isfinite(v)) lo = std::min(lo, v), hi = std::max(hi, v);
+    if (!std::isfinite(lo) || !std::isfinite(hi)) lo = hi = std::isfinite(r.value) ? r.value : 0.0;
+    if (!(hi > lo)) {
+      const double d = std::max(std::abs(lo) * 0.1, 1e-12);
+      lo -= d, hi += d;
+    }
+    const double pad = 0.08 * (hi - lo);
+    lo -= pad, hi += pad;
+    auto X = [&](double v) { return x0 + (v - lo) / (hi - lo) * (x1 - x0); };
+    if (k % 2 == 0) s += "<rect x='0' y='" + px(y - row_h / 2) + "' width='" + px(W) + "' height='" + px(row_h) + "' fill='#f6f8fa'/>";
+    s += text_at(ml - 8, y + 4, r.name + (r.unit.empty() || r.unit == "-" ? "" : " (" + r.unit + ")"), "end");
+    s += "<line x1='" + px(x0) + "' x2='" + px(x1) + "' y1='" + px(y) + "' y2='" + px(y) + "' stroke='#ccc'/>";
+    s += text_at(x0, y + 16, fmt(lo), "start", " font-size='10' fill='#777'");
+    s += text_at(x1, y + 16, fmt(hi), "end", " font-size='10' fill='#777'");
+    if (std::isfinite(r.reference)) {
+      any_reference = true;
+      s += "<line x1='" + px(X(r.reference)) + "' x2='" + px(X(r.reference)) + "' y1='" + px(y - 9) + "' y2='" + px(y + 9) +
+           "' stroke='#888' stroke-width='2'/>";
+    }
+    if (std::isfinite(r.lower) && std::isfinite(r.upper))
+      s += "<line x1='" + px(X(r.lower)) + "' x2='" + px(X(r.upper)) + "' y1='" + px(y) + "' y2='" + px(y) +
+           "' stroke='#1f77b4' stroke-width='5' stroke-linecap='round' opacity='0.55'/>";
+    if (std::isfinite(r.value)) s += "<circle cx='" + px(X(r.value)) + "' cy='" + px(y) + "' r='4.5' fill='#1f77b4'/>";
+    if (std::isfinite(r.truth)) {
+      any_truth = true;
+      const double t = X(r.truth);
+      s += "<path d='M" + px(t) + "," + px(y - 7) + "L" + px(t + 6) + "," + px(y) + "L" + px(t) + "," + px(y + 7) + "L" + px(t - 6) + "," +
+           px(y) + "Z' fill='none' stroke='#d62728' stroke-width='2'/>";
+    }
+    s += text_at(x1 + 10, y + 4, fmt(r.value) + "  [" + fmt(r.lower) + ", " + fmt(r.upper) + "]");
+    s += "\n";
+  }
+  // The legend under the rows.
+  const double ly = H - 12;
+  double lx = ml;
+  s += "<circle cx='" + px(lx) + "' cy='" + px(ly - 4) + "' r='4' fill='#1f77b4'/>" + text_at(lx + 8, ly, "value, 95 % interval");
+  lx += 150;
+  if (any_reference) {
+    s += "<line x1='" + px(lx) + "' x2='" + px(lx) + "' y1='" + px(ly - 11) + "' y2='" + px(ly + 2) + "' stroke='#888' stroke-width='2'/>" +
+         text_at(lx + 6, ly, reference_label);
+    lx += 110;
+  }
+  if (any_truth) s += text_at(lx, ly, "◇ truth", "start", " fill='#d62728'");
+  s += text_at(W - 6, ly, "each row on its own scale", "end", " font-size='9' fill='#888'");
+  s += "\n</svg>\n";
+  return s;
+}
+
+std::string svg_bars(const Bars& b, const PlotOptions& o) {
+  const std::size_t ns = std::max<std::size_t>(b.series.size(), 1), ng = b.groups.size();
+  const double W = o.width, ml = 190, mr = 150, mt = 30, mb = 42, bar_h = 11;
+  const double group_h = bar_h * static_cast<double>(ns) + 10;
+  const double H = mt + group_h * static_cast<double>(std::max<std::size_t>(ng, 1)) + mb;
+  auto at = [](const std::vector<std::vector<double>>& v, std::size_t k, std::size_t g) {
+    return k < v.size() && g < v[k].size() ? v[k][g] : kNoValue;
+  };
+  double lo = 0.0, hi = 0.0;  // bars start at zero
+  for (std::size_t k = 0; k < ns; ++k)
+    for (std::size_t g = 0; g < ng; ++g)
+      for (double v : {at(b.value, k, g), at(b.lower, k, g), at(b.upper, k, g)})
+        if (std::isfinite(v)) lo = std::min(lo, v), hi = std::max(hi, v);
+  if (!(hi > lo)) hi = lo + 1.0;
+  const double pad = 0.05 * (hi - lo);
+  if (lo < 0) lo -= pad;
+  hi += pad;
+  auto X = [&](double v) { return ml + (v - lo) / (hi - lo) * (W - ml - mr); };
+  std::string s = svg_open(W, H);
+  if (!o.title.empty()) s += text_at(ml, 18, o.title, "start", " font-weight='bold'") + "\n";
+  for (double t : ticks(lo, hi, false)) {
+    s += "<line x1='" + px(X(t)) + "' x2='" + px(X(t)) + "' y1='" + px(mt) + "' y2='" + px(H - mb) + "' stroke='#eee'/>";
+    s += text_at(X(t), H - mb + 14, fmt(t), "middle");
+  }
+  s += "<line x1='" + px(X(0)) + "' x2='" + px(X(0)) + "' y1='" + px(mt) + "' y2='" + px(H - mb) + "' stroke='#888'/>\n";
+  s += text_at((ml + W - mr) / 2, H - 8, o.xlabel, "middle") + "\n";
+  for (std::size_t g = 0; g < ng; ++g) {
+    const double y0 = mt + group_h * static_cast<double>(g) + 5;
+    s += text_at(ml - 8, y0 + bar_h * static_cast<double>(ns) / 2 + 4, b.groups[g], "end");
+    for (std::size_t k = 0; k < ns; ++k) {
+      const std::string col = k < b.colors.size() && !b.colors[k].empty() ? b.colors[k] : kPalette[k % 8];
+      const double y = y0 + bar_h * static_cast<double>(k);
+      const double v = at(b.value, k, g);
+      if (!std::isfinite(v)) {
+        s += text_at(X(0) + 4, y + bar_h - 2, "not scored", "start", " font-size='9' fill='#888'");
+        continue;
+      }
+      const double a = std::min(X(0), X(v)), w = std::abs(X(v) - X(0));
+      s += "<rect x='" + px(a) + "' y='" + px(y + 1) + "' width='" + px(std::max(w, 0.5)) + "' height='" + px(bar_h - 2) + "' fill='" +
+           col + "'/>";
+      const double l = at(b.lower, k, g), u = at(b.upper, k, g);
+      if (std::isfinite(l) && std::isfinite(u)) {
+        const double ym = y + bar_h / 2;
+        s += "<path d='M" + px(X(l)) + "," + px(ym) + "L" + px(X(u)) + "," + px(ym) + "M" + px(X(l)) + "," + px(ym - 3) + "L" + px(X(l)) +
+             "," + px(ym + 3) + "M" + px(X(u)) + "," + px(ym - 3) + "L" + px(X(u)) + "," + px(ym + 3) +
+             "' stroke='#222' stroke-width='1.2'/>";
+      }
+    }
+    s += "\n";
+  }
+  for (std::size_t k = 0; k < b.series.size(); ++k) {
+    const std::string col = k < b.colors.size() && !b.colors[k].empty() ? b.colors[k] : kPalette[k % 8];
+    const double ly = mt + 14 + 16 * static_cast<double>(k);
+    s += "<rect x='" + px(W - mr + 10) + "' y='" + px(ly - 8) + "' width='12' height='8' fill='" + col + "'/>" +
+         legend_text(W - mr + 26, ly, b.series[k], mr - 30) + "\n";
+  }
+  s += "</svg>\n";
+  return s;
+}
+
 Page::Page(std::string title) : title_(std::move(title)) {}
 
-void Page::heading(const std::string& text, int level) {
-  const auto l = std::to_string(std::clamp(level, 1, 6));
-  body_ += "<h" + l + ">" + escape(text) + "</h" + l + ">\n";
-}
-void Page::paragraph(const std::string& text) { body_ += "<p>" + escape(text) + "</p>\n"; }
-void Page::preformatted(const std::string& text) { body_ += "<pre>" + escape(text) + "</pre>\n"; }
-void Page::table(const std::vector<std::string>& header, const std::vector<std::vector<std::string>>& rows) {
-  body_ += "<table><tr>";
-  for (const auto& h : header) body_ += "<th>" + escape(h) + "</th>";
-  body_ += "</tr>\n";
-  for (const auto& r : rows) {
-    body_ += "<tr>";
-    for (const auto& c : r) body_ += "<td>" + escape(c) + "</td>";
-    body_ += "</tr>\n";
-  }
-  body_ += "</table>\n";
-}
-void Page::plot(const std::vector<Series>& series, const PlotOptions& options) {
-  std::string svg = svg_plot(series, options);
-  body_ += "<div class='plot'>" + svg + "</div>\n";
-  char n[8];
-  std::snprintf(n, sizeof n, "%02zu-", figures_.size() + 1);
-  figures_.push_back({n + slug(options.title), std::move(svg), csv_table(series, options)});
+void Page::end_figures() {
+  if (!in_figures_) return;
+  body_ += "</div>\n";
+  in_figures_ = false;
 }
 
+void Page::figure(std::string svg, std::string csv, const std::string& title, bool wide) {
+  if (!in_figures_) body_ += "<div class='figs'>\n";
+  in_figures_ = true;
+  char n[8];
+  std::snprintf(n, sizeof n, "%02zu-", figures_.size() + 1);
+  body_ += std::string("<figure class='fig") + (wide ? " wide" : "") + "' id='fig-" + std::to_string(figures_.size() + 1) + "'>" + svg +
+           "</figure>\n";
+  figures_.push_back({n + slug(title), std::move(svg), std::move(csv)});
+}
+
+void Page::verdict(const Verdict& v) {
+  std::string h = "<section id='verdict' class='verdict " + escape(v.kind) + "'>\n<p class='headline'>" + escape(v.headline) + "</p>\n";
+  if (!v.facts.empty()) {
+    h += "<dl>";
+    for (const auto& [k, x] : v.facts) h += "<dt>" + escape(k) + "</dt><dd>" + escape(x) + "</dd>";
+    h += "</dl>\n";
+  }
+  if (!v.next.empty()) h += "<p class='next'><b>Next:</b> " + escape(v.next) + "</p>\n";
+  verdict_ = h + "</section>\n";
+}
+
+void Page::heading(const std::string& text, int level) {
+  end_figures();
+  const int lv = std::clamp(level, 1, 6);
+  const auto l = std::to_string(lv);
+  std::string id;
+  if (lv == 2) {
+    id = "s" + std::to_string(toc_.size() + 1) + "-" + slug(text);
+    toc_.emplace_back(id, text);
+  }
+  body_ += "<h" + l + (id.empty() ? "" : " id='" + id + "'") + ">" + escape(text) + "</h" + l + ">\n";
+}
+void Page::paragraph(const std::string& text) {
+  end_figures();
+  body_ += "<p>" + escape(text) + "</p>\n";
+}
+void Page::preformatted(const std::string& text) {
+  end_figures();
+  body_ += "<pre>" + escape(text) + "</pre>\n";
+}
+void Page::table(const std::vector<std::string>& header, const std::vector<std::vector<std::string>>& rows,
+                 const std::vector<std::size_t>& emphasised) {
+  end_figures();
+  body_ += "<div class='tablewrap'><table><thead><tr>";
+  for (const auto& h : header) body_ += "<th>" + escape(h) + "</th>";
+  body_ += "</tr></thead><tbody>\n";
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    const bool em = std::find(emphasised.begin(), emphasised.end(), i) != emphasised.end();
+    body_ += em ? "<tr class='em'>" : "<tr>";
+    for (const auto& c : rows[i]) body_ += "<td>" + escape(c) + "</td>";
+    body_ += "</tr>\n";
+  }
+  body_ += "</tbody></table></div>\n";
+}
+void Page::plot(const std::vector<Series>& series, const PlotOptions& options) {
+  figure(svg_plot(series, options), csv_table(series, options), options.title, options.wide);
+}
+void Page::forest(const std::vector<Interval>& rows, const std::string& title, const std::string& reference_label) {
+  std::string csv = "parameter,unit,value,lower,upper," + csv_cell(reference_label) + ",truth\n";
+  for (const auto& r : rows)
+    csv += csv_cell(r.name) + "," + csv_cell(r.unit) + "," + exact(r.value) + "," + exact(r.lower) + "," + exact(r.upper) + "," +
+           exact(r.reference) + "," + exact(r.truth) + "\n";
+  figure(svg_forest(rows, title, reference_label), std::move(csv), title, false);
+}
+void Page::bars(const Bars& b, const PlotOptions& options) {
+  std::string csv = "group";
+  for (const auto& n : b.series) csv += "," + csv_cell(n) + "," + csv_cell(n + ": lower") + "," + csv_cell(n + ": upper");
+  csv += "\n";
+  auto at = [](const std::vector<std::vector<double>>& v, std::size_t k, std::size_t g) {
+    return k < v.size() && g < v[k].size() ? v[k][g] : kNoValue;
+  };
+  for (std::size_t g = 0; g < b.groups.size(); ++g) {
+    csv += csv_cell(b.groups[g]);
+    for (std::size_t k = 0; k < b.series.size(); ++k)
+      csv += "," + exact(at(b.value, k, g)) + "," + exact(at(b.lower, k, g)) + "," + exact(at(b.upper, k, g));
+    csv += "\n";
+  }
+  figure(svg_bars(b, options), std::move(csv), options.title, options.wide);
+}
+void Page::text_download(const std::string& label, const std::string& file_name, const std::string& text) {
+  end_figures();
+  body_ += "<details><summary>" + escape(label) + "</summary>\n<p><a download='" + escape(file_name) +
+           "' href='data:text/plain;charset=utf-8," + url_encode(text) + "'>Save as " + escape(file_name) + "</a></p>\n<pre>" +
+           escape(text) + "</pre></details>\n";
+}
+
+// The page's style: the verdict first in colour, figures in a grid two columns wide where the
+// screen allows (one below ~1,250 px), every SVG scaled to its column, long text wrapped rather
+// than cut, wide tables scrolled within their box, and print (Chromium's PDF) one figure per
+// width without splitting a figure or a table row.
+static const char* kStyle =
+    "body{font-family:system-ui,'DejaVu Sans',sans-serif;max-width:1500px;margin:0 auto;padding:0 24px 40px;color:#222;line-height:1.4}"
+    "h1{font-size:1.6em;margin:18px 0 10px}h2{margin-top:1.6em;border-bottom:1px solid #ddd;padding-bottom:3px}"
+    ".verdict{border-left:8px solid #1f77b4;background:#f2f7fc;padding:12px 18px;margin:0 0 14px}"
+    ".verdict.none{border-color:#2ca02c;background:#f2faf2}.verdict.unexplained{border-color:#d62728;background:#fcf2f2}"
+    ".verdict.identified{border-color:#9467bd;background:#f7f4fb}"
+    ".verdict .headline{font-size:1.3em;font-weight:600;margin:0 0 8px}"
+    ".verdict dl{display:grid;grid-template-columns:max-content 1fr;gap:3px 18px;margin:0}"
+    ".verdict dt{color:#555}.verdict dd{margin:0;font-variant-numeric:tabular-nums}.verdict .next{margin:10px 0 0}"
+    "nav.toc ol{columns:2 280px;margin:4px 0;padding-left:22px}nav.toc a{color:#1f5f99}"
+    ".figs{display:grid;grid-template-columns:repeat(auto-fill,minmax(min(100%,600px),1fr));gap:14px 22px;margin:10px 0}"
+    ".fig{margin:0;min-width:0}.fig.wide{grid-column:1/-1}.fig svg{display:block;width:100%;height:auto}"
+    ".tablewrap{max-width:100%;overflow-x:auto;margin:8px 0}"
+    "table{border-collapse:collapse;font-variant-numeric:tabular-nums}td,th{border:1px solid #ccc;padding:3px 9px;text-align:right;"
+    "vertical-align:top}td:first-child,th:first-child{text-align:left}th{background:#f2f2f2}tr.em td{font-weight:600;background:#eef5fb}"
+    "td{white-space:nowrap}td:last-child{text-align:left;white-space:normal}th:last-child{text-align:left}"
+    "@media (max-width:1200px){td{white-space:normal}td,th{padding:3px 5px}}"
+    "pre{background:#f7f7f7;padding:8px;white-space:pre-wrap;overflow-wrap:anywhere}details{margin:10px 0}summary{cursor:pointer}"
+    "@media print{body{max-width:none;padding:0}.figs{display:block}.fig{break-inside:avoid;margin:0 0 10px}"
+    "h2,h3{break-after:avoid}tr{break-inside:avoid}.tablewrap{overflow:visible}details pre{display:none}}";
+
 std::string Page::html() const {
-  return "<!DOCTYPE html>\n<html><head><meta charset='utf-8'><title>" + escape(title_) +
-         "</title>\n<style>body{font-family:sans-serif;max-width:980px;margin:1em auto;color:#222}"
-         "table{border-collapse:collapse;margin:0.5em 0}td,th{border:1px solid #ccc;padding:2px 8px;text-align:right}"
-         "th{background:#f4f4f4}pre{background:#f8f8f8;padding:6px;overflow-x:auto}.plot{margin:0.6em 0}</style>\n"
-         "</head><body>\n<h1>" +
-         escape(title_) + "</h1>\n" + body_ + "</body></html>\n";
+  std::string toc;
+  if (!toc_.empty()) {
+    toc = "<nav class='toc'><b>Contents</b><ol>";
+    for (const auto& [id, text] : toc_) toc += "<li><a href='#" + id + "'>" + escape(text) + "</a></li>";
+    toc += "</ol></nav>\n";
+  }
+  return "<!DOCTYPE html>\n<html lang='en'><head><meta charset='utf-8'><meta name='viewport' content='width=device-width,initial-scale=1'>"
+         "<title>" +
+         escape(title_) + "</title>\n<style>" + kStyle + "</style>\n</head><body>\n<h1>" + escape(title_) + "</h1>\n" + verdict_ + toc +
+         body_ + (in_figures_ ? "</div>\n" : "") + "</body></html>\n";
 }
 
 void Page::write(const std::string& path) const {

@@ -260,10 +260,63 @@ void write_report(const std::string& dir, const std::string& run_name, const cid
   std::vector<cid::Vector6d> w_geo;
   if (r.geometric) w_geo = model_plate_wrenches(p, r.geometric->x, r.geometric->theta.theta, n_geo);
 
-  std::ostringstream summary;
-  print(summary, p, r);
-  page.heading("Summary");
-  page.preformatted(summary.str());
+  // The verdict: the identified parameters with intervals, the fit, and what to do next.
+  const auto& best = r.geometric ? r.geometric->theta : r.nominal;
+  const auto& sc = p.scene();
+  {
+    rp::Verdict v;
+    v.kind = "identified";
+    v.headline = fmt::format("K = {:.4g} N/m ± {:.2g}{}", best.K, kZ95 * best.K_std,
+                             best.mu_identifiable ? fmt::format(", μ = {:.3f} ± {:.3f}", best.mu, kZ95 * best.mu_std)
+                                                  : std::string(", μ not identifiable from this run"));
+    if (r.geometric) v.headline += " with the geometry identified";
+    v.facts.emplace_back("run", fmt::format("{}: {} of {} samples in contact", run_name, p.used().size(), p.data().size()));
+    v.facts.emplace_back("force error", r.geometric
+                                            ? fmt::format("{:.2f} % → {:.2f} % (mean relative; design geometry → identified)",
+                                                          100 * r.nominal.relative_force_error, 100 * best.relative_force_error)
+                                            : fmt::format("{:.2f} % (mean relative, design geometry)", 100 * best.relative_force_error));
+    v.facts.emplace_back("conditioning", fmt::format("rank {}, condition {:.3g}", best.rank, best.condition));
+    if (r.geometric) v.facts.emplace_back("λ", fmt::format("{:.3g}{}", r.geometric->lambda, r.lcurve ? " (L-curve corner)" : " (given)"));
+    std::vector<std::string> unseen;
+    if (r.observability) {
+      for (const auto& u : r.observability->unobservable) unseen.push_back(u + " (unobservable)");
+      for (const auto& u : r.observability->weak) unseen.push_back(u + " (weak)");
+    }
+    if (!unseen.empty()) v.facts.emplace_back("kept at design", fmt::format("{}", fmt::join(unseen, ", ")));
+    const bool physical = best.K > 0 && (!best.mu_identifiable || best.mu >= 0);
+    if (!physical) v.facts.emplace_back("physical validity", "violated: K must be > 0 and μ ≥ 0 — the model does not fit this run");
+    v.next = !physical ? "check the rig's contact scene and the run's frames: a physically invalid estimate means the model's geometry "
+                         "or the run's alignment is wrong."
+             : !unseen.empty() ? "record motion that brings the unobserved features into contact, then identify again; run `hil diagnose` "
+                                 "on this run to see what the contact model still misses."
+                               : "run `hil diagnose` on this run to see what the contact model still misses.";
+    page.verdict(v);
+  }
+  page.heading("Parameters");
+  {
+    std::vector<std::vector<std::string>> rows;
+    std::vector<rp::Interval> forest;
+    auto add = [&](const std::string& name, const std::string& unit, double v, double sd, double design, const std::string& state) {
+      rows.push_back({name, fmt::format("{:.5g}", v), fmt::format("{:.5g} … {:.5g}", v - kZ95 * sd, v + kZ95 * sd), unit,
+                      sd > 0 ? fmt::format("{:.1f}", std::abs(v - (std::isfinite(design) ? design : 0.0)) / sd) : "-", state});
+      forest.push_back({name, unit, v, v - kZ95 * sd, v + kZ95 * sd, design});
+    };
+    add("K", "N/m", best.K, best.K_std, rp::kNoValue, best.K > 0 ? "✓ K > 0" : "✗ K ≤ 0");
+    if (best.mu_identifiable) add("mu", "-", best.mu, best.mu_std, rp::kNoValue, best.mu >= 0 ? "✓ μ ≥ 0" : "✗ μ < 0");
+    else rows.push_back({"mu", "-", "-", "-", "-", "✗ not identifiable"});
+    if (r.geometric)
+      for (int j = 0; j < p.uncertainties(); ++j) {
+        const auto& u = sc.uncertainties[static_cast<std::size_t>(j)];
+        const double design = sc.design()[j];
+        if (r.geometric->fitted[static_cast<std::size_t>(j)])
+          add(u.name, unit_of(u), r.geometric->x[j], r.geometric->x_std[j], design, "fitted");
+        else rows.push_back({u.name, fmt::format("{:.5g}", r.geometric->x[j]), "-", unit_of(u), "-", "not fitted: design value"});
+      }
+    page.table({"parameter", "value", "95 % interval", "unit", "distance / std", "state"}, rows);
+    page.paragraph("Intervals are 1.96 std. Geometric uncertainties are drawn against their design value (grey); K and μ have "
+                   "no design value.");
+    page.forest(forest, "Identified parameters: value and 95 % interval", "design");
+  }
 
   const char* names[6] = {"fx", "fy", "fz", "mx", "my", "mz"};
   for (int group = 0; group < 2; ++group) {
@@ -284,7 +337,7 @@ void write_report(const std::string& dir, const std::string& run_name, const cid
         for (std::size_t a = 0; a < t.size(); ++a) geo.y.push_back(w_geo[a][c]);
         s.push_back(geo);
       }
-      page.plot(s, {std::string(names[c]), "t (s)", group == 0 ? "N" : "N m"});
+      page.plot(s, {std::string(names[c]), "t (s)", std::string(names[c]) + (group == 0 ? " (N)" : " (N m)")});
     }
   }
   page.heading("Number of contact points");
@@ -298,7 +351,7 @@ void write_report(const std::string& dir, const std::string& run_name, const cid
       for (int v : n_geo) b.y.push_back(v);
       s.push_back(b);
     }
-    page.plot(s, {"contact points", "t (s)", "N"});
+    page.plot(s, {"contact points", "t (s)", "contact points"});
   }
   auto inst_plots = [&](const std::vector<cid::InstantEstimate>& one, const std::vector<cid::InstantEstimate>& win,
                         const cid::LinearEstimate& glob, const std::string& label) {
@@ -320,7 +373,7 @@ void write_report(const std::string& dir, const std::string& run_name, const cid
       if (which == 1)
         for (auto& y : pts.y)
           if (std::isfinite(y) && (y < -1.0 || y > 2.0)) y = nan;
-      page.plot({pts, line, g}, {(which == 0 ? "K " : "mu ") + label, "t (s)", which == 0 ? "N/m" : "-"});
+      page.plot({pts, line, g}, {(which == 0 ? "K " : "mu ") + label, "t (s)", which == 0 ? "K (N/m)" : "μ (-)"});
     }
   };
   page.heading("Instantaneous estimates, nominal geometry");
@@ -357,6 +410,10 @@ void write_report(const std::string& dir, const std::string& run_name, const cid
       page.table(hdr, rows);
     }
   }
+  page.heading("Text summary");
+  std::ostringstream summary;
+  print(summary, p, r);
+  page.text_download("The summary as `hil contact identify` prints it", "contact-identification-" + run_name + ".txt", summary.str());
   page.write((std::filesystem::path(dir) / "index.html").string());
   page.write_figures((std::filesystem::path(dir) / "figures").string());
 }

@@ -3,11 +3,17 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <array>
+#include <cmath>
 #include <filesystem>
+#include <limits>
+#include <map>
 #include <fstream>
 #include <set>
 
+#include <hil/error/error.hpp>
 #include <hil/format/output.hpp>
+#include <hil/models/stiffness_model.hpp>
 #include <hil/report/html.hpp>
 
 // The outputs of a run's diagnosis (text summary, JSON, HTML report), apart from its set-up
@@ -237,115 +243,276 @@ nlohmann::json to_json(const RunDiagnosis& r) {
   return j;
 }
 
-void write_report(const std::string& dir, const RunDiagnosis& r) {
+TruthValues read_truth(const std::string& path, const RunDiagnosis& r) {
+  const nlohmann::json j = models::load_json(path);
+  if (!j.is_object() || j.value("format", "") != "hil.hidden_effects")
+    throw error::FormatError({path, 0, 0, "format"}, "not a hidden-effects file (hil contact simulate --truth-out writes one)");
+  TruthValues t;
+  const auto& comp = r.obs().component;
+  for (const auto& [key, v] : j.items()) {
+    if (v.is_number() && key != "format_version" && key != "effect_seed") t[key] = v.get<double>();
+    // Per-channel effects as six numbers, reported per component (bias_fx, gain_mz).
+    if (v.is_array() && v.size() == comp.size() && (key == "sensor_bias" || key == "sensor_gain"))
+      for (std::size_t c = 0; c < comp.size(); ++c)
+        if (v[c].is_number()) t[(key == "sensor_bias" ? "bias_" : "gain_") + comp[c]] = v[c].get<double>();
+  }
+  if (j.contains("geometric") && j["geometric"].is_object())
+    for (const auto& [key, v] : j["geometric"].items())
+      if (v.is_number()) t[key] = v.get<double>();
+  return t;
+}
+
+namespace {
+
+constexpr double kZ95 = 1.96;
+
+/// The held-out gain's 95 % interval (percent) from the paired z of the per-sample squared-error
+/// reduction: the reduction of the mean squared error g2 = 1 - (1 - g)² has standard error g2 / z;
+/// its interval maps back through g = 1 - sqrt(1 - g2). NaN when z is not known.
+std::pair<double, double> gain_interval(double gain_percent, double z) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  if (!std::isfinite(z) || !std::isfinite(gain_percent) || z == 0.0) return {nan, nan};
+  const double g = gain_percent / 100, g2 = 1 - (1 - g) * (1 - g), se = std::abs(g2 / z);
+  auto back = [](double x) { return 100 * (1 - std::sqrt(std::max(0.0, 1 - std::min(x, 1.0)))); };
+  return {back(g2 - kZ95 * se), back(g2 + kZ95 * se)};
+}
+
+/// Held-out blocks (the unshifted grid) in which `b` predicts better than `a`, and their number.
+std::pair<int, int> blocks_won(const dg::Observations& obs, const dg::Score& a, const dg::Score& b, int folds) {
+  int won = 0, n = 0;
+  if (a.cv_prediction.rows() != static_cast<Eigen::Index>(obs.size()) || b.cv_prediction.rows() != a.cv_prediction.rows()) return {0, 0};
+  for (const auto& block : dg::time_blocks(obs.size(), folds)) {
+    if (block.empty()) continue;
+    ++n;
+    won += dg::relative_error(obs, b.cv_prediction, block) < dg::relative_error(obs, a.cv_prediction, block) ? 1 : 0;
+  }
+  return {won, n};
+}
+
+/// The held-out gain of `b` over `a` on each offset of the repeated CV's grid (offset 0 first).
+std::vector<double> grid_gains(const dg::Observations& obs, const dg::Score& a, const dg::Score& b) {
+  std::vector<int> all(obs.size());
+  for (std::size_t i = 0; i < all.size(); ++i) all[i] = static_cast<int>(i);
+  std::vector<double> g;
+  if (a.cv_prediction.size() == 0 || b.cv_prediction.size() == 0) return g;
+  g.push_back(100 * (1 - dg::relative_error(obs, b.cv_prediction, all) / dg::relative_error(obs, a.cv_prediction, all)));
+  for (std::size_t i = 0; i < a.cv_shifted.size() && i < b.cv_shifted.size(); ++i)
+    g.push_back(100 * (1 - dg::relative_error(obs, b.cv_shifted[i], all) / dg::relative_error(obs, a.cv_shifted[i], all)));
+  return g;
+}
+
+/// The unit of a context signal (contact_context, deflection_context, the stiffness table's).
+std::string signal_unit(const std::string& s) {
+  static const std::map<std::string, std::string> u{{"speed", "m/s"},      {"acceleration", "m/s²"},
+                                                    {"interference", "m"}, {"penetration_rate", "m/s"},
+                                                    {"slip_speed", "m/s"}, {"load", "N"},
+                                                    {"time", "s"},         {"px", "m"},
+                                                    {"py", "m"},           {"pz", "m"},
+                                                    {"vx", "m/s"},         {"vy", "m/s"},
+                                                    {"vz", "m/s"}};
+  if (const auto it = u.find(s); it != u.end()) return it->second;
+  if (s.rfind("load_f", 0) == 0) return "N";
+  if (s.rfind("load_m", 0) == 0) return "N m";
+  if (s.size() >= 2 && s[0] == 'q' && std::isdigit(static_cast<unsigned char>(s[1]))) return "rad";
+  return "";
+}
+
+std::string with_unit(const std::string& name, const std::string& unit) { return unit.empty() ? name : name + " (" + unit + ")"; }
+
+int component_index(const dg::Observations& obs, const std::string& name) {
+  for (std::size_t c = 0; c < obs.component.size(); ++c)
+    if (obs.component[c] == name) return static_cast<int>(c);
+  return -1;
+}
+
+/// The verdict block: what was found, how sure, what to do next.
+report::Verdict make_verdict(const RunDiagnosis& r) {
+  const auto& d = r.result;
+  const auto& obs = r.obs();
+  const auto& ext = extended_score(r);
+  const std::string what = r.mode == "contact" ? "wrench" : "deflection";
+  report::Verdict v;
+  const auto& nr = d.nominal_residuals;
+  const std::string follows = nr.correlations.empty() ? std::string()
+                                                      : fmt::format("{} (r = {:+.2f} on {}, lag {})", nr.correlations.front().signal,
+                                                                    nr.correlations.front().correlation, nr.correlations.front().component,
+                                                                    nr.correlations.front().lag);
+  if (d.cause != "none") {
+    v.kind = "cause";
+    v.headline = "Named cause: " + d.cause + " — " + dg::describe_extension(d.cause) +
+                 (d.second_cause.empty() ? "" : "; second cause: " + d.second_cause + " — " + dg::describe_extension(d.second_cause));
+  } else if (!nr.white) {
+    v.kind = "unexplained";
+    v.headline = fmt::format("No candidate explains it, yet the nominal residual is not white (Ljung-Box Q {:.0f} against {:.0f}): "
+                             "structure is left that the candidates tried do not name",
+                             nr.ljung_box_q, nr.ljung_box_bound);
+  } else {
+    v.kind = "none";
+    v.headline = "No cause: the nominal model is within the measurement noise on this run";
+  }
+  const double span = obs.size() > 1 ? obs.t_s.back() - obs.t_s.front() : 0.0;
+  v.facts.emplace_back("run", r.mode == "stiffness"
+                                  ? fmt::format("{}: {} loaded configurations, stiffness table", r.run_name, obs.size())
+                                  : fmt::format("{}: {} samples over {:.1f} s, {} model", r.run_name, obs.size(), span, r.mode));
+  if (d.extended) {
+    const double z = dg::paired_z(obs, d.nominal, ext);
+    const auto [lo, hi] = gain_interval(d.gain_percent, z);
+    v.facts.emplace_back("held-out error", fmt::format("{:.2f} % → {:.2f} % (relative {} error, nominal → {})", 100 * d.nominal.cv_error,
+                                                       100 * ext.cv_error, what, ext.model));
+    v.facts.emplace_back("gain", std::isfinite(lo)
+                                     ? fmt::format("{:.1f} % (95 %: {:.1f} … {:.1f} %, paired z {:.1f})", d.gain_percent, lo, hi, z)
+                                     : fmt::format("{:.1f} %", d.gain_percent));
+    const auto [won, blocks] = blocks_won(obs, d.nominal, ext, r.folds);
+    const auto g = grid_gains(obs, d.nominal, ext);
+    std::string stab = fmt::format("better in {} of {} held-out blocks", won, blocks);
+    if (g.size() > 1)
+      stab += fmt::format("; over {} offsets of the CV grid the gain is {:.1f} … {:.1f} %", g.size(), *std::min_element(g.begin(), g.end()),
+                          *std::max_element(g.begin(), g.end()));
+    else stab += "; one CV grid (--cv-offsets N repeats it over N offsets)";
+    v.facts.emplace_back("stability", stab);
+  } else {
+    v.facts.emplace_back("held-out error", fmt::format("{:.2f} % relative {} error; the noise alone ≈ {:.2f} %", 100 * d.nominal.cv_error,
+                                                       what, 100 * d.noise_relative));
+    const auto best = std::find_if(d.candidates.begin(), d.candidates.end(), [](const auto& c) { return std::isfinite(c.score.cv_error); });
+    if (best != d.candidates.end())
+      v.facts.emplace_back("best candidate", fmt::format("{}: gain {:+.1f} % — {}", best->name, best->gain_percent, best->verdict));
+  }
+  const auto& after = d.extended ? d.extended_residuals : nr;
+  v.facts.emplace_back(d.extended ? "residual after" : "residual",
+                       fmt::format("{} (Q {:.0f} against {:.0f}){}", after.white ? "white" : "not white", after.ljung_box_q,
+                                   after.ljung_box_bound,
+                                   after.correlations.empty()
+                                       ? std::string()
+                                       : fmt::format("; follows {} most (r = {:+.2f})", after.correlations.front().signal,
+                                                     after.correlations.front().correlation)));
+  if (!ext.full.unidentifiable.empty()) v.facts.emplace_back("not identifiable", unidentifiable_text(ext.full));
+  // What to do next.
+  if (v.kind == "cause") {
+    const auto cause = std::find_if(d.candidates.begin(), d.candidates.end(), [&](const auto& c) { return c.name == d.cause; });
+    const auto [clo, chi] = cause != d.candidates.end() ? gain_interval(cause->gain_percent, cause->z) : std::pair{0.0, 0.0};
+    std::string rival;
+    for (const auto& c : d.candidates) {
+      if (c.name == d.cause || !c.supported || !std::isfinite(c.gain_percent)) continue;
+      const auto [lo, hi] = gain_interval(c.gain_percent, c.z);
+      if (std::isfinite(hi) && std::isfinite(clo) && hi >= clo && lo <= chi) {
+        rival = c.name;
+        break;
+      }
+    }
+    if (!rival.empty())
+      v.next = fmt::format("{} and {} explain this run about equally (their gains' intervals overlap): record a run whose motion "
+                           "excites them differently before acting on {}.",
+                           d.cause, rival, d.cause);
+    else
+      v.next = fmt::format("re-identify with the nominal model extended by {} (its parameters below), or remove the cause at the rig, "
+                           "then diagnose again{}.",
+                           d.cause, d.extended_residuals.white ? ": the residual should stay white" : "");
+    if (!d.extended_residuals.white && !d.extended_residuals.correlations.empty())
+      v.next += fmt::format(" The extended model's residual is still not white and follows {}: a further effect may be tied to it.",
+                            d.extended_residuals.correlations.front().signal);
+  } else if (v.kind == "unexplained") {
+    v.next = follows.empty()
+                 ? "look for an effect outside the candidates tried, or record a run that excites one effect at a time."
+                 : "look for an effect that follows " + follows + ", outside the candidates tried, or record a run that excites it alone.";
+  } else {
+    v.next = "nothing to change: keep the nominal model for this rig.";
+  }
+  return v;
+}
+
+}  // namespace
+
+void write_report(const std::string& dir, const RunDiagnosis& r, const TruthValues& truth) {
   namespace rp = hil::report;
   const auto& d = r.result;
   const auto& obs = r.obs();
   const auto& ext = extended_score(r);
+  const std::size_t n = obs.size();
   fs::create_directories(dir);
   rp::Page page("Diagnosis: " + r.run_name);
-  std::ostringstream summary;
-  print_summary(summary, r);
-  page.heading("Summary");
-  page.preformatted(summary.str());
-  page.heading("Measured, nominal and extended (held-out predictions)");
-  page.paragraph("Each time block is predicted by the model fitted on the other blocks (blocked cross-validation).");
-  // The components in order of the nominal model's relative error.
-  std::vector<int> order{0, 1, 2, 3, 4, 5};
-  std::sort(order.begin(), order.end(),
-            [&](int a, int b) { return d.nominal_residuals.relative_rms(a) > d.nominal_residuals.relative_rms(b); });
-  for (int c : order) {
-    std::vector<double> m(obs.size()), nom(obs.size()), ex(obs.size());
-    for (std::size_t k = 0; k < obs.size(); ++k) {
+  page.verdict(make_verdict(r));
+  auto comp = [&](int c) { return obs.component[static_cast<std::size_t>(c)]; };
+  auto unit = [&](int c) { return obs.unit[static_cast<std::size_t>(c)]; };
+  auto residual = [&](const dg::Score& s, int c) {
+    std::vector<double> v(n);
+    for (std::size_t k = 0; k < n; ++k) {
       const auto i = static_cast<Eigen::Index>(k);
-      m[k] = obs.y(i, c);
-      nom[k] = d.nominal.cv_prediction(i, c);
-      ex[k] = ext.cv_prediction(i, c);
+      v[k] = s.cv_prediction.rows() == static_cast<Eigen::Index>(n) ? obs.y(i, c) - s.cv_prediction(i, c) : std::nan("");
     }
-    const auto& name = obs.component[static_cast<std::size_t>(c)];
-    page.plot({{"measured", obs.t_s, m, "#444444"}, {"nominal", obs.t_s, nom, "#d62728", false, true}, {ext.model, obs.t_s, ex, "#1f77b4"}},
-              {name, "t (s)", obs.unit[static_cast<std::size_t>(c)]});
-  }
-  page.heading("Residuals over time");
-  for (int c : {order[0], order[1]}) {
-    std::vector<double> rn(obs.size()), re(obs.size());
-    for (std::size_t k = 0; k < obs.size(); ++k) {
-      const auto i = static_cast<Eigen::Index>(k);
-      rn[k] = obs.y(i, c) - d.nominal.cv_prediction(i, c);
-      re[k] = obs.y(i, c) - ext.cv_prediction(i, c);
-    }
-    const auto& name = obs.component[static_cast<std::size_t>(c)];
-    page.plot({{"nominal", obs.t_s, rn, "#d62728"}, {ext.model, obs.t_s, re, "#1f77b4"}},
-              {"residual " + name, "t (s)", obs.unit[static_cast<std::size_t>(c)]});
-  }
-  page.heading("Where the nominal model is wrong");
+    return v;
+  };
+
+  page.heading("Candidates");
+  page.paragraph("Each candidate extends the nominal model; each is fitted and scored on held-out time blocks (blocked "
+                 "cross-validation). Intervals are 95 %, from the paired z of the per-sample error reduction.");
   {
     std::vector<std::vector<std::string>> rows;
-    for (int c = 0; c < 6; ++c)
-      rows.push_back({obs.component[static_cast<std::size_t>(c)],
-                      fmt::format("{:.4g} {}", d.nominal_residuals.rms(c), obs.unit[static_cast<std::size_t>(c)]),
-                      fmt::format("{:.2f} %", 100 * d.nominal_residuals.relative_rms(c)),
-                      fmt::format("{:.4g} {}", d.extended_residuals.rms(c), obs.unit[static_cast<std::size_t>(c)])});
-    page.table({"component", "nominal rms", "nominal relative", "extended rms"}, rows);
-    rows.clear();
-    for (const auto& s : d.nominal_residuals.states)
-      rows.push_back({s.label, std::to_string(s.samples), fmt::format("{:.2f} %", 100 * s.relative_error),
-                      fmt::format("{:.0f} %", 100 * s.share)});
-    if (!rows.empty()) page.table({"state", "samples", "relative error", "share of the error"}, rows);
-    rows.clear();
-    for (std::size_t i = 0; i < d.nominal_residuals.correlations.size() && i < 10; ++i) {
-      const auto& c = d.nominal_residuals.correlations[i];
-      rows.push_back({c.signal, c.component, fmt::format("{:+.3f}", c.correlation), std::to_string(c.lag)});
-    }
-    page.table({"signal", "residual", "correlation", "lag (samples)"}, rows);
-    page.paragraph(fmt::format("Ljung-Box Q (20 lags) of the {} residual: {:.1f} against a 99 % bound of {:.1f}: {}.",
-                               obs.component[static_cast<std::size_t>(d.nominal_residuals.worst_component)],
-                               d.nominal_residuals.ljung_box_q, d.nominal_residuals.ljung_box_bound,
-                               d.nominal_residuals.white ? "white" : "not white (structure left to explain)"));
-    std::vector<double> lag, ac_n, ac_e;
-    for (std::size_t i = 0; i < d.nominal_residuals.autocorrelation.size(); ++i) {
-      lag.push_back(static_cast<double>(i));
-      ac_n.push_back(d.nominal_residuals.autocorrelation[i]);
-      ac_e.push_back(i < d.extended_residuals.autocorrelation.size() ? d.extended_residuals.autocorrelation[i] : 0.0);
-    }
-    page.plot({{"nominal", lag, ac_n, "#d62728", true}, {ext.model, lag, ac_e, "#1f77b4", true}},
-              {"residual autocorrelation (worst component)", "lag (samples)", "-"});
-  }
-  page.heading("Candidate ranking");
-  {
-    std::vector<std::vector<std::string>> rows;
-    rows.push_back({"nominal", fmt::format("{:.3f} %", 100 * d.nominal.cv_error), "", "", fmt::format("{:.0f}", d.nominal.bic), "",
-                    "reference"});
-    for (const auto& c : d.candidates)
+    std::vector<std::size_t> em;
+    rows.push_back({"nominal", fmt::format("{:.3f} %", 100 * d.nominal.cv_error), "", "", "", "", "", "reference"});
+    rp::Bars bars;
+    bars.series = {"held-out error"};
+    bars.colors = {"#1f77b4"};
+    bars.value.resize(1), bars.lower.resize(1), bars.upper.resize(1);
+    bars.groups.push_back("nominal");
+    bars.value[0].push_back(100 * d.nominal.cv_error);
+    bars.lower[0].push_back(std::nan("")), bars.upper[0].push_back(std::nan(""));
+    for (const auto& c : d.candidates) {
+      const auto [lo, hi] = gain_interval(c.gain_percent, c.z);
+      if (c.name == d.cause) em.push_back(rows.size());
       rows.push_back({c.name, percent_cell(c.score.cv_error, "{:.3f} %"), percent_cell(c.gain_percent / 100, "{:+.1f} %"),
-                      std::isfinite(c.z) ? fmt::format("{:.1f}", c.z) : "-", fmt::format("{:.0f}", c.score.bic),
-                      fmt::format("{:.1f}", c.pnr), c.verdict});
-    page.table({"candidate", "held-out error", "gain", "z", "BIC", "max PNR", "verdict"}, rows);
-    std::vector<double> x, y;
-    for (std::size_t i = 0; i < d.candidates.size(); ++i) {
-      if (!std::isfinite(d.candidates[i].score.cv_error)) continue;
-      x.push_back(static_cast<double>(i + 1));
-      y.push_back(d.candidates[i].gain_percent);
+                      std::isfinite(lo) ? fmt::format("{:+.1f} … {:+.1f} %", lo, hi) : "-",
+                      std::isfinite(c.z) ? fmt::format("{:.1f}", c.z) : "-", fmt::format("{:.1f}", c.pnr),
+                      std::isfinite(c.noise_fraction) ? fmt::format("{:.2f}", c.noise_fraction) : "-", c.verdict});
+      bars.groups.push_back(c.name);
+      const double e = 100 * c.score.cv_error;
+      bars.value[0].push_back(std::isfinite(c.score.cv_error) ? e : std::nan(""));
+      // The error's interval from the gain's: e = e_nominal (1 - gain).
+      bars.lower[0].push_back(std::isfinite(hi) ? 100 * d.nominal.cv_error * (1 - hi / 100) : std::nan(""));
+      bars.upper[0].push_back(std::isfinite(lo) ? 100 * d.nominal.cv_error * (1 - lo / 100) : std::nan(""));
     }
-    page.plot({{"held-out gain by rank", x, y, "#2ca02c", true}}, {"held-out gain of each candidate (rank order)", "rank", "%"});
+    page.table({"candidate", "held-out error", "gain", "gain, 95 %", "z", "max PNR", "size (noise variances)", "verdict"}, rows, em);
+    rp::PlotOptions bo("Held-out error of each candidate (95 % interval)", "held-out relative error (%)", "");
+    page.bars(bars, bo);
     if (!d.second_step.empty()) {
       rows.clear();
-      for (const auto& c : d.second_step)
+      em.clear();
+      for (const auto& c : d.second_step) {
+        if (c.name == d.second_cause) em.push_back(rows.size());
         rows.push_back({d.cause + " + " + c.name, percent_cell(c.score.cv_error, "{:.3f} %"),
                         percent_cell(c.gain_percent / 100, "{:+.1f} %"), std::isfinite(c.z) ? fmt::format("{:.1f}", c.z) : "-", c.verdict});
+      }
       page.heading("Second step (greedy forward selection)", 3);
-      page.table({"model", "held-out error", "gain over the cause", "z", "verdict"}, rows);
+      page.table({"model", "held-out error", "gain over the cause", "z", "verdict"}, rows, em);
     }
   }
-  page.heading("Extended model parameters");
+
+  page.heading(d.extended ? "Parameters of the extended model (" + ext.model + ")" : "Parameters of the nominal model");
   {
     std::vector<std::vector<std::string>> rows;
-    for (const auto& q : ext.full.reported)
-      rows.push_back({q.name, fmt::format("{:.5g}", q.value), fmt::format("{:.2g}", q.std), q.unit, fmt::format("{:.1f}", q.pnr()),
-                      q.extension ? "extension" : "nominal"});
-    page.table({"parameter", "value", "std", "unit", "PNR", ""}, rows);
-    if (!ext.full.unidentifiable.empty())
-      page.paragraph("Not identifiable from this run (fixed at their nominal value, not estimated): " + unidentifiable_text(ext.full));
+    std::vector<rp::Interval> forest;
+    bool any_truth = false;
+    for (const auto& q : ext.full.reported) {
+      const double lo = q.value - kZ95 * q.std, hi = q.value + kZ95 * q.std;
+      const auto t = truth.find(q.name);
+      rows.push_back({q.name, fmt::format("{:.5g}", q.value), fmt::format("{:.5g} … {:.5g}", lo, hi), q.unit,
+                      fmt::format("{:.1f}", q.pnr()), q.pnr() >= 5 ? "✓ (PNR ≥ 5)" : "weak (PNR < 5)",
+                      q.extension ? "extension" : "nominal", t != truth.end() ? fmt::format("{:.5g}", t->second) : ""});
+      // An extension's nominal value is "no effect": worth a tick; a nominal parameter's is not.
+      rp::Interval iv{q.name, q.unit, q.value, lo, hi, q.extension ? q.nominal : rp::kNoValue, t != truth.end() ? t->second : rp::kNoValue};
+      any_truth = any_truth || t != truth.end();
+      forest.push_back(iv);
+    }
+    for (const auto& u : ext.full.unidentifiable)
+      rows.push_back({u.name, "fixed", "-", "", "-", "✗ not identifiable" + (u.reason.empty() ? std::string() : ": " + u.reason), "", ""});
+    std::vector<std::string> header{"parameter", "value", "95 % interval", "unit", "PNR", "identifiable", "part"};
+    if (any_truth) header.push_back("truth");
+    else
+      for (auto& row : rows) row.pop_back();
+    page.table(header, rows);
+    page.paragraph("The interval is 1.96 std, the wider of the asymptotic and the folds' spread, with the model forms' shifts added; "
+                   "PNR = |value − nominal| / asymptotic std." +
+                   std::string(any_truth ? " The truth is the hidden-effects file's (--truth); the diagnosis did not read it." : ""));
+    page.forest(forest, "Parameters: value and 95 % interval", "nominal");
     const auto ext_set = extended_set(r);
     const auto events = located_events(r, ext_set);
     if (!events.empty()) {
@@ -361,7 +528,171 @@ void write_report(const std::string& dir, const RunDiagnosis& r) {
       page.table({"event", "time (s)", "from (s)", "to (s)"}, rows);
     }
   }
-  for (const auto& n : r.notes) page.paragraph("Note: " + n);
+
+  const auto& nr = d.nominal_residuals;
+  const int worst = nr.worst_component;
+  const bool table_rows = r.mode == "stiffness";
+  const std::string xname = table_rows ? "configuration (row)" : "t (s)";
+  std::vector<double> xs = obs.t_s;
+  if (table_rows)
+    for (std::size_t k = 0; k < n; ++k) xs[k] = static_cast<double>(k + 1);
+  page.heading("Residual structure (nominal model, held out)");
+  page.paragraph(fmt::format("What the verdict rests on: the nominal model's held-out residual of {} (its worst component), where in "
+                             "time and in which state it sits, whether it is white, and what it follows.",
+                             comp(worst)));
+  {
+    const auto rn = residual(d.nominal, worst);
+    std::vector<rp::Series> by_state;
+    if (!r.context.state.empty() && r.context.state.size() == n) {
+      std::vector<std::string> labels;
+      for (const auto& s : nr.states) labels.push_back(s.label);
+      for (std::size_t i = 0; i < labels.size() && i < 7; ++i) {
+        rp::Series sr(labels[i], {}, {}, "", true, false, 1.3);
+        for (std::size_t k = 0; k < n; ++k)
+          if (r.context.state[k] == labels[i]) sr.x.push_back(xs[k]), sr.y.push_back(rn[k]);
+        by_state.push_back(std::move(sr));
+      }
+    } else {
+      by_state.push_back(rp::Series("nominal residual", xs, rn, "#d62728", table_rows));
+    }
+    rp::PlotOptions o("Residual of " + comp(worst) + (by_state.size() > 1 ? " over time, by state" : ""), xname,
+                      with_unit(comp(worst), unit(worst)));
+    o.wide = true;
+    o.width = 1440;  // drawn at about the page's width: text at its size
+    o.height = 320;
+    page.plot(by_state, o);
+    std::vector<double> lag, ac_n, ac_e, hi, lo;
+    const double bound = kZ95 / std::sqrt(static_cast<double>(std::max<std::size_t>(n, 1)));
+    for (std::size_t i = 0; i < nr.autocorrelation.size(); ++i) {
+      lag.push_back(static_cast<double>(i));
+      ac_n.push_back(nr.autocorrelation[i]);
+      ac_e.push_back(i < d.extended_residuals.autocorrelation.size() ? d.extended_residuals.autocorrelation[i] : std::nan(""));
+      hi.push_back(bound), lo.push_back(-bound);
+    }
+    std::vector<rp::Series> ac{{"nominal", lag, ac_n, "#d62728", true, false, 3.0}};
+    if (d.extended) ac.push_back({ext.model, lag, ac_e, "#1f77b4", true, false, 3.0});
+    ac.push_back({"±1.96/√N (white)", lag, hi, "#888888", false, true});
+    ac.push_back({"", lag, lo, "#888888", false, true});
+    page.plot(ac,
+              {fmt::format("Autocorrelation of the {} residual (Q {:.0f}, bound {:.0f})", comp(worst), nr.ljung_box_q, nr.ljung_box_bound),
+               "lag (samples)", "autocorrelation"});
+    // The residual against the two signals it follows most (distinct signals).
+    std::vector<const dg::ResidualAnalysis::Correlation*> top;
+    for (const auto& c : nr.correlations) {
+      if (top.size() == 2) break;
+      if (std::any_of(top.begin(), top.end(), [&](const auto* t) { return t->signal == c.signal; })) continue;
+      if (r.context.signals.count(c.signal) && component_index(obs, c.component) >= 0) top.push_back(&c);
+    }
+    for (const auto* c : top) {
+      const int ci = component_index(obs, c->component);
+      const auto& sig = r.context.signals.at(c->signal);
+      const auto rc = residual(d.nominal, ci);
+      if (sig.size() != n) continue;
+      page.plot({{"held-out residual", sig, rc, "#9467bd", true, false, 1.5}},
+                {fmt::format("Residual of {} against {} (r = {:+.2f}, lag {})", c->component, c->signal, c->correlation, c->lag),
+                 with_unit(c->signal, signal_unit(c->signal)), with_unit(c->component, unit(ci))});
+    }
+    std::vector<std::vector<std::string>> rows;
+    for (int c = 0; c < 6; ++c)
+      rows.push_back({comp(c), fmt::format("{:.4g} {}", nr.rms(c), unit(c)), fmt::format("{:.2f} %", 100 * nr.relative_rms(c)),
+                      fmt::format("{:.4g} {}", d.extended_residuals.rms(c), unit(c))});
+    page.heading("Per component", 3);
+    page.table({"component", "nominal rms", "nominal relative", d.extended ? "extended rms" : "rms"}, rows,
+               {static_cast<std::size_t>(worst)});
+    rows.clear();
+    for (const auto& s : nr.states)
+      rows.push_back({s.label, std::to_string(s.samples), fmt::format("{:.2f} %", 100 * s.relative_error),
+                      fmt::format("{:.0f} %", 100 * s.share)});
+    if (!rows.empty()) {
+      page.heading("Per state", 3);
+      page.table({"state", "samples", "relative error", "share of the error"}, rows);
+    }
+    rows.clear();
+    for (std::size_t i = 0; i < nr.correlations.size() && i < 10; ++i) {
+      const auto& c = nr.correlations[i];
+      rows.push_back({c.signal, c.component, fmt::format("{:+.3f}", c.correlation), std::to_string(c.lag)});
+    }
+    if (!rows.empty()) {
+      page.heading("Correlations with the run's signals", 3);
+      page.table({"signal", "residual", "correlation", "lag (samples)"}, rows);
+    }
+  }
+
+  if (table_rows) {
+    // A calibration engineer's view: each configuration's residual vector, before and after.
+    page.heading("Residual vectors per configuration");
+    const auto nominal_res = [&](int c) { return residual(d.nominal, c); };
+    const auto ext_res = [&](int c) { return residual(ext, c); };
+    std::array<std::vector<double>, 3> pn{nominal_res(0), nominal_res(1), nominal_res(2)}, pe{ext_res(0), ext_res(1), ext_res(2)};
+    std::array<std::vector<double>, 3> rn{nominal_res(3), nominal_res(4), nominal_res(5)}, re{ext_res(3), ext_res(4), ext_res(5)};
+    auto norm = [](const std::array<std::vector<double>, 3>& v, std::size_t k) {
+      return std::sqrt(v[0][k] * v[0][k] + v[1][k] * v[1][k] + v[2][k] * v[2][k]);
+    };
+    // The residual's length per configuration, before and after, and the translation vectors'
+    // ends in two planes (a target plot: the cloud shrinks when the model improves).
+    std::vector<double> idx(n), tn(n), te(n), rnn(n), ree(n);
+    for (std::size_t k = 0; k < n; ++k) {
+      idx[k] = static_cast<double>(k + 1);
+      tn[k] = 1e3 * norm(pn, k), te[k] = 1e3 * norm(pe, k), rnn[k] = 1e3 * norm(rn, k), ree[k] = 1e3 * norm(re, k);
+    }
+    auto mm = [](const std::vector<double>& v) {
+      std::vector<double> o(v.size());
+      for (std::size_t k = 0; k < v.size(); ++k) o[k] = 1e3 * v[k];
+      return o;
+    };
+    const std::string after = d.extended ? ext.model : "nominal";
+    page.paragraph("Held-out residuals (measured − predicted deflection, each configuration predicted by the fit without its block), "
+                   "before (nominal) and after (" +
+                   after + ").");
+    page.plot({{"nominal", idx, tn, "#d62728", true, false, 2.5}, {after, idx, te, "#1f77b4", true, false, 2.5}},
+              {"Translation residual per configuration", "configuration (row)", "|Δp| (mm)"});
+    page.plot({{"nominal", idx, rnn, "#d62728", true, false, 2.5}, {after, idx, ree, "#1f77b4", true, false, 2.5}},
+              {"Rotation residual per configuration", "configuration (row)", "|Δr| (mrad)"});
+    page.plot({{"nominal", mm(pn[0]), mm(pn[1]), "#d62728", true, false, 2.5}, {after, mm(pe[0]), mm(pe[1]), "#1f77b4", true, false, 2.5}},
+              {"Translation residual vectors, x-y plane", "Δx (mm)", "Δy (mm)"});
+    page.plot({{"nominal", mm(pn[0]), mm(pn[2]), "#d62728", true, false, 2.5}, {after, mm(pe[0]), mm(pe[2]), "#1f77b4", true, false, 2.5}},
+              {"Translation residual vectors, x-z plane", "Δx (mm)", "Δz (mm)"});
+    // The worst configurations as a table (every one is in the figures' CSV files).
+    std::vector<std::size_t> worst_rows(n);
+    for (std::size_t k = 0; k < n; ++k) worst_rows[k] = k;
+    std::sort(worst_rows.begin(), worst_rows.end(), [&](std::size_t a, std::size_t b) { return tn[a] > tn[b]; });
+    worst_rows.resize(std::min<std::size_t>(n, 15));
+    std::vector<std::vector<std::string>> rows;
+    for (std::size_t k : worst_rows)
+      rows.push_back({std::to_string(k + 1), fmt::format("{:+.3f}, {:+.3f}, {:+.3f}", 1e3 * pn[0][k], 1e3 * pn[1][k], 1e3 * pn[2][k]),
+                      fmt::format("{:.3f}", tn[k]),
+                      fmt::format("{:+.3f}, {:+.3f}, {:+.3f}", 1e3 * pe[0][k], 1e3 * pe[1][k], 1e3 * pe[2][k]),
+                      fmt::format("{:.3f}", te[k]), fmt::format("{:.3f}", rnn[k]), fmt::format("{:.3f}", ree[k])});
+    page.heading(fmt::format("The {} configurations with the largest nominal residual", worst_rows.size()), 3);
+    page.table({"configuration", "nominal Δp (mm)", "|Δp|", after + " Δp (mm)", "|Δp|", "nominal |Δr| (mrad)", after + " |Δr| (mrad)"},
+               rows);
+  }
+
+  page.heading("Measured and predicted");
+  page.paragraph("Each time block is predicted by the model fitted on the other blocks (blocked cross-validation); components "
+                 "in order of the nominal model's relative error.");
+  std::vector<int> order{0, 1, 2, 3, 4, 5};
+  std::sort(order.begin(), order.end(), [&](int a, int b) { return nr.relative_rms(a) > nr.relative_rms(b); });
+  for (int c : order) {
+    std::vector<double> m(n), nom(n), ex(n);
+    for (std::size_t k = 0; k < n; ++k) {
+      const auto i = static_cast<Eigen::Index>(k);
+      m[k] = obs.y(i, c);
+      nom[k] = d.nominal.cv_prediction(i, c);
+      ex[k] = ext.cv_prediction(i, c);
+    }
+    std::vector<rp::Series> s{{"measured", xs, m, "#444444", table_rows}, {"nominal", xs, nom, "#d62728", table_rows, !table_rows}};
+    if (d.extended) s.push_back({ext.model, xs, ex, "#1f77b4", table_rows});
+    page.plot(s, {comp(c), xname, with_unit(comp(c), unit(c))});
+  }
+  if (!r.notes.empty()) {
+    page.heading("Notes");
+    for (const auto& note : r.notes) page.paragraph(note);
+  }
+  page.heading("Text summary");
+  std::ostringstream summary;
+  print_summary(summary, r);
+  page.text_download("The summary as `hil diagnose` prints it", "diagnosis-" + r.run_name + ".txt", summary.str());
   page.write((fs::path(dir) / "index.html").string());
   page.write_figures((fs::path(dir) / "figures").string());
 }

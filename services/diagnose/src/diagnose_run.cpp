@@ -107,6 +107,7 @@ RunDiagnosis diagnose_table(const std::string& table_path, const std::string& ri
   RunDiagnosis r;
   r.run_name = fs::path(table_path).filename().string();
   r.mode = "stiffness";
+  r.folds = o.folds;
   const auto candidates = checked_candidates(o, dg::stiffness_extensions());
   dg::DiagnoseOptions dopt;
   dopt.cv.folds = o.folds;
@@ -141,6 +142,7 @@ RunDiagnosis diagnose_run(const format::Run& run, const Options& o) {
   if (!run.rig) throw error::FormatError({run.dir, 0, 0, ""}, "no rig: pass --rig or put rig.yaml in the run folder");
   const auto& rig = *run.rig;
   RunDiagnosis r;
+  r.folds = o.folds;
   r.run_name = fs::path(run.dir).filename().string();
   if (r.run_name.empty()) r.run_name = fs::path(run.dir).parent_path().filename().string();
   dg::DiagnoseOptions dopt;

@@ -157,5 +157,103 @@ TEST(Report, LogLogPlotSkipsNonPositiveValues) {
   EXPECT_EQ(escape("<a&b>"), "&lt;a&amp;b&gt;");
 }
 
+/// Count of non-overlapping occurrences of `what` in `s`.
+std::size_t count(const std::string& s, const std::string& what) {
+  std::size_t n = 0;
+  for (auto p = s.find(what); p != std::string::npos; p = s.find(what, p + what.size())) ++n;
+  return n;
+}
+
+TEST(Report, ADenseScatterDrawsOnePointPerPixel) {
+  // 100,000 points on 10 distinct values: a cloud the size of the picture, not of the data.
+  Series s("cloud", {}, {}, "", true);
+  for (int i = 0; i < 100000; ++i) s.x.push_back(i % 10), s.y.push_back(i % 10);
+  const auto svg = svg_plot({s}, PlotOptions("cloud", "x", "y"));
+  EXPECT_EQ(count(svg, "<circle"), 10u);
+  // Every sample is still in the figure's data.
+  const auto csv = csv_table({s}, PlotOptions("cloud", "x", "y"));
+  EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 100001);
+}
+
+TEST(Report, ForestRowsKeepTheirOwnScaleAndMarkTheTruth) {
+  // Two parameters six orders of magnitude apart: each row spans its own interval.
+  const std::vector<Interval> rows{{"K", "N/m", 1.8e5, 1.7e5, 1.9e5}, {"bias_fx", "N", -7.66, -7.73, -7.59, 0.0, -7.662}};
+  const auto svg = svg_forest(rows, "intervals");
+  EXPECT_NE(svg.find("K (N/m)"), std::string::npos);
+  EXPECT_NE(svg.find("bias_fx (N)"), std::string::npos);
+  EXPECT_NE(svg.find("[1.7e+05, 1.9e+05]"), std::string::npos);
+  // The interval bars: K's spans most of its row whatever its units; bias_fx's row also holds its
+  // reference (0, no effect), so its interval sits at the row's far end, drawn but short.
+  static const std::regex bar("<line x1='([0-9.]+)' x2='([0-9.]+)' y1='[0-9.]+' y2='[0-9.]+' stroke='#1f77b4' stroke-width='5'");
+  std::vector<double> widths;
+  for (std::sregex_iterator it(svg.begin(), svg.end(), bar), end; it != end; ++it)
+    widths.push_back(std::stod((*it)[2]) - std::stod((*it)[1]));
+  ASSERT_EQ(widths.size(), 2u);
+  EXPECT_GT(widths[0], 0.6 * (720 - 190 - 200));
+  EXPECT_GT(widths[1], 1.0);
+  EXPECT_EQ(count(svg, "stroke='#888' stroke-width='2'"), 1u + 1u);  // the reference tick, and its legend key
+  // The truth is drawn where given (one row), and named in the legend.
+  EXPECT_EQ(count(svg, "stroke='#d62728' stroke-width='2'"), 1u);
+  EXPECT_NE(svg.find("truth"), std::string::npos);
+  const auto no_truth = svg_forest({rows[0]}, "intervals");
+  EXPECT_EQ(no_truth.find("truth"), std::string::npos);
+}
+
+TEST(Report, BarsWithWhiskersAndUnscoredRows) {
+  Bars b;
+  b.groups = {"nominal", "sensor_bias", "time_offset"};
+  b.series = {"held-out error"};
+  b.value = {{20.0, 0.2, std::nan("")}};
+  b.lower = {{std::nan(""), 0.1, std::nan("")}};
+  b.upper = {{std::nan(""), 2.0, std::nan("")}};
+  const auto svg = svg_bars(b, PlotOptions("errors", "held-out relative error (%)", ""));
+  EXPECT_EQ(count(svg, "<rect x="), 2u + 1u);  // two bars and the legend's key
+  EXPECT_EQ(count(svg, "not scored"), 1u);
+  EXPECT_EQ(count(svg, "stroke='#222'"), 1u);  // one whisker
+}
+
+TEST(Report, TheVerdictComesFirstThenTheContentsThenTheSections) {
+  Page page("Diagnosis: r");
+  page.heading("Candidates");
+  page.table({"candidate", "gain"}, {{"a", "1 %"}, {"b", "2 %"}}, {1});
+  page.plot({Series("a", {0, 1}, {0, 1})}, PlotOptions("one", "t", "N"));
+  page.plot({Series("b", {0, 1}, {1, 0})}, PlotOptions("two", "t", "N"));
+  page.heading("Parameters & intervals");
+  page.text_download("the summary", "d.txt", "line 1, 100 %\nline <2>\n");
+  page.verdict({"cause", "Named cause: a", {{"gain", "12 %"}}, "re-identify"});  // called last, placed first
+  const auto html = page.html();
+  const auto v = html.find("<section id='verdict' class='verdict cause'>"), toc = html.find("<nav class='toc'>"),
+             h2 = html.find("<h2 id='s1-candidates'>");
+  ASSERT_NE(v, std::string::npos);
+  ASSERT_NE(toc, std::string::npos);
+  ASSERT_NE(h2, std::string::npos);
+  EXPECT_LT(v, toc);
+  EXPECT_LT(toc, h2);
+  EXPECT_NE(html.find("<a href='#s1-candidates'>Candidates</a>"), std::string::npos);
+  EXPECT_NE(html.find("<a href='#s2-parameters-intervals'>Parameters &amp; intervals</a>"), std::string::npos);
+  EXPECT_NE(html.find("<tr class='em'><td>b</td>"), std::string::npos);
+  // Consecutive figures share one grid; the next heading closes it.
+  EXPECT_EQ(count(html, "<div class='figs'>"), 1u);
+  EXPECT_LT(html.find("<div class='figs'>"), html.find("id='fig-1'"));
+  EXPECT_LT(html.find("id='fig-2'"), html.find("</div>\n<h2 id='s2"));
+  // The text is kept whole as a data: URL that decodes back to it.
+  EXPECT_NE(html.find("href='data:text/plain;charset=utf-8,line%201%2C%20100%20%25%0Aline%20%3C2%3E%0A'"), std::string::npos);
+  EXPECT_NE(html.find("download='d.txt'"), std::string::npos);
+  // Figures scale to their column.
+  EXPECT_NE(html.find("viewBox='0 0 720.0 280.0'"), std::string::npos);
+}
+
+TEST(Report, AnAxisLabelWithItsUnitGivesTheColumnsTheUnit) {
+  const auto rows = csv_rows(csv_table({Series("measured", {0}, {1}), Series("nominal", {0}, {2})}, PlotOptions("fx", "t (s)", "fx (N)")));
+  EXPECT_EQ(rows[0], (std::vector<std::string>{"t (s)", "measured (N)", "nominal (N)"}));
+}
+
+TEST(Report, ALongLegendLabelIsCondensedNotCut) {
+  const auto svg = svg_plot({Series("robot_compliance+rest_change+sensor_gain", {0, 1}, {0, 1}), Series("short", {0, 1}, {1, 0})},
+                            PlotOptions("t", "x", "y"));
+  EXPECT_EQ(count(svg, "lengthAdjust='spacingAndGlyphs'"), 1u);
+  EXPECT_NE(svg.find(">robot_compliance+rest_change+sensor_gain<"), std::string::npos);
+}
+
 }  // namespace
 }  // namespace hil::report

@@ -25,7 +25,7 @@ using format::write_json;
 namespace {
 
 struct DiagnoseArgs {
-  std::string run, rig, json, report;
+  std::string run, rig, json, report, truth;
   std::vector<std::string> candidates;
   int folds = 5;
   int cv_offsets = 0;
@@ -55,7 +55,7 @@ int diagnose_cmd(const DiagnoseArgs& a) {
   diagnose::print_summary(text, r);
   if (!a.json.empty()) write_json(a.json, diagnose::to_json(r));
   if (!a.report.empty()) {
-    diagnose::write_report(a.report, r);
+    diagnose::write_report(a.report, r, a.truth.empty() ? diagnose::TruthValues{} : diagnose::read_truth(a.truth, r));
     text << "report: " << (std::filesystem::path(a.report) / "index.html").string() << "\n";
   }
   return 0;
@@ -89,6 +89,9 @@ void add_diagnose(CLI::App& app) {
   d->add_option("--rig", da.rig, "rig file (default: the run's rig.yaml)");
   d->add_option("--json", da.json, "write the diagnosis as JSON (hil.diagnosis; - for stdout, the summary then goes to stderr)");
   d->add_option("--report", da.report, "write an HTML report into this folder");
+  d->add_option("--truth", da.truth,
+                "a hidden-effects file (hil contact simulate --truth-out): its values are drawn beside the report's intervals; "
+                "the diagnosis itself never reads it");
   d->add_option("--candidates", da.candidates, candidates_help())->delimiter(',');
   d->add_option("--folds", da.folds, "blocks of the cross-validation over time")->capture_default_str()->check(CLI::Range(2, 1000));
   d->add_option("--cv-offsets", da.cv_offsets, cv_offsets_help())->capture_default_str()->check(CLI::Range(0, 64));

@@ -1,6 +1,11 @@
 #pragma once
-/// \file A small, dependency-free HTML report writer with inline SVG plots (line, scatter, log
-/// axes). One self-contained page: no scripts, no external files, viewable offline.
+/// \file A small, dependency-free HTML report writer with inline SVG figures (line, scatter, log
+/// axes, interval forest plots, grouped bars). One self-contained page: no scripts, no external
+/// files, viewable offline and printable; the verdict block first, then a table of contents, then
+/// the sections, their figures in a grid that is two columns wide where the screen allows.
+/// Written here rather than taken from a plotting library: Debian has none for C++ that writes
+/// self-contained SVG without a scripting runtime (docs/architecture.md, "Reports").
+#include <limits>
 #include <string>
 #include <utility>
 #include <vector>
@@ -30,6 +35,7 @@ struct PlotOptions {
   std::string xlabel, ylabel;
   bool logx = false, logy = false;
   int width = 720, height = 280;
+  bool wide = false;  ///< spans the page's width in the page's figure grid (e.g. a long time series)
   /// Optional annotations: points drawn as a labelled ring.
   struct Mark {
     double x, y;
@@ -38,8 +44,45 @@ struct PlotOptions {
   std::vector<Mark> marks;
 };
 
-/// The SVG element of one plot.
+/// The SVG element of one plot. Scatter series draw at most one point per pixel (the picture of a
+/// dense cloud, not its sample count).
 std::string svg_plot(const std::vector<Series>& series, const PlotOptions& options);
+
+constexpr double kNoValue = std::numeric_limits<double>::quiet_NaN();
+
+/// One row of a forest plot: a parameter's value and interval. Parameters differ in units, so each
+/// row is drawn on its own scale, its ends labelled.
+struct Interval {
+  std::string name, unit;
+  double value = 0.0, lower = 0.0, upper = 0.0;
+  double reference = kNoValue;  ///< e.g. the nominal value (a grey tick); NaN: none
+  double truth = kNoValue;      ///< the true value where the run knows it (a hidden-effect simulation)
+};
+
+/// A forest plot: per row the interval as a bar, the value as a dot, the reference and the truth.
+std::string svg_forest(const std::vector<Interval>& rows, const std::string& title, const std::string& reference_label = "nominal");
+
+/// Horizontal bars, grouped: per group (a row: a candidate, a posture) one bar per series, each with
+/// an optional interval whisker.
+struct Bars {
+  std::vector<std::string> groups;         ///< row labels
+  std::vector<std::string> series;         ///< bar labels within a group (the legend)
+  std::vector<std::vector<double>> value;  ///< [series][group]; NaN: no bar, "not scored" written
+  /// [series][group] or empty: the whisker's ends (NaN: none)
+  std::vector<std::vector<double>> lower, upper;
+  std::vector<std::string> colors;  ///< per series; empty: the palette
+};
+std::string svg_bars(const Bars& bars, const PlotOptions& options);
+
+/// The verdict block that opens a report: what was found in words and numbers, and what to do.
+struct Verdict {
+  /// The block's kind, also its colour: "cause" (a cause named), "none" (nothing to explain),
+  /// "unexplained" (structure left that nothing explains), "identified" (parameters estimated).
+  std::string kind;
+  std::string headline;                                    ///< one sentence
+  std::vector<std::pair<std::string, std::string>> facts;  ///< label, value
+  std::string next;                                        ///< what to do next, one sentence
+};
 
 /// One plot's data as CSV: every sample of every series (not the pixel-decimated drawing), numbers
 /// in their shortest exact form, NaN as an empty cell. When the series share their x, one x column
@@ -55,11 +98,21 @@ std::string escape(const std::string& s);
 class Page {
  public:
   explicit Page(std::string title);
+  /// The verdict block, placed above the table of contents whatever the order of the calls.
+  void verdict(const Verdict& v);
+  /// Level-2 headings are the sections of the table of contents.
   void heading(const std::string& text, int level = 2);
   void paragraph(const std::string& text);  ///< escaped
   void preformatted(const std::string& text);
-  void table(const std::vector<std::string>& header, const std::vector<std::vector<std::string>>& rows);
+  /// Rows listed in `emphasised` (e.g. the named cause) are set in bold.
+  void table(const std::vector<std::string>& header, const std::vector<std::vector<std::string>>& rows,
+             const std::vector<std::size_t>& emphasised = {});
   void plot(const std::vector<Series>& series, const PlotOptions& options);
+  void forest(const std::vector<Interval>& rows, const std::string& title, const std::string& reference_label = "nominal");
+  void bars(const Bars& bars, const PlotOptions& options);
+  /// A text kept whole (e.g. the command's text summary): folded away, and a link that saves it as
+  /// `file_name` (a data: URL, so the page stays one file).
+  void text_download(const std::string& label, const std::string& file_name, const std::string& text);
   std::string html() const;
   /// \throws std::runtime_error if the file cannot be written.
   void write(const std::string& path) const;
@@ -73,8 +126,13 @@ class Page {
     std::string base;  ///< file name without extension
     std::string svg, csv;
   };
+  void figure(std::string svg, std::string csv, const std::string& title, bool wide);
+  void end_figures();  ///< closes the figure grid before a non-figure element
   std::string title_;
+  std::string verdict_;
+  std::vector<std::pair<std::string, std::string>> toc_;  ///< anchor, heading
   std::string body_;
+  bool in_figures_ = false;
   std::vector<Figure> figures_;
 };
 

@@ -31,6 +31,7 @@ struct Options {
 
 struct RunDiagnosis {
   std::string run_name, mode;  ///< mode: "contact", "deflection" or "stiffness" (a stiffness table)
+  int folds = 5;               ///< the cross-validation's blocks (Options::folds)
   std::unique_ptr<hil::diagnose::ContactData> contact;
   std::unique_ptr<hil::diagnose::DeflectionData> deflection;
   std::unique_ptr<hil::diagnose::StiffnessData> stiffness;

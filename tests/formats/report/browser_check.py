@@ -1,0 +1,116 @@
+#!/usr/bin/env python3
+"""Each kind of hil report, made by the real `hil` from the shipped examples, opened in Debian's
+headless Chromium (browser/check_report.mjs): contact identification, the diagnosis of a contact
+run (with its hidden truth), of a deflection run (TIAGo, when ../shared is beside the checkout)
+and of a calibration run (the KR-270-like stiffness table). Each must show its verdict on the first
+screen, overflow nowhere, draw every figure, keep every link, log no error and print to PDF; a
+screenshot per kind is kept in SHOTS. A deliberately broken page must fail the same check, with
+each of its faults named (the check can fail).
+
+usage: browser_check.py HIL SRC NODE CHECKER CHROMIUM SHOTS"""
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+import unittest
+
+HIL, SRC, NODE, CHECKER, CHROMIUM, SHOTS = sys.argv[1:7]
+TIAGO = os.path.join(SRC, "..", "shared", "data", "tiago-suspension", "tiago_xyz_vicon_1640.csv")
+
+
+def run(*args, timeout=600):
+    r = subprocess.run(list(args), capture_output=True, text=True, timeout=timeout)
+    return r
+
+
+class Reports(unittest.TestCase):
+    @classmethod
+    def setUpClass(cls):
+        cls.dir = tempfile.mkdtemp()
+
+    @classmethod
+    def tearDownClass(cls):
+        shutil.rmtree(cls.dir)
+
+    def hil(self, *args):
+        r = run(HIL, *args)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        return r
+
+    def check(self, kind, report, min_figures, *expect):
+        r = run(NODE, CHECKER, CHROMIUM, SHOTS, kind, os.path.join(report, "index.html"), str(min_figures), *expect)
+        self.assertEqual(r.returncode, 0, r.stdout + r.stderr)
+        self.assertTrue(os.path.getsize(os.path.join(SHOTS, kind + ".png")) > 10000)
+        return r
+
+    def simulated(self, name, *inject):
+        out = os.path.join(self.dir, name)
+        args = ["contact", "simulate", "--rig", os.path.join(SRC, "examples", "rigs", "press_bench.yaml"), "--trajectory",
+                os.path.join(SRC, "examples", "trajectories", "press_slide.csv"), "--out", out, "--force-resolution", "0.1",
+                "--force-noise", "0.1", "--moment-resolution", "0.005", "--moment-noise", "0.005", "--seed", "11"]
+        if inject:
+            args += ["--inject", ",".join(inject), "--effect-seed", "12", "--truth-out", out + ".truth.json"]
+        self.hil(*args)
+        return out
+
+    def test_contact_identification(self):
+        run_dir = self.simulated("ident")
+        rep = os.path.join(self.dir, "ident-report")
+        self.hil("contact", "identify", run_dir, "--geometric", "--report", rep)
+        self.check("contact-identification", rep, 10, "K = ", "force error", "Parameters", "fig:Identified parameters",
+                   "fig:L-curve", "The summary as `hil contact identify` prints it")
+
+    def test_diagnosis_of_a_contact_run(self):
+        run_dir = self.simulated("bias", "sensor_bias")
+        rep = os.path.join(self.dir, "bias-report")
+        self.hil("diagnose", run_dir, "--report", rep, "--truth", run_dir + ".truth.json", "--quiet")
+        self.check("diagnosis-contact", rep, 10, "Named cause: sensor_bias", "held-out error", "gain", "stability", "Next:",
+                   "truth", "fig:Held-out error of each candidate", "fig:Parameters: value and 95 % interval",
+                   "fig:Residual of", "fig:Autocorrelation", "1 contact, sliding")
+
+    def test_diagnosis_of_a_clean_contact_run(self):
+        run_dir = self.simulated("clean")
+        rep = os.path.join(self.dir, "clean-report")
+        self.hil("diagnose", run_dir, "--report", rep, "--quiet")
+        self.check("diagnosis-none", rep, 8, "No cause", "Next: nothing to change")
+
+    @unittest.skipUnless(os.path.exists(TIAGO), "../shared/data/tiago-suspension is not beside this checkout")
+    def test_diagnosis_of_a_deflection_run(self):
+        run_dir = os.path.join(self.dir, "tiago")
+        self.hil("import", TIAGO, "--config", os.path.join(SRC, "examples", "import", "tiago_suspension.yaml"), "--out", run_dir)
+        rep = os.path.join(self.dir, "tiago-report")
+        self.hil("diagnose", run_dir, "--rig", os.path.join(SRC, "examples", "import", "tiago_suspension_rig.yaml"), "--report", rep,
+                 "--cv-offsets", "4", "--quiet")
+        self.check("diagnosis-deflection", rep, 10, "Named cause:", "offsets of the CV grid", "deflection model",
+                   "Located events", "fig:Autocorrelation")
+
+    def test_diagnosis_of_a_calibration_run(self):
+        rep = os.path.join(self.dir, "stiffness-report")
+        self.hil("diagnose", os.path.join(SRC, "examples", "stiffness", "table.csv"), "--rig",
+                 os.path.join(SRC, "examples", "stiffness", "kr270_like.yaml"), "--report", rep, "--quiet")
+        self.check("diagnosis-calibration", rep, 10, "Named cause: link_compliance", "Residual vectors per configuration",
+                   "fig:Translation residual per configuration", "fig:Translation residual vectors, x-y plane",
+                   "largest nominal residual")
+
+    def test_a_broken_page_fails_with_each_fault_named(self):
+        bad = os.path.join(self.dir, "bad")
+        os.makedirs(bad)
+        with open(os.path.join(bad, "index.html"), "w") as f:
+            f.write("<!DOCTYPE html><html><head><meta charset='utf-8'><title>bad</title></head><body>"
+                    "<div style='height:1200px'></div><section id='verdict'><p class='headline'>too low</p></section>"
+                    "<a href='#nowhere'>a dangling link</a><a href='https://example.com/x'>away</a>"
+                    "<pre style='width:2000px'>a line wider than any window</pre>"
+                    "<figure class='fig' id='fig-1'></figure>"
+                    "<script>console.error('boom')</script></body></html>")
+        r = run(NODE, CHECKER, CHROMIUM, os.path.join(self.dir, "bad-shots"), "broken", os.path.join(bad, "index.html"), "2",
+                "a text the page lacks")
+        self.assertEqual(r.returncode, 1, r.stdout + r.stderr)
+        for fault in ("not on the first screen", "the page is", "broken link: #nowhere", "broken link: https://example.com/x",
+                      "figure fig-1 has no SVG", "1 figures, expected at least 2", "console error: boom",
+                      'missing text: "a text the page lacks"'):
+            self.assertIn(fault, r.stderr)
+
+
+if __name__ == "__main__":
+    unittest.main(argv=sys.argv[:1], verbosity=2)
