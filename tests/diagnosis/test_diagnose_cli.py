@@ -250,5 +250,62 @@ class Diagnose(unittest.TestCase):
         with open(os.path.join(SRC, "docs", "schemas", "hil.diagnosis.schema.json")) as f:
             jsonschema.validate(d, json.load(f))
 
+    def test_windows_show_a_plate_offset_appearing_half_way(self):
+        # Rule written before the run: with a 4 N fz offset from 13 s on, the windows of 6.5 s from
+        # 13 s name sensor_bias (as the cause or the second cause) and those before do not.
+        sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+        import step_bias_run
+        run = os.path.join(self.dir, "step")
+        step_bias_run.make(HIL, SRC, run, seed=47, offset_n=4.0, t_step_s=13.0)
+        js = os.path.join(self.dir, "w.json")
+        r = hil("diagnose", run, "--window", "6.5", "--json", js, "--quiet")
+        self.assertEqual(r.returncode, 0, r.stderr)
+        self.assertIn("over time (4 windows):", r.stdout)
+        with open(js) as f:
+            d = json.load(f)
+        self.assertEqual(len(d["windows"]), 4)
+        for w in d["windows"]:
+            self.assertIsNone(w["error"])
+            named = {w["cause"], w["second_cause"]}
+            if w["start_s"] >= 13.0 - 1e-9:
+                self.assertIn("sensor_bias", named, w)
+                self.assertGreater(w["gain_percent"], 20)
+            else:
+                self.assertNotIn("sensor_bias", named, w)
+        self.assertAlmostEqual(d["windows"][0]["start_s"], 0.0)
+        self.assertAlmostEqual(d["windows"][-1]["end_s"], 25.98, places=2)
+        import jsonschema
+        with open(os.path.join(SRC, "docs", "schemas", "hil.diagnosis.schema.json")) as f:
+            jsonschema.validate(d, json.load(f))
+        # A window too short for its folds is reported, not fatal.
+        r = hil("diagnose", run, "--window", "0.5", "--json", js, "--quiet")
+        self.assertEqual(r.returncode, 0, r.stderr)
+        with open(js) as f:
+            d = json.load(f)
+        self.assertTrue(all(w["error"] == "25 samples: too few for 5 folds" for w in d["windows"][:-1]), d["windows"][:3])
+        # The report says where the cause appears.
+        rep = os.path.join(self.dir, "w_report")
+        r = hil("diagnose", run, "--window", "6.5", "--report", rep, "--quiet")
+        self.assertEqual(r.returncode, 0, r.stderr)
+        with open(os.path.join(rep, "index.html")) as f:
+            html = f.read()
+        self.assertIn("the windows name sensor_bias from 13.0 s", html)
+        # A truth file that is not one: named, exit 2.
+        bad = os.path.join(self.dir, "not-truth.json")
+        with open(bad, "w") as f:
+            f.write('{"format": "hil.diagnosis"}')
+        r = hil("diagnose", run, "--report", rep, "--truth", bad, "--quiet")
+        self.assertEqual(r.returncode, 2, r.stderr)
+        self.assertIn(bad, r.stderr)
+        self.assertIn("not a hidden-effects file", r.stderr)
+        # Bad input: no window in a table (no time); a window must be > 0.
+        r = hil("diagnose", os.path.join(SRC, "examples", "stiffness", "table.csv"), "--rig",
+                os.path.join(SRC, "examples", "stiffness", "kr270_like.yaml"), "--window", "5")
+        self.assertEqual(r.returncode, 2, r.stderr)
+        self.assertIn("--window", r.stderr)
+        r = hil("diagnose", run, "--window", "0")
+        self.assertEqual(r.returncode, 2, r.stderr)
+
+
 if __name__ == "__main__":
     unittest.main(argv=[sys.argv[0]], verbosity=2)

@@ -413,6 +413,50 @@ std::string svg_bars(const Bars& b, const PlotOptions& o) {
   return s;
 }
 
+std::string svg_timeline(const std::vector<Span>& spans, const PlotOptions& o) {
+  const double W = o.width, ml = 20, mr = 20, mt = 30, row_h = 54, mb = 42, H = mt + row_h + mb;
+  double t0 = std::numeric_limits<double>::infinity(), t1 = -t0;
+  for (const auto& sp : spans) t0 = std::min(t0, sp.start), t1 = std::max(t1, sp.end);
+  if (!(t1 > t0)) t0 = 0, t1 = 1;
+  auto X = [&](double t) { return ml + (t - t0) / (t1 - t0) * (W - ml - mr); };
+  std::vector<std::string> labels;  // distinct labels, first-seen order: their colours
+  std::string s = svg_open(W, H);
+  if (!o.title.empty()) s += text_at(ml, 18, o.title, "start", " font-weight='bold'") + "\n";
+  for (double t : ticks(t0, t1, false)) {
+    s += "<line x1='" + px(X(t)) + "' x2='" + px(X(t)) + "' y1='" + px(mt + row_h) + "' y2='" + px(mt + row_h + 5) + "' stroke='#888'/>";
+    s += text_at(X(t), mt + row_h + 18, fmt(t), "middle");
+  }
+  s += text_at((ml + W - mr) / 2, H - 8, o.xlabel, "middle") + "\n";
+  for (const auto& sp : spans) {
+    std::string col;
+    if (sp.label == "none") col = "#b7dfb0";
+    else if (sp.label == "not diagnosed") col = "#e4e4e4";
+    else {
+      auto it = std::find(labels.begin(), labels.end(), sp.label);
+      if (it == labels.end()) it = labels.insert(labels.end(), sp.label);
+      col = kPalette[static_cast<std::size_t>(it - labels.begin()) % 8];
+    }
+    const double a = X(sp.start), b = X(sp.end), w = std::max(b - a - 2, 1.0);
+    s += "<rect x='" + px(a + 1) + "' y='" + px(mt) + "' width='" + px(w) + "' height='" + px(row_h) + "' fill='" + col +
+         "' stroke='#666'/>";
+    const bool dark = sp.label != "none" && sp.label != "not diagnosed";
+    const std::string fill = dark ? " fill='white'" : "";
+    const std::string fit = 6.6 * static_cast<double>(sp.label.size()) > w - 8
+                                ? " textLength='" + px(std::max(w - 8, 4.0)) + "' lengthAdjust='spacingAndGlyphs'"
+                                : "";
+    s += text_at(a + 5, mt + 22, sp.label, "start", (" font-weight='bold'" + fill + fit).c_str());
+    if (!sp.detail.empty()) {
+      const std::string fit2 = 6.0 * static_cast<double>(sp.detail.size()) > w - 8
+                                   ? " textLength='" + px(std::max(w - 8, 4.0)) + "' lengthAdjust='spacingAndGlyphs'"
+                                   : "";
+      s += text_at(a + 5, mt + 40, sp.detail, "start", (fill + fit2).c_str());
+    }
+    s += "\n";
+  }
+  s += "</svg>\n";
+  return s;
+}
+
 Page::Page(std::string title) : title_(std::move(title)) {}
 
 void Page::end_figures() {
@@ -499,6 +543,11 @@ void Page::bars(const Bars& b, const PlotOptions& options) {
     csv += "\n";
   }
   figure(svg_bars(b, options), std::move(csv), options.title, options.wide);
+}
+void Page::timeline(const std::vector<Span>& spans, const PlotOptions& options) {
+  std::string csv = "start,end,label,detail\n";
+  for (const auto& sp : spans) csv += exact(sp.start) + "," + exact(sp.end) + "," + csv_cell(sp.label) + "," + csv_cell(sp.detail) + "\n";
+  figure(svg_timeline(spans, options), std::move(csv), options.title, options.wide);
 }
 void Page::text_download(const std::string& label, const std::string& file_name, const std::string& text) {
   end_figures();

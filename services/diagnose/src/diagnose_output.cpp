@@ -152,6 +152,17 @@ void print_summary(std::ostream& out, const RunDiagnosis& r) {
     if (locates_events({c.name}) && c.applicable)
       out << fmt::format("  {} + {:<10} {:>9} {:>9}  {}\n    {}\n", d.cause, c.name, percent_cell(c.score.cv_error, "{:.2f} %"),
                          percent_cell(c.gain_percent / 100, "{:+.1f} %"), c.verdict, events_text(located_events(r, {d.cause, c.name})));
+  if (!r.windows.empty()) {
+    out << fmt::format("  over time ({} windows):\n", r.windows.size());
+    for (const auto& w : r.windows) {
+      out << fmt::format("    {:>7.1f} - {:<7.1f} s {:>6} samples  ", w.start_s, w.end_s, w.samples);
+      if (!w.error.empty()) out << "not diagnosed: " << w.error << "\n";
+      else if (w.cause == "none") out << fmt::format("{:<22} {:.2f} %\n", "none", 100 * w.nominal_error);
+      else
+        out << fmt::format("{:<22} {:.2f} % -> {:.2f} % (gain {:.1f} %)\n", w.cause + (w.second_cause.empty() ? "" : "+" + w.second_cause),
+                           100 * w.nominal_error, 100 * w.extended_error, w.gain_percent);
+    }
+  }
   for (const auto& n : r.notes) out << "  note: " << n << "\n";
   out << fmt::format("  ({:.1f} s)\n", d.seconds);
 }
@@ -238,6 +249,22 @@ nlohmann::json to_json(const RunDiagnosis& r) {
   j["candidates"] = table(d.candidates, false);
   j["second_step"] = table(d.second_step, true);
   j["nominal"]["bic"] = d.nominal.bic;
+  if (!r.windows.empty()) {
+    auto num = [](double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); };
+    auto str = [](const std::string& v) { return v.empty() ? nlohmann::json(nullptr) : nlohmann::json(v); };
+    j["windows"] = nlohmann::json::array();
+    for (const auto& w : r.windows)
+      j["windows"].push_back({{"start_s", w.start_s},
+                              {"end_s", w.end_s},
+                              {"samples", w.samples},
+                              {"cause", str(w.cause)},
+                              {"second_cause", str(w.second_cause)},
+                              {"relative_error", num(w.nominal_error)},
+                              {"extended_relative_error", num(w.extended_error)},
+                              {"gain_percent", num(w.gain_percent)},
+                              {"white", w.error.empty() ? nlohmann::json(w.white) : nlohmann::json(nullptr)},
+                              {"error", str(w.error)}});
+  }
   j["notes"] = r.notes;
   j["seconds"] = d.seconds;
   return j;
@@ -325,6 +352,25 @@ int component_index(const dg::Observations& obs, const std::string& name) {
   return -1;
 }
 
+/// "sensor_bias from 16.0 s (2 of 4 windows); none in 2; 1 not diagnosed": each window's verdict
+/// in order of first appearance.
+std::string windows_text(const std::vector<WindowVerdict>& windows) {
+  std::vector<std::string> order;
+  std::map<std::string, std::pair<double, int>> seen;  // label -> first start, count
+  for (const auto& w : windows) {
+    const std::string label = w.error.empty() ? w.cause + (w.second_cause.empty() ? "" : "+" + w.second_cause) : "not diagnosed";
+    if (!seen.count(label)) order.push_back(label), seen[label] = {w.start_s, 0};
+    ++seen[label].second;
+  }
+  std::vector<std::string> parts;
+  for (const auto& l : order) {
+    const auto [t, k] = seen[l];
+    if (l == "none" || l == "not diagnosed") parts.push_back(fmt::format("{} in {}", l, k));
+    else parts.push_back(fmt::format("{} from {:.1f} s ({} of {} windows)", l, t, k, windows.size()));
+  }
+  return fmt::format("{}", fmt::join(parts, "; "));
+}
+
 /// The verdict block: what was found, how sure, what to do next.
 report::Verdict make_verdict(const RunDiagnosis& r) {
   const auto& d = r.result;
@@ -386,6 +432,7 @@ report::Verdict make_verdict(const RunDiagnosis& r) {
                                        : fmt::format("; follows {} most (r = {:+.2f})", after.correlations.front().signal,
                                                      after.correlations.front().correlation)));
   if (!ext.full.unidentifiable.empty()) v.facts.emplace_back("not identifiable", unidentifiable_text(ext.full));
+  if (!r.windows.empty()) v.facts.emplace_back("over time", windows_text(r.windows));
   // What to do next.
   if (v.kind == "cause") {
     const auto cause = std::find_if(d.candidates.begin(), d.candidates.end(), [&](const auto& c) { return c.name == d.cause; });
@@ -410,6 +457,12 @@ report::Verdict make_verdict(const RunDiagnosis& r) {
     if (!d.extended_residuals.white && !d.extended_residuals.correlations.empty())
       v.next += fmt::format(" The extended model's residual is still not white and follows {}: a further effect may be tied to it.",
                             d.extended_residuals.correlations.front().signal);
+  } else if (const auto w = std::find_if(r.windows.begin(), r.windows.end(),
+                                         [](const WindowVerdict& x) { return x.error.empty() && x.cause != "none"; });
+             w != r.windows.end()) {
+    v.next = fmt::format("the windows name {} from {:.1f} s: a cause that appears during the run, which a model for the whole run "
+                         "cannot hold — find what changed there, then diagnose the parts before and after it apart.",
+                         w->cause, w->start_s);
   } else if (v.kind == "unexplained") {
     v.next = follows.empty()
                  ? "look for an effect outside the candidates tried, or record a run that excites one effect at a time."
@@ -441,6 +494,36 @@ void write_report(const std::string& dir, const RunDiagnosis& r, const TruthValu
     }
     return v;
   };
+
+  if (!r.windows.empty()) {
+    page.heading(fmt::format("Over time ({} windows)", r.windows.size()));
+    page.paragraph("Each window diagnosed on its own, with the same candidates and folds: where a cause appears, drifts or goes.");
+    std::vector<rp::Span> spans;
+    std::vector<double> mid, en, ee;
+    std::vector<std::vector<std::string>> rows;
+    for (const auto& w : r.windows) {
+      const bool ok = w.error.empty();
+      const std::string label = ok ? w.cause + (w.second_cause.empty() ? "" : "+" + w.second_cause) : "not diagnosed";
+      spans.push_back({w.start_s, w.end_s, label,
+                       !ok                 ? w.error
+                       : w.cause == "none" ? fmt::format("{:.2f} %", 100 * w.nominal_error)
+                                           : fmt::format("gain {:.0f} %", w.gain_percent)});
+      mid.push_back(0.5 * (w.start_s + w.end_s));
+      en.push_back(100 * w.nominal_error), ee.push_back(100 * w.extended_error);
+      rows.push_back({fmt::format("{:.1f} – {:.1f}", w.start_s, w.end_s), std::to_string(w.samples), label,
+                      ok ? fmt::format("{:.3f} %", 100 * w.nominal_error) : "-", ok ? fmt::format("{:.3f} %", 100 * w.extended_error) : "-",
+                      ok && w.cause != "none" ? fmt::format("{:+.1f} %", w.gain_percent) : "-",
+                      ok ? (w.white ? "white" : "not white") : "-", w.error});
+    }
+    rp::PlotOptions to("Verdict per window", "t (s)", "");
+    to.wide = true;
+    to.width = 1440;
+    page.timeline(spans, to);
+    page.plot({{"nominal", mid, en, "#d62728", true, false, 4.0}, {"with the window's cause", mid, ee, "#1f77b4", true, false, 4.0}},
+              {"Held-out error per window", "window centre, t (s)", "relative error (%)"});
+    page.table({"window (s)", "samples", "verdict", "nominal error", "extended error", "gain", "nominal residual", "why not diagnosed"},
+               rows);
+  }
 
   page.heading("Candidates");
   page.paragraph("Each candidate extends the nominal model; each is fitted and scored on held-out time blocks (blocked "

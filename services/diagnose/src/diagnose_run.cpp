@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <set>
@@ -195,6 +196,72 @@ RunDiagnosis diagnose_run(const format::Run& run, const Options& o) {
     throw std::runtime_error(run.dir + ": " + e.what());
   }
   return r;
+}
+
+namespace {
+
+/// The samples of `run` with t in [t0, t1), the rest of the run as it is.
+format::Run slice(const format::Run& run, double t0, double t1) {
+  format::Run w;
+  w.dir = run.dir;
+  w.info = run.info;
+  w.rig = run.rig;
+  w.samples.file = run.samples.file;
+  w.samples.extra_columns = run.samples.extra_columns;
+  std::vector<Eigen::Index> rows;
+  for (std::size_t k = 0; k < run.samples.size(); ++k) {
+    const double t = run.samples.samples[k].t_s;
+    if (t < t0 || t >= t1) continue;
+    w.samples.samples.push_back(run.samples.samples[k]);
+    if (k < run.samples.line.size()) w.samples.line.push_back(run.samples.line[k]);
+    rows.push_back(static_cast<Eigen::Index>(k));
+  }
+  w.samples.joints_rad.resize(static_cast<Eigen::Index>(rows.size()), run.samples.joints_rad.cols());
+  for (std::size_t i = 0; i < rows.size() && run.samples.joints_rad.cols() > 0; ++i)
+    w.samples.joints_rad.row(static_cast<Eigen::Index>(i)) = run.samples.joints_rad.row(rows[i]);
+  return w;
+}
+
+}  // namespace
+
+std::vector<WindowVerdict> diagnose_windows(const format::Run& run, double window_s, const Options& o) {
+  if (!(window_s > 0)) throw std::invalid_argument("diagnose: the window must be > 0 s, not " + std::to_string(window_s));
+  std::vector<WindowVerdict> out;
+  if (run.samples.size() == 0) return out;
+  const double t_first = run.samples.samples.front().t_s, t_last = run.samples.samples.back().t_s;
+  // Window edges; a tail shorter than half a window joins the last window.
+  std::vector<double> edges{t_first};
+  while (edges.back() + window_s < t_last) edges.push_back(edges.back() + window_s);
+  if (edges.size() > 1 && t_last - edges.back() < 0.5 * window_s) edges.pop_back();
+  edges.push_back(std::nextafter(t_last, std::numeric_limits<double>::infinity()));
+  Options wo = o;
+  wo.progress = {};
+  for (std::size_t i = 0; i + 1 < edges.size(); ++i) {
+    WindowVerdict v;
+    v.start_s = edges[i];
+    v.end_s = std::min(edges[i + 1], t_last);
+    const auto part = slice(run, edges[i], edges[i + 1]);
+    v.samples = part.samples.size();
+    if (o.progress)
+      o.progress(static_cast<int>(i + 1), static_cast<int>(edges.size() - 1), fmt::format("window {:.1f}-{:.1f} s", v.start_s, v.end_s));
+    try {
+      if (v.samples < 20 * static_cast<std::size_t>(o.folds))
+        throw std::runtime_error(fmt::format("{} samples: too few for {} folds", v.samples, o.folds));
+      const auto d = diagnose_run(part, wo);
+      v.cause = d.result.cause;
+      v.second_cause = d.result.second_cause;
+      v.nominal_error = d.result.nominal.cv_error;
+      v.extended_error = d.result.extended ? d.result.extended->cv_error : d.result.nominal.cv_error;
+      v.gain_percent = d.result.gain_percent;
+      v.white = d.result.nominal_residuals.white;
+    } catch (const std::exception& e) {
+      // A window without contact or with too little data is reported, not fatal: the others stand.
+      v.error = e.what();
+      if (const auto at = v.error.find(run.dir + ": "); at == 0) v.error = v.error.substr(run.dir.size() + 2);
+    }
+    out.push_back(std::move(v));
+  }
+  return out;
 }
 
 }  // namespace hil::services::diagnose

@@ -1,8 +1,9 @@
 #!/usr/bin/env python3
 """Each kind of hil report, made by the real `hil` from the shipped examples, opened in Debian's
 headless Chromium (browser/check_report.mjs): contact identification, the diagnosis of a contact
-run (with its hidden truth), of a deflection run (TIAGo, when ../shared is beside the checkout)
-and of a calibration run (the KR-270-like stiffness table). Each must show its verdict on the first
+run (with its hidden truth), of a clean one, of a deflection run (TIAGo, when ../shared is beside the
+checkout), of a run diagnosed in time windows (its timeline of verdicts) and of a calibration run
+(the KR-270-like stiffness table). Each must show its verdict on the first
 screen, overflow nowhere, draw every figure, keep every link, log no error and print to PDF; a
 screenshot per kind is kept in SHOTS. A deliberately broken page must fail the same check, with
 each of its faults named (the check can fail).
@@ -84,6 +85,16 @@ class Reports(unittest.TestCase):
                  "--cv-offsets", "4", "--quiet")
         self.check("diagnosis-deflection", rep, 10, "Named cause:", "offsets of the CV grid", "deflection model",
                    "Located events", "fig:Autocorrelation")
+
+    def test_windowed_diagnosis(self):
+        sys.path.insert(0, os.path.join(SRC, "tests", "diagnosis"))
+        import step_bias_run
+        run_dir = os.path.join(self.dir, "step")
+        step_bias_run.make(HIL, SRC, run_dir, seed=53, offset_n=4.0, t_step_s=13.0)
+        rep = os.path.join(self.dir, "step-report")
+        self.hil("diagnose", run_dir, "--window", "6.5", "--report", rep, "--quiet")
+        self.check("diagnosis-windows", rep, 10, "Over time (4 windows)", "over time", "sensor_bias from 13.0 s",
+                   "fig:Verdict per window", "fig:Held-out error per window")
 
     def test_diagnosis_of_a_calibration_run(self):
         rep = os.path.join(self.dir, "stiffness-report")

@@ -248,6 +248,21 @@ TEST(Report, AnAxisLabelWithItsUnitGivesTheColumnsTheUnit) {
   EXPECT_EQ(rows[0], (std::vector<std::string>{"t (s)", "measured (N)", "nominal (N)"}));
 }
 
+TEST(Report, ATimelineColoursEachVerdictOnceAndSpansTheRun) {
+  const std::vector<Span> spans{{0, 6.5, "none", "0.16 %"},
+                                {6.5, 13, "none", "0.22 %"},
+                                {13, 19.5, "sensor_bias", "gain 88 %"},
+                                {19.5, 26, "sensor_bias", "gain 85 %"},
+                                {26, 27, "not diagnosed", "too few samples"}};
+  const auto svg = svg_timeline(spans, PlotOptions("verdicts", "t (s)", ""));
+  EXPECT_EQ(count(svg, "fill='#b7dfb0'"), 2u);  // none
+  EXPECT_EQ(count(svg, "fill='#1f77b4'"), 2u);  // the first named cause's colour, both its windows
+  EXPECT_EQ(count(svg, "fill='#e4e4e4'"), 1u);  // not diagnosed
+  // The first block starts at the left margin, the last ends at the right one.
+  EXPECT_NE(svg.find("<rect x='21.0' y='30.0'"), std::string::npos);
+  EXPECT_NE(svg.find(">gain 88 %<"), std::string::npos);
+}
+
 TEST(Report, ALongLegendLabelIsCondensedNotCut) {
   const auto svg = svg_plot({Series("robot_compliance+rest_change+sensor_gain", {0, 1}, {0, 1}), Series("short", {0, 1}, {1, 0})},
                             PlotOptions("t", "x", "y"));

@@ -7,8 +7,10 @@
 #include <fstream>
 #include <iostream>
 #include <map>
+#include <optional>
 
 #include <hil/cli/commands.hpp>
+#include <hil/error/error.hpp>
 #include <hil/format/output.hpp>
 #include <hil/format/run.hpp>
 #include <hil/services/diagnose_output.hpp>
@@ -31,6 +33,7 @@ struct DiagnoseArgs {
   int cv_offsets = 0;
   int threads = 0;
   hil::diagnose::RateSource damping_rates = hil::diagnose::RateSource::automatic;
+  double window_s = 0.0;
   bool quiet = false;
 };
 
@@ -48,8 +51,22 @@ int diagnose_cmd(const DiagnoseArgs& a) {
       else std::cerr << fmt::format("[diagnose {}/{}] {}\n", step, total, what);
     };
   // A file is a stiffness-experiment table; a folder a run.
-  const auto r = std::filesystem::is_regular_file(a.run) ? diagnose::diagnose_table(a.run, a.rig, o)
-                                                         : diagnose::diagnose_run(format::load_run(a.run, a.rig), o);
+  const bool table = std::filesystem::is_regular_file(a.run);
+  if (table && a.window_s > 0)
+    throw error::FormatError({"command line", 0, 0, "--window"}, "applies to a run folder (a stiffness table has no time)");
+  std::optional<format::Run> run;
+  if (!table) run = format::load_run(a.run, a.rig);
+  auto r = table ? diagnose::diagnose_table(a.run, a.rig, o) : diagnose::diagnose_run(*run, o);
+  if (a.window_s > 0) {
+    if (!a.quiet && tty) std::cerr << "\r" << std::string(80, ' ') << "\r";
+    auto wo = o;
+    if (!a.quiet)
+      wo.progress = [tty](int step, int total, const std::string& what) {
+        if (tty) std::cerr << fmt::format("\r[diagnose window {}/{}] {:<50}", step, total, what) << std::flush;
+        else std::cerr << fmt::format("[diagnose window {}/{}] {}\n", step, total, what);
+      };
+    r.windows = diagnose::diagnose_windows(*run, a.window_s, wo);
+  }
   if (!a.quiet && tty) std::cerr << "\r" << std::string(80, ' ') << "\r";
   auto& text = human(is_stdout(a.json));
   diagnose::print_summary(text, r);
@@ -92,6 +109,10 @@ void add_diagnose(CLI::App& app) {
   d->add_option("--truth", da.truth,
                 "a hidden-effects file (hil contact simulate --truth-out): its values are drawn beside the report's intervals; "
                 "the diagnosis itself never reads it");
+  d->add_option("--window", da.window_s,
+                "also diagnose each window of this many seconds on its own: when a cause appears or drifts (a timeline in "
+                "the summary, JSON and report)")
+      ->check(CLI::PositiveNumber);
   d->add_option("--candidates", da.candidates, candidates_help())->delimiter(',');
   d->add_option("--folds", da.folds, "blocks of the cross-validation over time")->capture_default_str()->check(CLI::Range(2, 1000));
   d->add_option("--cv-offsets", da.cv_offsets, cv_offsets_help())->capture_default_str()->check(CLI::Range(0, 64));

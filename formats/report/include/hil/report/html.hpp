@@ -74,6 +74,15 @@ struct Bars {
 };
 std::string svg_bars(const Bars& bars, const PlotOptions& options);
 
+/// One span of a timeline: [start, end) with its label (e.g. a time window's verdict) and a detail.
+struct Span {
+  double start = 0.0, end = 0.0;
+  std::string label, detail;
+};
+/// A timeline: the spans on one time axis, one colour per distinct label ("none" green, "not
+/// diagnosed" grey), each span labelled in place.
+std::string svg_timeline(const std::vector<Span>& spans, const PlotOptions& options);
+
 /// The verdict block that opens a report: what was found in words and numbers, and what to do.
 struct Verdict {
   /// The block's kind, also its colour: "cause" (a cause named), "none" (nothing to explain),
@@ -110,6 +119,7 @@ class Page {
   void plot(const std::vector<Series>& series, const PlotOptions& options);
   void forest(const std::vector<Interval>& rows, const std::string& title, const std::string& reference_label = "nominal");
   void bars(const Bars& bars, const PlotOptions& options);
+  void timeline(const std::vector<Span>& spans, const PlotOptions& options);
   /// A text kept whole (e.g. the command's text summary): folded away, and a link that saves it as
   /// `file_name` (a data: URL, so the page stays one file).
   void text_download(const std::string& label, const std::string& file_name, const std::string& text);

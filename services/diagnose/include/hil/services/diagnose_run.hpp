@@ -2,6 +2,7 @@
 /// \file `hil diagnose` on a run: the model family from the rig (contact scene -> contact family;
 /// no contact model -> deflection family) and the diagnosis; its outputs are diagnose_output.hpp's.
 #include <nlohmann/json.hpp>
+#include <limits>
 #include <memory>
 #include <ostream>
 #include <string>
@@ -29,6 +30,19 @@ struct Options {
   hil::diagnose::Progress progress;
 };
 
+/// The verdict of one time window of a run (diagnose_windows): when a cause appears or drifts.
+struct WindowVerdict {
+  double start_s = 0.0, end_s = 0.0;  ///< the window's span, the run's time
+  std::size_t samples = 0;
+  std::string cause;                                                ///< the named cause, "none", or empty when the window was not diagnosed
+  std::string second_cause;                                         ///< empty: none
+  double nominal_error = std::numeric_limits<double>::quiet_NaN();  ///< held-out relative error
+  double extended_error = std::numeric_limits<double>::quiet_NaN();
+  double gain_percent = std::numeric_limits<double>::quiet_NaN();
+  bool white = true;  ///< the nominal residual's whiteness (Ljung-Box)
+  std::string error;  ///< why the window was not diagnosed (e.g. no contact in it)
+};
+
 struct RunDiagnosis {
   std::string run_name, mode;  ///< mode: "contact", "deflection" or "stiffness" (a stiffness table)
   int folds = 5;               ///< the cross-validation's blocks (Options::folds)
@@ -41,11 +55,18 @@ struct RunDiagnosis {
   hil::diagnose::ModelFactory make;
   hil::diagnose::Diagnosis result;
   std::vector<std::string> notes;
+  std::vector<WindowVerdict> windows;  ///< diagnose_windows' verdicts, when asked for
   const hil::diagnose::Observations& obs() const { return contact ? contact->obs : deflection ? deflection->obs : stiffness->obs; }
 };
 
 /// \throws error::FormatError / std::runtime_error naming the run on bad input.
 RunDiagnosis diagnose_run(const format::Run& run, const Options& o);
+/// The run cut into consecutive windows of `window_s` (a last window shorter than half of one
+/// joins the one before), each diagnosed on its own with the same options: a cause that appears,
+/// drifts or goes in a long recording shows where. A window that cannot be diagnosed (no contact,
+/// too few samples) keeps why in WindowVerdict::error. \throws std::invalid_argument if
+/// window_s <= 0.
+std::vector<WindowVerdict> diagnose_windows(const format::Run& run, double window_s, const Options& o);
 /// A stiffness-experiment table (docs/calibration.md) of the robot in `rig_path`, against the
 /// joint-compliance model. \throws error::FormatError / std::runtime_error naming the file.
 RunDiagnosis diagnose_table(const std::string& table_path, const std::string& rig_path, const Options& o);
