@@ -576,7 +576,7 @@ static const char* kStyle =
     "table{border-collapse:collapse;font-variant-numeric:tabular-nums}td,th{border:1px solid #ccc;padding:3px 9px;text-align:right;"
     "vertical-align:top}td:first-child,th:first-child{text-align:left}th{background:#f2f2f2}tr.em td{font-weight:600;background:#eef5fb}"
     "td{white-space:nowrap}td:last-child{text-align:left;white-space:normal}th:last-child{text-align:left}"
-    "@media (max-width:1200px){td{white-space:normal}td,th{padding:3px 5px}}"
+    "@media (max-width:1200px){td{white-space:normal}td,th{padding:3px 5px;overflow-wrap:anywhere}}"
     "pre{background:#f7f7f7;padding:8px;white-space:pre-wrap;overflow-wrap:anywhere}details{margin:10px 0}summary{cursor:pointer}"
     "@media print{body{max-width:none;padding:0}.figs{display:block}.fig{break-inside:avoid;margin:0 0 10px}"
     "h2,h3{break-after:avoid}tr{break-inside:avoid}.tablewrap{overflow:visible}details pre{display:none}}";
