@@ -292,12 +292,21 @@ class Diagnose(unittest.TestCase):
         self.assertIn("the windows name sensor_bias from 13.0 s", html)
         # A truth file that is not one: named, exit 2.
         bad = os.path.join(self.dir, "not-truth.json")
+        for text in ('{"format": "hil.diagnosis"}', '{"format": 3}', '[1, 2]'):
+            with open(bad, "w") as f:
+                f.write(text)
+            r = hil("diagnose", run, "--report", rep, "--truth", bad, "--quiet")
+            self.assertEqual(r.returncode, 2, r.stderr)
+            self.assertIn(bad, r.stderr)
+            self.assertIn("not a hidden-effects file", r.stderr)
         with open(bad, "w") as f:
-            f.write('{"format": "hil.diagnosis"}')
+            f.write('{"format": "hil.hidden_effects", "K": ')
         r = hil("diagnose", run, "--report", rep, "--truth", bad, "--quiet")
         self.assertEqual(r.returncode, 2, r.stderr)
-        self.assertIn(bad, r.stderr)
-        self.assertIn("not a hidden-effects file", r.stderr)
+        self.assertIn("not valid JSON", r.stderr)
+        r = hil("diagnose", run, "--truth", bad, "--quiet")  # the truth is only drawn in a report
+        self.assertEqual(r.returncode, 2, r.stderr)
+        self.assertIn("--report", r.stderr)
         # Bad input: no window in a table (no time); a window must be > 0.
         r = hil("diagnose", os.path.join(SRC, "examples", "stiffness", "table.csv"), "--rig",
                 os.path.join(SRC, "examples", "stiffness", "kr270_like.yaml"), "--window", "5")

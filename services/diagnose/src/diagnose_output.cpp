@@ -272,7 +272,7 @@ nlohmann::json to_json(const RunDiagnosis& r) {
 
 TruthValues read_truth(const std::string& path, const RunDiagnosis& r) {
   const nlohmann::json j = models::load_json(path);
-  if (!j.is_object() || j.value("format", "") != "hil.hidden_effects")
+  if (!j.is_object() || !j.contains("format") || j["format"] != "hil.hidden_effects")
     throw error::FormatError({path, 0, 0, "format"}, "not a hidden-effects file (hil contact simulate --truth-out writes one)");
   TruthValues t;
   const auto& comp = r.obs().component;

@@ -105,10 +105,11 @@ void add_diagnose(CLI::App& app) {
   d->add_option("RUN", da.run, "run folder, or a stiffness-experiment table (CSV, with --rig of its robot)")->required();
   d->add_option("--rig", da.rig, "rig file (default: the run's rig.yaml)");
   d->add_option("--json", da.json, "write the diagnosis as JSON (hil.diagnosis; - for stdout, the summary then goes to stderr)");
-  d->add_option("--report", da.report, "write an HTML report into this folder");
+  auto* report = d->add_option("--report", da.report, "write an HTML report into this folder");
   d->add_option("--truth", da.truth,
                 "a hidden-effects file (hil contact simulate --truth-out): its values are drawn beside the report's intervals; "
-                "the diagnosis itself never reads it");
+                "the diagnosis itself never reads it")
+      ->needs(report);
   d->add_option("--window", da.window_s,
                 "also diagnose each window of this many seconds on its own: when a cause appears or drifts (a timeline in "
                 "the summary, JSON and report)")
