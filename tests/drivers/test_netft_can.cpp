@@ -135,8 +135,12 @@ TEST(NetFtCanDriver, EveryWholeAnswerIsAReadingUnderDropsCorruptionSilenceAndDel
   EXPECT_GT(stats.answers_corrupted, 5U);
   EXPECT_GT(stats.frames_dropped, 5U);
   EXPECT_GT(stats.ignored_silent, 20U);
-  // Each whole answer was read (none lost, none torn), each cut one reported.
-  EXPECT_EQ(ok + 1, stats.gauge_answers_delivered) << "the start-up reading is one of the box's answers";
+  // Each whole answer was read (none lost, none torn) or, when it came after its poll had given up
+  // (a loaded machine), drained as late by the next poll; at most the last one is still in flight.
+  // (A fresh-clone CI run saw 3 of 303 answers late.)
+  const auto late = rig.drv->counters().late_frames;
+  EXPECT_LE(ok + 1, stats.gauge_answers_delivered) << "the start-up reading is one of the box's answers";
+  EXPECT_LE(stats.gauge_answers_delivered, ok + 1 + late + 1) << "an answer neither read nor counted late";
   EXPECT_EQ(bad, rig.drv->counters().bad_frames);
   EXPECT_GE(bad, stats.answers_corrupted - 2) << "a cut first answer is a bad frame";
   EXPECT_GT(timeouts, 20U);
