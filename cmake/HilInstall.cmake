@@ -33,7 +33,7 @@ set(_hil_exports
   hil_service_stiffness service_stiffness
   hil_service_workers service_workers)
 set(HIL_CONFIG_MCAP_DEPS "")
-set(HIL_PC_REQUIRES "eigen3 yaml-cpp spdlog libmodbus")
+set(HIL_PC_REQUIRES "eigen3 yaml-cpp spdlog libmodbus urdfdom orocos-kdl")
 if(TARGET hil_mcap)
   list(APPEND _hil_exports hil_mcap mcap)
   # hil::mcap's private links (zstd and lz4 chunks).
@@ -131,6 +131,8 @@ foreach(target IN LISTS _hil_order)
   endif()
   string(APPEND HIL_PC_LIBS " -l${out}")
 endforeach()
+# hil::format's URDF reader: kdl_parser has no usable .pc on Debian 12 (its Requires need ROS).
+string(APPEND HIL_PC_LIBS " -lkdl_parser")
 # The .pc file finds the prefix from its own place, so an installed tree can be moved.
 file(RELATIVE_PATH HIL_PC_TO_PREFIX /${CMAKE_INSTALL_LIBDIR}/pkgconfig /)
 string(REGEX REPLACE "/$" "" HIL_PC_TO_PREFIX "${HIL_PC_TO_PREFIX}")

@@ -114,7 +114,14 @@ py::dict meta_dict(const fmt_::RunInfo& info) {
 py::dict robot_dict(const fmt_::RobotSpec& r) {
   py::dict d;
   d["name"] = r.name;
-  d["convention"] = r.convention == fmt_::DhConvention::standard ? "standard" : "modified";
+  d["convention"] = fmt_::convention_name(r.convention);
+  if (r.convention == fmt_::DhConvention::urdf) {
+    d["urdf"] = r.urdf_file;
+    d["base_link"] = r.base_link;
+    d["tip_link"] = r.tip_link;
+    d["body_links"] = r.body_links;
+    d["masses_kg"] = matrix(r.inertials.size(), 1, [&](std::size_t i, std::size_t) { return r.inertials[i].mass_kg; });
+  }
   py::list joints;
   for (const auto& j : r.joints) {
     py::dict x;
@@ -126,6 +133,10 @@ py::dict robot_dict(const fmt_::RobotSpec& r) {
     x["theta_offset_rad"] = j.theta_offset_rad;
     x["lower"] = j.lower;
     x["upper"] = j.upper;
+    if (r.convention == fmt_::DhConvention::urdf) {
+      x["T_parent_joint"] = pose_dict(j.T_parent_joint);
+      x["axis"] = std::vector<double>{j.axis.x(), j.axis.y(), j.axis.z()};
+    }
     joints.append(x);
   }
   d["joints"] = joints;
@@ -323,7 +334,7 @@ void add_readers(py::module_& m) {
         return rig_dict(rig);
       },
       py::arg("path"),
-      "Reads a rig file strictly into a dict: name, frames, robot (DH table), objects (polyhedra as "
+      "Reads a rig file strictly into a dict: name, frames, robot (DH table or URDF chain), objects (polyhedra as "
       "(V,3) vertex arrays in m), devices, model (contact model, geometric uncertainties).");
 }
 

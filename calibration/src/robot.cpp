@@ -15,6 +15,12 @@ Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
 Eigen::Isometry3d dh_transform(DhConvention convention, const DhRow& row, double q) {
   const double theta = row.kind == JointKind::revolute ? q + row.theta_offset_rad : row.theta_offset_rad;
   const double d = row.kind == JointKind::prismatic ? q + row.d_m : row.d_m;
+  if (convention == DhConvention::urdf) {
+    Eigen::Isometry3d motion = Eigen::Isometry3d::Identity();
+    if (row.kind == JointKind::revolute) motion.linear() = Eigen::AngleAxisd(theta, row.axis).toRotationMatrix();
+    else motion.translation() = d * row.axis;
+    return row.T_parent_joint * motion;
+  }
   const double ct = std::cos(theta), st = std::sin(theta);
   const double ca = std::cos(row.alpha_rad), sa = std::sin(row.alpha_rad);
   Eigen::Matrix4d M;
@@ -48,7 +54,14 @@ void forward(const SerialRobot& robot, const Eigen::Ref<const Eigen::VectorXd>& 
     const Eigen::Isometry3d& T_prev = out.T_world_body[ui];
     out.T_world_body[ui + 1] = T_prev * dh_transform(robot.convention, robot.joints[ui], q[i]);
     // Standard: joint i+1 moves about z of the previous frame through its origin;
-    // modified: about z of its own frame (the new frame's z, through its origin).
+    // modified: about z of its own frame (the new frame's z, through its origin);
+    // URDF: about its axis through the joint frame's origin (the axis is unchanged by the motion).
+    if (robot.convention == DhConvention::urdf) {
+      const DhRow& row = robot.joints[ui];
+      out.joint_axis_world[ui] = T_prev.linear() * (row.T_parent_joint.linear() * row.axis);
+      out.p_world_joint_m[ui] = T_prev * row.T_parent_joint.translation();
+      continue;
+    }
     const Eigen::Isometry3d& T_axis = robot.convention == DhConvention::standard ? T_prev : out.T_world_body[ui + 1];
     out.joint_axis_world[ui] = T_axis.linear().col(2);
     out.p_world_joint_m[ui] = T_axis.translation();

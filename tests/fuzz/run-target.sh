@@ -12,6 +12,8 @@ bin=${1:?usage: run-target.sh BUILD_DIR TARGET SECONDS}
 target=${2:?target}
 seconds=${3:?seconds}
 exe=$bin/$target
+# Leaks inside Debian's libraries (not hil's to fix) are suppressed by name, with the reason there.
+export LSAN_OPTIONS="suppressions=$here/lsan.supp:print_suppressions=0${LSAN_OPTIONS:+:$LSAN_OPTIONS}"
 [[ -x $exe ]] || { echo "run-target: $exe not built (tests/fuzz/build.sh $bin)" >&2; exit 1; }
 
 regressions=("$here/regressions/$target"/*)

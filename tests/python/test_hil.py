@@ -112,6 +112,25 @@ def test_read_rig():
     assert robot_dev["port"] == 5020 and robot_dev["register_map"] == "ur"
 
 
+def test_a_urdf_robot_reads_and_identifies_as_its_dh_table():
+    urdf_rig = os.path.join(SRC, "examples", "stiffness", "kr270_like_urdf.yaml")
+    robot = hil.read_rig(urdf_rig)["robot"]
+    assert robot["convention"] == "urdf"
+    assert (robot["base_link"], robot["tip_link"]) == ("base_link", "tool0")
+    assert robot["urdf"].endswith("kr270_like.urdf")
+    assert robot["body_links"] == ["base_link"] + ["link_%d" % i for i in range(1, 7)]
+    assert [j["name"] for j in robot["joints"]] == ["a1", "a2", "a3", "a4", "a5", "a6"]
+    np.testing.assert_allclose(robot["joints"][1]["T_parent_joint"]["translation_m"], [0.35, 0, 0.675])
+    np.testing.assert_array_equal(robot["joints"][1]["axis"], [0, 0, 1])
+    a, b = hil.identify_stiffness(STIFF_TABLE, STIFF_RIG), hil.identify_stiffness(STIFF_TABLE, urdf_rig)
+    assert a["rank"] == b["rank"]
+    va = {p["name"]: p["value"] for p in a["parameters"]}
+    vb = {p["name"]: p["value"] for p in b["parameters"]}
+    assert va.keys() == vb.keys()
+    for k in va:
+        assert vb[k] == pytest.approx(va[k], rel=1e-6), k
+
+
 def test_run_sources_keep_the_device_identity(tmp_path):
     shutil.copytree(RUN, tmp_path / "run")
     (tmp_path / "run" / "run.yaml").write_text(

@@ -1,12 +1,17 @@
-// `hil validate PATH [--json [OUT|-]]`: checks a run folder, a rig file, run.yaml or samples.csv
-// and summarises it, as text and optionally as JSON (hil.validation).
+// `hil validate PATH [--json [OUT|-]]`: checks a run folder, a rig file, run.yaml, samples.csv or a
+// calibration run (against --rig's robot) and summarises it, as text and optionally as JSON (hil.validation).
 #include <fmt/format.h>
 
 #include <filesystem>
+#include <fstream>
 #include <iostream>
+#include <map>
+#include <sstream>
 
 #include <hil/cli/commands.hpp>
 #include <hil/error/error.hpp>
+#include <hil/format/calibration_run.hpp>
+#include <hil/format/csv.hpp>
 #include <hil/format/run.hpp>
 #include <hil/format/output.hpp>
 #include "summary.hpp"
@@ -21,15 +26,31 @@ namespace fs = std::filesystem;
 
 namespace {
 
-/// What PATH is: run, run_info (run.yaml), samples (.csv) or rig (.yaml). \throws FormatError.
+/// The column names of a CSV's header line (the first that is not blank or a comment).
+std::vector<std::string> csv_header(const std::string& path) {
+  std::ifstream in(path);
+  std::string line;
+  while (std::getline(in, line)) {
+    if (line.empty() || line[0] == '#' || line.find_first_not_of(" \t\r") == std::string::npos) continue;
+    std::vector<std::string> names;
+    std::string cell;
+    std::istringstream cells(line);
+    while (std::getline(cells, cell, ',')) names.push_back(cell.substr(0, cell.find_last_not_of(" \t\r") + 1));
+    return names;
+  }
+  return {};
+}
+
+/// What PATH is: run, run_info (run.yaml), samples or calibration_run (.csv, by its header) or rig
+/// (.yaml). \throws FormatError.
 std::string kind_of(const std::string& path) {
   if (!fs::exists(path)) throw error::FormatError({path, 0, 0, ""}, "no such file or folder");
   if (fs::is_directory(path)) return "run";
   if (fs::path(path).filename() == "run.yaml") return "run_info";
   const auto ext = fs::path(path).extension().string();
-  if (ext == ".csv") return "samples";
+  if (ext == ".csv") return format::looks_like_calibration_run(csv_header(path)) ? "calibration_run" : "samples";
   if (ext == ".yaml" || ext == ".yml") return "rig";
-  throw error::FormatError({path, 0, 0, ""}, "not a run folder, rig file (.yaml), run.yaml or samples.csv");
+  throw error::FormatError({path, 0, 0, ""}, "not a run folder, rig file (.yaml), run.yaml, samples.csv or calibration run (.csv)");
 }
 
 /// Checks PATH of that kind, prints the human summary to `text` and returns it as JSON.
@@ -51,6 +72,33 @@ nlohmann::json check(const std::string& kind, const std::string& path, const std
     text << fmt::format("samples {}: OK\n", path);
     print_samples_summary(text, table);
     return samples_summary_json(table);
+  }
+  if (kind == "calibration_run") {
+    if (rig_path.empty()) throw error::FormatError({path, 0, 0, ""}, "a calibration run is checked against its robot: give --rig RIG");
+    const auto rig = format::load_rig(rig_path);
+    if (!rig.robot) throw error::FormatError({rig_path, 0, 0, "robot"}, "the rig has no robot to check the calibration run against");
+    const auto run = format::read_calibration_run(path, *rig.robot);
+    std::map<std::string, int> per_station;
+    for (const auto& p : run.postures) ++per_station[p.station];
+    nlohmann::json j = {{"robot", rig.robot->name},         {"postures", run.postures.size()},    {"stations", nlohmann::json::array()},
+                        {"joints", run.joint_names},        {"orientation", run.has_orientation}, {"sigma", run.has_sigma},
+                        {"flags", nlohmann::json::array()}, {"tilts", nlohmann::json::array()},   {"payload", run.has_payload},
+                        {"wrench", run.has_wrench}};
+    text << fmt::format("calibration run {}: OK ({} postures of robot '{}', {} station(s){}{})\n", path, run.postures.size(),
+                        rig.robot->name, run.stations.size(), run.has_orientation ? ", full poses" : ", points",
+                        run.has_sigma ? ", with sigma" : "");
+    for (const auto& s : run.stations) {
+      j["stations"].push_back({{"id", s}, {"postures", per_station[s]}});
+      text << fmt::format("  station {}: {} postures\n", s, per_station[s]);
+    }
+    for (std::size_t f = 0; f < run.flag_names.size(); ++f) {
+      int set = 0;
+      for (const auto& p : run.postures) set += p.flags[f] ? 1 : 0;
+      j["flags"].push_back({{"name", run.flag_names[f]}, {"set", set}});
+      text << fmt::format("  flag {}: set on {} postures\n", run.flag_names[f], set);
+    }
+    for (const auto& t : run.tilts) j["tilts"].push_back(t.column);
+    return j;
   }
   const auto rig = format::load_rig(path);
   text << fmt::format("rig {}: OK\n", path);
@@ -102,11 +150,12 @@ int validate(const std::string& path, const std::string& rig_path, const std::st
 }  // namespace
 
 void add_validate(CLI::App& app) {
-  auto* cmd = app.add_subcommand("validate", "Check a run folder, a rig file, run.yaml or samples.csv and summarise it");
+  auto* cmd = app.add_subcommand("validate", "Check a run folder, a rig file, run.yaml, samples.csv or a calibration run and summarise it");
   static std::string path, rig, json;
   static CLI::Option* json_opt = nullptr;
-  cmd->add_option("PATH", path, "run folder, rig file, run.yaml or samples.csv")->required();
-  cmd->add_option("--rig", rig, "rig file to check the run against (default: the run's rig.yaml)");
+  cmd->add_option("PATH", path, "run folder, rig file, run.yaml, samples.csv or calibration run (.csv with posture, px, py, pz)")
+      ->required();
+  cmd->add_option("--rig", rig, "rig file to check the run against (default: the run's rig.yaml); a calibration run's robot");
   json_opt = cmd->add_option("--json", json,
                              "also write the summary (or the error) as JSON (hil.validation) to OUT; without OUT or with -, to "
                              "stdout and the text to stderr")

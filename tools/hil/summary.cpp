@@ -25,8 +25,11 @@ void print_samples_summary(std::ostream& os, const format::SampleTable& t) {
 void print_rig_summary(std::ostream& os, const format::RigSpec& rig) {
   os << fmt::format("  rig '{}': {} frames", rig.name, rig.frames.size());
   if (rig.robot)
-    os << fmt::format(", robot '{}' ({} joints, {} DH)", rig.robot->name, rig.robot->joints.size(),
-                      rig.robot->convention == format::DhConvention::standard ? "standard" : "modified");
+    os << (rig.robot->convention == format::DhConvention::urdf
+               ? fmt::format(", robot '{}' ({} joints, URDF {} -> {})", rig.robot->name, rig.robot->joints.size(), rig.robot->base_link,
+                             rig.robot->tip_link)
+               : fmt::format(", robot '{}' ({} joints, {} DH)", rig.robot->name, rig.robot->joints.size(),
+                             format::convention_name(rig.robot->convention)));
   os << '\n';
   os << fmt::format("  objects: {}, features: {}, polyhedra: {}\n", rig.objects.size(), format::total_features(rig),
                     format::total_polyhedra(rig));
@@ -73,10 +76,16 @@ nlohmann::json rig_summary_json(const format::RigSpec& rig) {
             {"robot_controller", nullptr},
             {"contact_model", nullptr},
             {"geometric_uncertainties", rig.model.uncertainties.size()}};
-  if (rig.robot)
+  if (rig.robot) {
     j["robot"] = {{"name", rig.robot->name},
                   {"joints", rig.robot->joints.size()},
-                  {"convention", rig.robot->convention == format::DhConvention::standard ? "standard" : "modified"}};
+                  {"convention", format::convention_name(rig.robot->convention)}};
+    if (rig.robot->convention == format::DhConvention::urdf) {
+      j["robot"]["urdf"] = rig.robot->urdf_file;
+      j["robot"]["base_link"] = rig.robot->base_link;
+      j["robot"]["tip_link"] = rig.robot->tip_link;
+    }
+  }
   for (const auto& o : rig.objects)
     j["objects"].push_back({{"name", o.name}, {"frame", o.frame}, {"features", o.features.size()}, {"polyhedra", o.polyhedron_count()}});
   if (rig.devices.force_plate) {

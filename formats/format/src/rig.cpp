@@ -2,15 +2,26 @@
 
 #include <Eigen/SVD>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <set>
 #include <sstream>
 
 #include <hil/format/quaternion.hpp>
+#include <hil/format/urdf.hpp>
 #include <hil/format/yaml.hpp>
 
 namespace hil::format {
 using YNode = YamlNode;
+
+const char* convention_name(DhConvention c) {
+  switch (c) {
+    case DhConvention::standard: return "standard";
+    case DhConvention::modified: return "modified";
+    case DhConvention::urdf: return "urdf";
+  }
+  return "standard";
+}
 
 Eigen::Isometry3d Pose::isometry() const {
   Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
@@ -124,7 +135,27 @@ FrameSpec read_frame(const YNode& n) {
   return f;
 }
 
-RobotSpec read_robot(const YNode& n) {
+/// `robot: {urdf: FILE, base_link: L, tip_link: L}`: the chain from the URDF, the file relative to
+/// the rig file's folder; `base` places the base link in world, `tool` goes after the tip link.
+RobotSpec read_urdf_section(const YNode& n, const std::string& rig_path) {
+  n.only({"name", "urdf", "base_link", "tip_link", "base", "tool"});
+  std::filesystem::path file = n.req("urdf").str();
+  if (file.is_relative()) file = std::filesystem::path(rig_path).parent_path() / file;
+  RobotSpec r;
+  try {
+    r = read_urdf_robot(file.lexically_normal().string(), read_name(n, "base_link"), read_name(n, "tip_link"));
+  } catch (const error::FormatError& e) {
+    // Both places: the rig's line and what is wrong in the URDF.
+    n.child("urdf").fail(e.what());
+  }
+  if (n.has("name")) r.name = read_name(n, "name");
+  if (n.has("base")) r.T_world_base = read_pose(n.child("base"));
+  if (n.has("tool")) r.T_flange_ee = Pose::from_isometry(r.T_flange_ee.isometry() * read_pose(n.child("tool")).isometry());
+  return r;
+}
+
+RobotSpec read_robot(const YNode& n, const std::string& rig_path) {
+  if (n.has("urdf")) return read_urdf_section(n, rig_path);
   n.only({"name", "convention", "joints", "base", "tool"});
   RobotSpec r;
   r.name = n.str("name", "robot");
@@ -475,7 +506,7 @@ RigSpec parse_rig(const std::string& text, const std::string& display_name) {
       }
     }
   }
-  if (root.has("robot")) rig.robot = read_robot(root.child("robot"));
+  if (root.has("robot")) rig.robot = read_robot(root.child("robot"), display_name);
   if (root.has("objects")) {
     std::set<std::string> names;
     for (const auto& on : root.child("objects").seq()) {

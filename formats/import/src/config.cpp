@@ -13,6 +13,7 @@
 #include <sstream>
 
 #include <hil/format/csv.hpp>
+#include "config_internal.hpp"
 #include <hil/error/error.hpp>
 #include <hil/format/yaml.hpp>
 #include <hil/import/timeparse.hpp>
@@ -182,42 +183,61 @@ std::vector<std::string> expand_columns(const std::vector<std::string>& names) {
   return out;
 }
 
+void read_csv_section(const Node& n, char& delimiter, bool& header, std::vector<std::string>& columns) {
+  n.only({"delimiter", "header", "columns"});
+  if (n.has("delimiter")) {
+    const auto d = n.child("delimiter").str();
+    if (d == "tab" || d == "\t") delimiter = '\t';
+    else if (d.size() == 1 && d != "\"" && d != "#" && d != "." && !std::isalnum(static_cast<unsigned char>(d[0]))) delimiter = d[0];
+    else n.child("delimiter").fail("expected one character such as ',' ';' or tab, found '" + d + "'");
+  }
+  if (n.has("header")) header = n.child("header").boolean();
+  if (n.has("columns")) {
+    if (header) n.child("columns").fail("columns name a file without a header: set header: false, or drop columns");
+    std::vector<std::string> raw;
+    for (const auto& e : n.child("columns").seq()) raw.push_back(e.str());
+    columns = expand_columns(raw);
+    std::set<std::string> seen;
+    for (const auto& s : columns)
+      if (!seen.insert(s).second) n.child("columns").fail("column '" + s + "' is named twice");
+  } else if (!header) {
+    n.fail("required field is missing", "columns");
+  }
+}
+
+std::string config_kind(const YAML::Node& doc, const std::string& display_name) {
+  if (!doc.IsDefined() || doc.IsNull() || !doc.IsMap()) return "run";
+  std::string file = display_name;
+  const Node root(doc, "", &file);
+  if (!root.has("kind")) return "run";
+  const auto k = root.child("kind").str();
+  if (k != "run" && k != "calibration_run") root.child("kind").fail("expected 'run' or 'calibration_run', found '" + k + "'");
+  return k;
+}
+
+std::string import_config_kind(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw FormatError({path, 0, 0, ""}, "cannot open import config");
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  return config_kind(format::load_yaml(ss.str(), path), path);
+}
+
 ImportConfig parse_import_config(const std::string& text, const std::string& display_name) {
   ImportConfig c;
   c.file = display_name;
   const YAML::Node doc = format::load_yaml(text, display_name);
   if (!doc.IsDefined() || doc.IsNull()) throw FormatError({display_name, 0, 0, ""}, "empty import config");
   const Node root(doc, "", &c.file);
-  root.only({"format_version", "rig", "source", "notes", "csv", "time", "markers", "bodies", "ee", "wrench", "joints", "extra_columns",
-             "twist"});
+  root.only({"format_version", "kind", "rig", "source", "notes", "csv", "time", "markers", "bodies", "ee", "wrench", "joints",
+             "extra_columns", "twist"});
+  if (config_kind(doc, display_name) != "run") root.child("kind").fail("this is not a run import config");
   if (root.req("format_version").count(1) != 1) root.child("format_version").fail("this hil reads import config version 1");
   if (root.has("rig")) c.rig = checked_name(root.child("rig"));
   if (root.has("source")) c.source_name = checked_name(root.child("source"));
   c.notes = root.has("notes") ? root.child("notes").str() : "";
 
-  if (root.has("csv")) {
-    const auto n = root.child("csv");
-    n.only({"delimiter", "header", "columns"});
-    if (n.has("delimiter")) {
-      const auto d = n.child("delimiter").str();
-      if (d == "tab" || d == "\t") c.delimiter = '\t';
-      else if (d.size() == 1 && d != "\"" && d != "#" && d != "." && !std::isalnum(static_cast<unsigned char>(d[0]))) c.delimiter = d[0];
-      else n.child("delimiter").fail("expected one character such as ',' ';' or tab, found '" + d + "'");
-    }
-    if (n.has("header")) c.header = n.child("header").boolean();
-    if (n.has("columns")) {
-      if (c.header) n.child("columns").fail("columns name a file without a header: set header: false, or drop columns");
-      std::vector<std::string> raw;
-      for (const auto& e : n.child("columns").seq()) raw.push_back(e.str());
-      c.columns = expand_columns(raw);
-      std::set<std::string> seen;
-      for (const auto& s : c.columns)
-        if (!seen.insert(s).second) n.child("columns").fail("column '" + s + "' is named twice");
-    } else if (!c.header) {
-      n.fail("required field is missing", "columns");
-    }
-  }
-  if (!root.has("csv")) c.header = true;
+  if (root.has("csv")) read_csv_section(root.child("csv"), c.delimiter, c.header, c.columns);
 
   c.time = parse_time(root.req("time"));
 

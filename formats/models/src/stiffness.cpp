@@ -17,7 +17,9 @@ using error::FormatError;
 hc::SerialRobot to_serial_robot(const format::RobotSpec& spec) {
   hc::SerialRobot r;
   r.name = spec.name;
-  r.convention = spec.convention == format::DhConvention::standard ? hc::DhConvention::standard : hc::DhConvention::modified;
+  r.convention = spec.convention == format::DhConvention::standard   ? hc::DhConvention::standard
+                 : spec.convention == format::DhConvention::modified ? hc::DhConvention::modified
+                                                                     : hc::DhConvention::urdf;
   for (const auto& j : spec.joints) {
     hc::DhRow row;
     row.name = j.name;
@@ -28,8 +30,11 @@ hc::SerialRobot to_serial_robot(const format::RobotSpec& spec) {
     row.theta_offset_rad = j.theta_offset_rad;
     row.lower = j.lower;
     row.upper = j.upper;
+    row.T_parent_joint = j.T_parent_joint.isometry();
+    row.axis = j.axis;
     r.joints.push_back(row);
   }
+  for (const auto& in : spec.inertials) r.inertials.push_back({in.mass_kg, in.com_m, in.inertia_kgm2});
   r.T_world_base = spec.T_world_base.isometry();
   r.T_flange_ee = spec.T_flange_ee.isometry();
   return r;
@@ -37,7 +42,7 @@ hc::SerialRobot to_serial_robot(const format::RobotSpec& spec) {
 
 hc::SerialRobot load_robot(const std::string& rig_path) {
   const auto rig = format::load_rig(rig_path);
-  if (!rig.robot) throw FormatError({rig_path, 0, 0, "robot"}, "the rig has no robot: stiffness calibration needs its DH table");
+  if (!rig.robot) throw FormatError({rig_path, 0, 0, "robot"}, "the rig has no robot: stiffness calibration needs its DH table or URDF");
   return to_serial_robot(*rig.robot);
 }
 

@@ -112,26 +112,43 @@ nlohmann::json springs_to_json(const hc::VjmModel& model, const hc::ComplianceSe
   return j;
 }
 
+const char* convention_name(hc::DhConvention c) {
+  return c == hc::DhConvention::standard ? "standard" : c == hc::DhConvention::modified ? "modified" : "urdf";
+}
+
+nlohmann::json pose_to_json(const Eigen::Isometry3d& T) {
+  const Eigen::Matrix4d M = T.matrix();
+  nlohmann::json m = nlohmann::json::array();
+  for (int r = 0; r < 4; ++r) m.push_back({M(r, 0), M(r, 1), M(r, 2), M(r, 3)});
+  return m;
+}
+
+Eigen::Isometry3d pose_from_json(const nlohmann::json& m) {
+  Eigen::Matrix4d M;
+  for (int rr = 0; rr < 4; ++rr)
+    for (int c = 0; c < 4; ++c) M(rr, c) = m.at(static_cast<std::size_t>(rr)).at(static_cast<std::size_t>(c)).get<double>();
+  Eigen::Isometry3d T;
+  T.matrix() = M;
+  return T;
+}
+
 nlohmann::json robot_to_json(const hc::SerialRobot& robot) {
   nlohmann::json j;
   j["name"] = robot.name;
-  j["convention"] = robot.convention == hc::DhConvention::standard ? "standard" : "modified";
+  j["convention"] = convention_name(robot.convention);
   j["joints"] = nlohmann::json::array();
-  for (const auto& r : robot.joints)
-    j["joints"].push_back({{"name", r.name},
-                           {"type", r.kind == hc::JointKind::revolute ? "revolute" : "prismatic"},
-                           {"a_m", r.a_m},
-                           {"alpha_rad", r.alpha_rad},
-                           {"d_m", r.d_m},
-                           {"theta_offset_rad", r.theta_offset_rad},
-                           {"lower", r.lower},
-                           {"upper", r.upper}});
-  auto pose = [](const Eigen::Isometry3d& T) {
-    const Eigen::Matrix4d M = T.matrix();
-    nlohmann::json m = nlohmann::json::array();
-    for (int r = 0; r < 4; ++r) m.push_back({M(r, 0), M(r, 1), M(r, 2), M(r, 3)});
-    return m;
-  };
+  for (const auto& r : robot.joints) {
+    nlohmann::json row = {{"name", r.name},   {"type", r.kind == hc::JointKind::revolute ? "revolute" : "prismatic"},
+                          {"a_m", r.a_m},     {"alpha_rad", r.alpha_rad},
+                          {"d_m", r.d_m},     {"theta_offset_rad", r.theta_offset_rad},
+                          {"lower", r.lower}, {"upper", r.upper}};
+    if (robot.convention == hc::DhConvention::urdf) {
+      row["T_parent_joint"] = pose_to_json(r.T_parent_joint);
+      row["axis"] = {r.axis.x(), r.axis.y(), r.axis.z()};
+    }
+    j["joints"].push_back(row);
+  }
+  const auto& pose = pose_to_json;
   j["T_world_base"] = pose(robot.T_world_base);
   j["T_flange_ee"] = pose(robot.T_flange_ee);
   return j;
@@ -142,8 +159,11 @@ hc::SerialRobot robot_from_json(const nlohmann::json& j, const std::string& file
     hc::SerialRobot r;
     r.name = j.at("name").get<std::string>();
     const auto conv = j.at("convention").get<std::string>();
-    if (conv != "standard" && conv != "modified") throw FormatError({file, 0, 0, "robot.convention"}, "expected standard or modified");
-    r.convention = conv == "standard" ? hc::DhConvention::standard : hc::DhConvention::modified;
+    if (conv != "standard" && conv != "modified" && conv != "urdf")
+      throw FormatError({file, 0, 0, "robot.convention"}, "expected standard, modified or urdf");
+    r.convention = conv == "standard"   ? hc::DhConvention::standard
+                   : conv == "modified" ? hc::DhConvention::modified
+                                        : hc::DhConvention::urdf;
     for (const auto& jr : j.at("joints")) {
       hc::DhRow row;
       row.name = jr.at("name").get<std::string>();
@@ -154,17 +174,16 @@ hc::SerialRobot robot_from_json(const nlohmann::json& j, const std::string& file
       row.theta_offset_rad = jr.at("theta_offset_rad").get<double>();
       row.lower = jr.at("lower").get<double>();
       row.upper = jr.at("upper").get<double>();
+      if (r.convention == hc::DhConvention::urdf) {
+        row.T_parent_joint = pose_from_json(jr.at("T_parent_joint"));
+        const auto& a = jr.at("axis");
+        row.axis = Eigen::Vector3d(a.at(0).get<double>(), a.at(1).get<double>(), a.at(2).get<double>());
+        if (!(std::abs(row.axis.norm() - 1.0) < 1e-9))
+          throw FormatError({file, 0, 0, "robot.joints." + row.name + ".axis"}, "the axis is not a unit vector");
+      }
       r.joints.push_back(row);
     }
-    auto pose = [&](const char* key) {
-      Eigen::Matrix4d M;
-      const auto& m = j.at(key);
-      for (int rr = 0; rr < 4; ++rr)
-        for (int c = 0; c < 4; ++c) M(rr, c) = m.at(static_cast<std::size_t>(rr)).at(static_cast<std::size_t>(c)).get<double>();
-      Eigen::Isometry3d T;
-      T.matrix() = M;
-      return T;
-    };
+    auto pose = [&](const char* key) { return pose_from_json(j.at(key)); };
     r.T_world_base = pose("T_world_base");
     r.T_flange_ee = pose("T_flange_ee");
     if (r.joints.empty()) throw FormatError({file, 0, 0, "robot.joints"}, "no joints");

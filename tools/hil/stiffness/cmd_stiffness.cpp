@@ -229,7 +229,7 @@ void add_stiffness(CLI::App& app) {
     static std::string data, rig, json;
     static ReductionArgs a;
     cmd->add_option("DATA", data, "stiffness-experiment table (CSV, docs/calibration.md)")->required();
-    cmd->add_option("--rig", rig, "rig file with the robot's DH table")->required();
+    cmd->add_option("--rig", rig, "rig file with the robot (DH table or URDF)")->required();
     cmd->add_option(
         "--json", json,
         "write the report and the identified model as JSON (hil.stiffness_model; - for stdout, the text report then goes to stderr)");
@@ -250,7 +250,7 @@ void add_stiffness(CLI::App& app) {
   {
     auto* cmd = st->add_subcommand("simulate", "Generate a stiffness-experiment table from a known compliance set, with noise");
     static SimArgs a;
-    cmd->add_option("--rig", a.rig, "rig file with the robot's DH table")->required();
+    cmd->add_option("--rig", a.rig, "rig file with the robot (DH table or URDF)")->required();
     cmd->add_option("--truth", a.truth, "truth file (JSON \"springs\", docs/calibration.md)")->required();
     cmd->add_option("--configs", a.configs, "random configurations within the joint limits")
         ->capture_default_str()
@@ -298,7 +298,7 @@ void add_stiffness(CLI::App& app) {
     static ReductionArgs a;
     static std::size_t count = 0;
     static double timeout = 0.0;
-    cmd->add_option("--rig", rig, "rig file with the robot's DH table")->required();
+    cmd->add_option("--rig", rig, "rig file with the robot (DH table or URDF)")->required();
     cmd->add_option("--model", model, "keep the reduced model of an identify --json output (default: reduce online)");
     add_reduction_options(cmd, a);
     cmd->add_option("--count", count, "stop after this many measurements (0: run until interrupted)")->capture_default_str();

@@ -21,11 +21,14 @@ using hil::Vector6d;
 
 enum class DhConvention {
   standard,  ///< Denavit-Hartenberg 1955: T_{i-1,i} = Rz(θ) Tz(d) Tx(a) Rx(α); joint i moves about z_{i-1}
-  modified   ///< Craig: T_{i-1,i} = Rx(α) Tx(a) Rz(θ) Tz(d); joint i moves about z_i
+  modified,  ///< Craig: T_{i-1,i} = Rx(α) Tx(a) Rz(θ) Tz(d); joint i moves about z_i
+  urdf       ///< URDF joints: T_{i-1,i} = T_parent_joint · Rot(axis, θ) (or · Trans(axis, d)); joint i moves about its axis
 };
 enum class JointKind { revolute, prismatic };
 
-/// One DH row. θ = q + theta_offset_rad (revolute) or d = q + d_m (prismatic).
+/// One joint: a DH row, or (DhConvention::urdf) a URDF joint's origin and axis.
+/// θ = q + theta_offset_rad (revolute) or d = q + d_m (prismatic) in every convention; a_m and
+/// alpha_rad are unused in the URDF form, T_parent_joint and axis only there.
 struct DhRow {
   std::string name;
   JointKind kind = JointKind::revolute;
@@ -35,6 +38,16 @@ struct DhRow {
   double theta_offset_rad = 0.0;
   double lower = -3.141592653589793;  ///< joint limit (rad or m), used to plan experiments
   double upper = 3.141592653589793;
+  Eigen::Isometry3d T_parent_joint = Eigen::Isometry3d::Identity();  ///< URDF form: the joint frame in the previous body
+  Eigen::Vector3d axis = Eigen::Vector3d::UnitZ();                   ///< URDF form: unit axis in the joint frame
+};
+
+/// Mass properties of one body of the chain (URDF inertials, fixed links lumped in), in the body's
+/// frame: mass, centre of mass, rotational inertia about the centre of mass.
+struct BodyInertial {
+  double mass_kg = 0.0;
+  Eigen::Vector3d com_m = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d inertia_kgm2 = Eigen::Matrix3d::Zero();
 };
 
 struct SerialRobot {
@@ -43,6 +56,8 @@ struct SerialRobot {
   std::vector<DhRow> joints;
   Eigen::Isometry3d T_world_base = Eigen::Isometry3d::Identity();
   Eigen::Isometry3d T_flange_ee = Eigen::Isometry3d::Identity();
+  /// Bodies 0..N (empty when the description has none, as a DH table): what gravity loads.
+  std::vector<BodyInertial> inertials;
 
   int dof() const { return static_cast<int>(joints.size()); }
 };

@@ -25,11 +25,16 @@ struct FrameSpec {
   Pose T_parent_frame;
 };
 
-enum class DhConvention { standard, modified };
+/// How the robot's joints are given: a DH table (standard or modified) or a URDF's joints.
+enum class DhConvention { standard, modified, urdf };
+/// "standard", "modified", "urdf".
+const char* convention_name(DhConvention c);
 enum class JointType { revolute, prismatic };
 
 /// One row of a DH table. Standard (Denavit-Hartenberg 1955): T = Rz(θ) Tz(d) Tx(a) Rx(α);
 /// modified (Craig): T = Rx(α) Tx(a) Rz(θ) Tz(d). θ = q + theta_offset for revolute joints.
+/// A URDF joint (DhConvention::urdf): T = T_parent_joint · Rot(axis, θ) (prismatic: · Trans(axis, d)),
+/// a_m and alpha_rad unused.
 struct DhJointSpec {
   std::string name;
   JointType type = JointType::revolute;
@@ -37,8 +42,17 @@ struct DhJointSpec {
   double alpha_rad = 0.0;
   double d_m = 0.0;
   double theta_offset_rad = 0.0;
-  double lower = -3.141592653589793;  ///< rad or m
-  double upper = 3.141592653589793;   ///< rad or m
+  double lower = -3.141592653589793;                ///< rad or m
+  double upper = 3.141592653589793;                 ///< rad or m
+  Pose T_parent_joint;                              ///< URDF: the joint frame in the previous body's frame
+  Eigen::Vector3d axis = Eigen::Vector3d::UnitZ();  ///< URDF: unit axis in the joint frame
+};
+
+/// A body's mass properties in its frame (URDF inertials, fixed links lumped in).
+struct InertialSpec {
+  double mass_kg = 0.0;
+  Eigen::Vector3d com_m = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d inertia_kgm2 = Eigen::Matrix3d::Zero();  ///< about the centre of mass
 };
 
 struct RobotSpec {
@@ -46,7 +60,14 @@ struct RobotSpec {
   DhConvention convention = DhConvention::standard;
   std::vector<DhJointSpec> joints;
   Pose T_world_base;  ///< robot base in world
-  Pose T_flange_ee;   ///< end-effector (tool) frame in the last DH frame
+  Pose T_flange_ee;   ///< end-effector (tool) frame in the last joint's body frame
+  /// URDF robots: the file (as resolved), the chain's ends, the links of bodies 0..N (the link each
+  /// body's frame is; fixed links are lumped into the one they hang from) and their inertials.
+  std::string urdf_file;
+  std::string base_link;
+  std::string tip_link;
+  std::vector<std::string> body_links;
+  std::vector<InertialSpec> inertials;
 };
 
 /// A convex polyhedron given by its vertices in the object frame. Faces are derived by the

@@ -94,6 +94,9 @@ struct ImportConfig {
 /// Parses a mapping config. \throws error::FormatError naming file, line, column and field.
 ImportConfig parse_import_config(const std::string& yaml_text, const std::string& display_name);
 ImportConfig load_import_config(const std::string& path);
+/// What an import config makes: "run" (this config) or "calibration_run" (calibration_import.hpp),
+/// from its `kind` key (default run). \throws FormatError.
+std::string import_config_kind(const std::string& path);
 
 /// `base1_xyz` -> base1_x, base1_y, base1_z; other names unchanged.
 std::vector<std::string> expand_columns(const std::vector<std::string>& names);

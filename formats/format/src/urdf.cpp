@@ -1,0 +1,172 @@
+#include <hil/format/urdf.hpp>
+
+#include <console_bridge/console.h>
+#include <kdl/tree.hpp>
+#include <kdl_parser/kdl_parser.hpp>
+#include <urdf_parser/urdf_parser.h>
+
+#include <cmath>
+#include <fstream>
+#include <mutex>
+#include <sstream>
+
+#include <hil/error/error.hpp>
+
+namespace hil::format {
+namespace {
+
+using error::FormatError;
+
+/// urdfdom and kdl_parser report through console_bridge, a process-wide logger: while one parse
+/// runs, its warnings and errors are collected here so that the FormatError can quote them.
+class CollectLog : public console_bridge::OutputHandler {
+ public:
+  void log(const std::string& text, console_bridge::LogLevel level, const char*, int) override {
+    if (level >= console_bridge::CONSOLE_BRIDGE_LOG_WARN) lines.push_back(text);
+  }
+  std::vector<std::string> lines;
+};
+
+std::mutex& log_mutex() {
+  static std::mutex m;
+  return m;
+}
+
+std::string joined(const std::vector<std::string>& lines) {
+  std::string s;
+  for (const auto& l : lines) s += (s.empty() ? "" : "; ") + l;
+  return s;
+}
+
+Eigen::Isometry3d to_isometry(const KDL::Frame& f) {
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) T.linear()(r, c) = f.M(static_cast<unsigned>(r), static_cast<unsigned>(c));
+    T.translation()(r) = f.p(static_cast<unsigned>(r));
+  }
+  return T;
+}
+
+/// KDL's inertia (about the reference frame's origin) as mass, centre of mass and inertia about it.
+InertialSpec to_inertial(const KDL::RigidBodyInertia& I) {
+  InertialSpec s;
+  s.mass_kg = I.getMass();
+  const KDL::Vector c = I.getCOG();
+  s.com_m = Eigen::Vector3d(c.x(), c.y(), c.z());
+  const KDL::RotationalInertia Io = I.getRotationalInertia();
+  Eigen::Matrix3d M;
+  for (int r = 0; r < 3; ++r)
+    for (int k = 0; k < 3; ++k) M(r, k) = Io.data[3 * r + k];
+  // Parallel axis: I_c = I_o - m (|c|² 1 - c cᵀ).
+  s.inertia_kgm2 = M - s.mass_kg * (s.com_m.squaredNorm() * Eigen::Matrix3d::Identity() - s.com_m * s.com_m.transpose());
+  return s;
+}
+
+bool is_revolute(KDL::Joint::JointType t) {
+  return t == KDL::Joint::RotAxis || t == KDL::Joint::RotX || t == KDL::Joint::RotY || t == KDL::Joint::RotZ;
+}
+bool is_prismatic(KDL::Joint::JointType t) {
+  return t == KDL::Joint::TransAxis || t == KDL::Joint::TransX || t == KDL::Joint::TransY || t == KDL::Joint::TransZ;
+}
+
+std::string link_list(const urdf::ModelInterface& m) {
+  std::vector<urdf::LinkSharedPtr> links;
+  m.getLinks(links);
+  std::string s;
+  for (const auto& l : links) s += (s.empty() ? "" : ", ") + l->name;
+  return s;
+}
+
+}  // namespace
+
+RobotSpec parse_urdf_robot(const std::string& xml, const std::string& display_name, const std::string& base_link,
+                           const std::string& tip_link) {
+  urdf::ModelInterfaceSharedPtr model;
+  KDL::Tree tree;
+  {
+    std::lock_guard lock(log_mutex());
+    CollectLog log;
+    console_bridge::useOutputHandler(&log);
+    try {
+      model = urdf::parseURDF(xml);
+    } catch (const std::exception& e) {
+      log.lines.push_back(e.what());
+      model.reset();
+    }
+    const bool tree_ok = model && kdl_parser::treeFromUrdfModel(*model, tree);
+    console_bridge::restorePreviousOutputHandler();
+    if (!model) throw FormatError({display_name, 0, 0, "robot"}, "not a URDF robot description: " + joined(log.lines));
+    if (!tree_ok) throw FormatError({display_name, 0, 0, "robot"}, "KDL could not build the kinematic tree: " + joined(log.lines));
+  }
+  for (const auto* end : {&base_link, &tip_link})
+    if (!model->getLink(*end))
+      throw FormatError({display_name, 0, 0, *end == base_link ? "base_link" : "tip_link"},
+                        "no link '" + *end + "' in robot '" + model->getName() + "' (links: " + link_list(*model) + ")");
+  KDL::Chain chain;
+  if (!tree.getChain(base_link, tip_link, chain))
+    throw FormatError({display_name, 0, 0, "tip_link"}, "no chain from '" + base_link + "' to '" + tip_link + "'");
+
+  RobotSpec r;
+  r.name = model->getName();
+  r.convention = DhConvention::urdf;
+  r.base_link = base_link;
+  r.tip_link = tip_link;
+  r.body_links.push_back(base_link);
+  // Fixed segments fold into what follows: the next joint's origin, or the tool frame at the end;
+  // their inertia into the body they hang from (expressed in that body's frame).
+  KDL::Frame T_body_fixed = KDL::Frame::Identity();
+  KDL::RigidBodyInertia body_inertia = KDL::RigidBodyInertia::Zero();
+  for (const auto& seg : chain.segments) {
+    const KDL::Joint& jt = seg.getJoint();
+    const KDL::Frame T_parent_child = seg.pose(0.0);
+    if (!is_revolute(jt.getType()) && !is_prismatic(jt.getType())) {
+      T_body_fixed = T_body_fixed * T_parent_child;
+      body_inertia = body_inertia + T_body_fixed * seg.getInertia();
+      continue;
+    }
+    const auto uj = model->getJoint(jt.getName());
+    if (uj && uj->mimic)
+      throw FormatError({display_name, 0, 0, "joint " + jt.getName()},
+                        "joint '" + jt.getName() + "' mimics '" + uj->mimic->joint_name +
+                            "': a mimic joint between the base and the tip is not supported (docs/formats.md, URDF robots)");
+    r.inertials.push_back(to_inertial(body_inertia));
+    DhJointSpec s;
+    s.name = jt.getName();
+    s.type = is_revolute(jt.getType()) ? JointType::revolute : JointType::prismatic;
+    s.T_parent_joint = Pose::from_isometry(to_isometry(T_body_fixed * T_parent_child));
+    // KDL gives the axis in the segment's parent frame; the joint frame is the child frame at q = 0.
+    const KDL::Vector a = T_parent_child.M.Inverse(jt.JointAxis());
+    s.axis = Eigen::Vector3d(a.x(), a.y(), a.z());
+    // urdfdom lets an <axis> without a usable xyz through as (0, 0, 0).
+    if (!(s.axis.norm() > 1e-9) || !s.axis.allFinite())
+      throw FormatError({display_name, 0, 0, "joint " + s.name}, "joint '" + s.name + "' has no axis direction (<axis xyz=\"...\"/>)");
+    s.axis.normalize();
+    if (uj && uj->limits && uj->type != urdf::Joint::CONTINUOUS) {
+      s.lower = uj->limits->lower;
+      s.upper = uj->limits->upper;
+    }
+    if (!(s.lower < s.upper))
+      throw FormatError({display_name, 0, 0, "joint " + s.name}, "joint '" + s.name + "': its lower limit is not below its upper limit");
+    r.joints.push_back(s);
+    r.body_links.push_back(seg.getName());
+    T_body_fixed = KDL::Frame::Identity();
+    body_inertia = seg.getInertia();
+  }
+  r.inertials.push_back(to_inertial(body_inertia));
+  if (r.joints.empty())
+    throw FormatError({display_name, 0, 0, "tip_link"}, "the chain from '" + base_link + "' to '" + tip_link + "' has no moving joint");
+  r.T_flange_ee = Pose::from_isometry(to_isometry(T_body_fixed));
+  return r;
+}
+
+RobotSpec read_urdf_robot(const std::string& path, const std::string& base_link, const std::string& tip_link) {
+  std::ifstream in(path);
+  if (!in) throw FormatError({path, 0, 0, ""}, "cannot open the URDF file");
+  std::stringstream ss;
+  ss << in.rdbuf();
+  RobotSpec r = parse_urdf_robot(ss.str(), path, base_link, tip_link);
+  r.urdf_file = path;
+  return r;
+}
+
+}  // namespace hil::format

@@ -1,0 +1,179 @@
+#!/usr/bin/env python3
+"""A URDF robot through the commands: the KR-270-like robot's rig with its robot from a URDF
+(examples/stiffness/kr270_like_urdf.yaml) validates, simulates, identifies and diagnoses exactly as
+the rig with the same robot as a DH table; a rig whose URDF is missing or wrong fails by name."""
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import shutil
+import unittest
+
+HIL, SRC = sys.argv[1], sys.argv[2]
+EX = os.path.join(SRC, "examples", "stiffness")
+DH_RIG = os.path.join(EX, "kr270_like.yaml")
+URDF_RIG = os.path.join(EX, "kr270_like_urdf.yaml")
+TABLE = os.path.join(EX, "table.csv")
+
+
+def hil(*args, timeout=300):
+    return subprocess.run([HIL, *args], capture_output=True, text=True, timeout=timeout)
+
+
+class UrdfRobot(unittest.TestCase):
+    def setUp(self):
+        self.dir = tempfile.mkdtemp()
+
+    def tearDown(self):
+        shutil.rmtree(self.dir, ignore_errors=True)
+
+    def json_of(self, *args):
+        r = hil(*args, "--json", "-")
+        self.assertEqual(r.returncode, 0, r.stderr)
+        return json.loads(r.stdout)
+
+    def test_validate_names_the_urdf_chain(self):
+        d = self.json_of("validate", URDF_RIG)
+        self.assertEqual(d["kind"], "rig")
+        robot = d["summary"]["robot"]
+        self.assertEqual(robot["convention"], "urdf")
+        self.assertEqual(robot["joints"], 6)
+        self.assertEqual((robot["base_link"], robot["tip_link"]), ("base_link", "tool0"))
+        r = hil("validate", URDF_RIG)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        self.assertIn("URDF base_link -> tool0", r.stdout + r.stderr)
+
+    def test_simulate_and_identify_agree_with_the_dh_rig(self):
+        truth = os.path.join(EX, "truth.json")
+        tables = {}
+        for name, rig in (("dh", DH_RIG), ("urdf", URDF_RIG)):
+            out = os.path.join(self.dir, name + ".csv")
+            r = hil("stiffness", "simulate", "--rig", rig, "--truth", truth, "--seed", "11", "--configs", "40", "--out", out)
+            self.assertEqual(r.returncode, 0, r.stderr)
+            with open(out) as f:
+                tables[name] = [line for line in f if not line.startswith("#")]
+        self.assertEqual(len(tables["dh"]), 41)
+        # Same robot, same seed: the same table, number for number, up to the last digits of the
+        # floating-point sums (the two forms multiply the transforms in different orders).
+        for a, b in zip(tables["dh"][1:], tables["urdf"][1:]):
+            for x, y in zip(a.split(","), b.split(",")):
+                self.assertAlmostEqual(float(x), float(y), delta=1e-9 * max(1.0, abs(float(x))))
+        ident = {name: self.json_of("stiffness", "identify", TABLE, "--rig", rig, "--noise-pos-m", "1e-5", "--noise-rot-rad", "1e-5")
+                 for name, rig in (("dh", DH_RIG), ("urdf", URDF_RIG))}
+        self.assertEqual(ident["urdf"]["robot"]["convention"], "urdf")
+        self.assertEqual(ident["dh"]["rank"], ident["urdf"]["rank"])
+        pa = {p["name"]: p["value"] for p in ident["dh"]["parameters"]}
+        pb = {p["name"]: p["value"] for p in ident["urdf"]["parameters"]}
+        self.assertEqual(pa.keys(), pb.keys())
+        for k in pa:
+            self.assertAlmostEqual(pa[k], pb[k], delta=1e-6 * abs(pa[k]), msg=k)
+        # The identified model keeps its URDF robot: predict reads it back.
+        model = os.path.join(self.dir, "model.json")
+        with open(model, "w") as f:
+            json.dump(ident["urdf"], f)
+        r = hil("stiffness", "predict", model, "--data", os.path.join(EX, "configs.csv"), "--out", "-")
+        self.assertEqual(r.returncode, 0, r.stderr)
+        self.assertGreater(len(r.stdout.splitlines()), 2)
+
+    def test_diagnosis_names_the_same_cause(self):
+        d = {name: self.json_of("diagnose", TABLE, "--rig", rig, "--quiet") for name, rig in (("dh", DH_RIG), ("urdf", URDF_RIG))}
+        self.assertEqual(d["urdf"]["mode"], "stiffness")
+        self.assertEqual(d["urdf"]["cause"]["name"], "link_compliance")
+        self.assertEqual(d["urdf"]["cause"]["name"], d["dh"]["cause"]["name"])
+        self.assertAlmostEqual(d["urdf"]["gain_percent"], d["dh"]["gain_percent"], delta=1e-6)
+
+    def test_bad_urdf_sections_fail_by_name(self):
+        rig = os.path.join(self.dir, "rig.yaml")
+        with open(rig, "w") as f:
+            f.write("format_version: 1\nname: r\nrobot:\n  urdf: %s\n  base_link: base_link\n  tip_link: hand\n"
+                    % os.path.join(EX, "kr270_like.urdf"))
+        r = hil("validate", rig)
+        self.assertNotEqual(r.returncode, 0)
+        self.assertIn("rig.yaml:4", r.stderr)
+        self.assertIn("no link 'hand'", r.stderr)
+        self.assertIn("tool0", r.stderr)  # the links it has
+        with open(rig, "w") as f:
+            f.write("format_version: 1\nname: r\nrobot:\n  urdf: missing.urdf\n  base_link: a\n  tip_link: b\n")
+        r = hil("stiffness", "identify", TABLE, "--rig", rig)
+        self.assertNotEqual(r.returncode, 0)
+        self.assertIn(os.path.join(self.dir, "missing.urdf"), r.stderr)
+        self.assertIn("cannot open", r.stderr)
+
+
+    def test_the_real_ur10_table_imports_into_a_calibration_run(self):
+        data = os.path.join(SRC, "..", "shared", "data", "ur10-calibration", "calibration.csv")
+        if not os.path.exists(data):
+            self.skipTest("the shared UR10 data is not beside the clone")
+        rig = os.path.join(SRC, "examples", "robots", "ur10_rig.yaml")
+        cfg = os.path.join(SRC, "examples", "import", "ur10_calibration.yaml")
+        out = os.path.join(self.dir, "ur10.csv")
+        r = hil("import", data, "--config", cfg, "--rig", rig, "--out", out)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        self.assertIn("23 postures of robot 'ur10'", r.stdout)
+        d = self.json_of("validate", out, "--rig", rig)
+        self.assertEqual(d["kind"], "calibration_run")
+        s = d["summary"]
+        self.assertEqual((s["postures"], s["orientation"], s["stations"]), (23, True, [{"id": "figaroh", "postures": 23}]))
+        self.assertEqual(s["joints"][0], "shoulder_pan_joint")
+        # The rotation vectors are the roll-pitch-yaw angles of the source, converted (first row:
+        # rpy -1.1869 -0.5110 -2.3796, i.e. R = Rz(yaw) Ry(pitch) Rx(roll)), checked here with numpy.
+        import numpy as np
+        with open(out) as f:
+            rows = [line.rstrip("\n").split(",") for line in f if not line.startswith("#")]
+        head, first = rows[0], dict(zip(rows[0], rows[1]))
+        self.assertEqual(head[:2], ["posture", "station"])
+        rv = np.array([float(first[c]) for c in ("rx", "ry", "rz")])
+        roll, pitch, yaw = -1.1869330161318221, -0.5109858420062574, -2.3796294050596307
+
+        def rot(axis, a):
+            c, s_ = np.cos(a), np.sin(a)
+            m = {"x": [[1, 0, 0], [0, c, -s_], [0, s_, c]], "y": [[c, 0, s_], [0, 1, 0], [-s_, 0, c]], "z": [[c, -s_, 0], [s_, c, 0], [0, 0, 1]]}
+            return np.array(m[axis])
+        R = rot("z", yaw) @ rot("y", pitch) @ rot("x", roll)
+        th = np.linalg.norm(rv)
+        k = rv / th
+        K = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]])
+        Rv = np.eye(3) + np.sin(th) * K + (1 - np.cos(th)) * K @ K
+        self.assertLess(np.abs(Rv - R).max(), 1e-12)
+        self.assertAlmostEqual(float(first["px"]), 0.9088284523365023, delta=1e-15)
+        # Once written, not again without --force.
+        r = hil("import", data, "--config", cfg, "--rig", rig, "--out", out)
+        self.assertNotEqual(r.returncode, 0)
+        self.assertIn("--force", r.stderr)
+
+    def test_calibration_imports_fail_where_the_problem_is(self):
+        rig = os.path.join(SRC, "examples", "robots", "ur10_rig.yaml")
+        src = os.path.join(self.dir, "lab.csv")
+        cfg = os.path.join(self.dir, "map.yaml")
+        joints = ["shoulder_pan_joint", "shoulder_lift_joint", "elbow_joint", "wrist_1_joint", "wrist_2_joint", "wrist_3_joint"]
+        with open(src, "w") as f:
+            f.write("x;y;z;" + ";".join(joints) + "\n1000;200;1200;10;-80;90;0;45;0\n1010;;1190;11;-81;89;0;44;0\n")
+        with open(cfg, "w") as f:
+            f.write("format_version: 1\nkind: calibration_run\ncsv: {delimiter: ';'}\npoint: {columns: [x, y, z], unit: mm}\n"
+                    "joints: {unit: deg}\n")
+        out = os.path.join(self.dir, "run.csv")
+        r = hil("import", src, "--config", cfg, "--rig", rig, "--out", out)
+        self.assertNotEqual(r.returncode, 0)
+        self.assertIn("lab.csv:3:2", r.stderr)  # the empty y cell, where it is in the source
+        self.assertFalse(os.path.exists(out))
+        with open(src, "w") as f:
+            f.write("x;y;z;" + ";".join(joints) + "\n1000;200;1200;10;-80;90;0;45;0\n")
+        # Degrees taken as radians: the strict reader refuses the joint value, asking about degrees.
+        with open(cfg, "w") as f:
+            f.write("format_version: 1\nkind: calibration_run\ncsv: {delimiter: ';'}\npoint: {columns: [x, y, z], unit: mm}\n")
+        r = hil("import", src, "--config", cfg, "--rig", rig, "--out", out)
+        self.assertNotEqual(r.returncode, 0)
+        self.assertIn("degrees?", r.stderr)
+        with open(cfg, "w") as f:
+            f.write("format_version: 1\nkind: calibration_run\ncsv: {delimiter: ';'}\npoint: {columns: [x, y, z]}\n"
+                    "joints: {columns: {elbow: q3}}\n")
+        r = hil("import", src, "--config", cfg, "--rig", rig, "--out", out)
+        self.assertNotEqual(r.returncode, 0)
+        self.assertIn("no joint 'elbow'", r.stderr)
+        r = hil("import", src, "--config", cfg, "--out", out)
+        self.assertIn("--rig", r.stderr)
+
+
+if __name__ == "__main__":
+    unittest.main(argv=sys.argv[:1], verbosity=2)
