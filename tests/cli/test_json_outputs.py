@@ -21,7 +21,7 @@ RIG = os.path.join(EX, "rigs", "press_bench.yaml")
 TRAJ = os.path.join(EX, "trajectories", "press_slide.csv")
 KR_RIG = os.path.join(EX, "stiffness", "kr270_like.yaml")
 TABLE = os.path.join(EX, "stiffness", "table.csv")
-KINDS = ("validation", "diagnosis", "contact_identification", "stiffness_model", "hidden_effects")
+KINDS = ("validation", "diagnosis", "contact_identification", "stiffness_model", "hidden_effects", "point_calibration")
 
 
 def hil(*args, timeout=300):
@@ -139,6 +139,24 @@ class JsonOutputs(unittest.TestCase):
     def test_stiffness_table_diagnosis(self):
         r = hil("diagnose", TABLE, "--rig", KR_RIG, "--candidates", "sensor_bias", "--folds", "2", "--quiet", "--json", "-")
         self.assertEqual(self.check("diagnosis", self.stdout_json(r))["mode"], "stiffness")
+
+    def test_point_calibration(self):
+        # The real UR10 postures (../shared beside the clone), imported, then calibrated with two
+        # quick candidates; and the calibration run's validation summary.
+        data = os.path.join(SRC, "..", "shared", "data", "ur10-calibration", "calibration.csv")
+        if not os.path.exists(data):
+            self.skipTest("the shared UR10 data is not beside the clone")
+        rig = os.path.join(EX, "robots", "ur10_rig.yaml")
+        run = os.path.join(self.dir, "ur10.csv")
+        r = hil("import", data, "--config", os.path.join(EX, "import", "ur10_calibration.yaml"), "--rig", rig, "--out", run)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        r = hil("validate", run, "--rig", rig, "--json", "-")
+        self.assertEqual(self.check("validation", self.stdout_json(r))["kind"], "calibration_run")
+        r = hil("calibrate", run, "--rig", rig, "--candidates", "joint_offsets,backlash", "--folds", "4", "--json", "-")
+        d = self.check("point_calibration", self.stdout_json(r))
+        self.assertEqual(d["scheme"], "4-fold over postures")
+        self.assertEqual([h["model"] for h in d["held_out"]][:3], ["rigid", "joint_offsets", "backlash"])
+        self.assertIn("what the postures determine", r.stderr)
 
     def test_contact_identification(self):
         rep = os.path.join(self.dir, "report")

@@ -142,6 +142,44 @@ class UrdfRobot(unittest.TestCase):
         self.assertNotEqual(r.returncode, 0)
         self.assertIn("--force", r.stderr)
 
+    def test_the_real_ur10_calibration_names_what_the_rigid_urdf_misses(self):
+        data = os.path.join(SRC, "..", "shared", "data", "ur10-calibration", "calibration.csv")
+        if not os.path.exists(data):
+            self.skipTest("the shared UR10 data is not beside the clone")
+        rig = os.path.join(SRC, "examples", "robots", "ur10_rig.yaml")
+        run = os.path.join(self.dir, "ur10.csv")
+        r = hil("import", data, "--config", os.path.join(SRC, "examples", "import", "ur10_calibration.yaml"), "--rig", rig, "--out", run)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        report = os.path.join(self.dir, "report")
+        d = self.json_of("calibrate", run, "--rig", rig, "--report", report)
+        with open(os.path.join(report, "index.html")) as f:
+            html = f.read()
+        self.assertIn("What the rigid model misses: geometric", html)
+        self.assertIn("What the postures determine", html)
+        self.assertIn("offset shoulder_pan_joint", html)
+        figures = sorted(os.listdir(os.path.join(report, "figures")))
+        self.assertTrue(any("residual-vectors-x-y" in f for f in figures), figures)
+        self.assertTrue(any("per-posture" in f and f.endswith(".csv") for f in figures), figures)
+        # The figures for the nominal URDF with a fitted measurement frame and tool point.
+        self.assertAlmostEqual(d["rigid"]["rms_m"] * 1e3, 10.9, delta=0.05)
+        self.assertAlmostEqual(d["rigid"]["max_m"] * 1e3, 16.9, delta=0.1)
+        determined = {x["model"]: x for x in d["determined"]}
+        self.assertEqual(determined["rigid"]["undetermined"], [])
+        # A point on the tool cannot tell the first joint's offset from the station's turn about
+        # the base's vertical, nor the last joint's from where the point sits on the tool.
+        offsets = [t["parameter"] for u in determined["joint_offsets"]["undetermined"] for t in u["terms"]]
+        self.assertIn("offset shoulder_pan_joint", offsets)
+        self.assertIn("station figaroh rz", offsets)
+        self.assertIn("offset wrist_3_joint", offsets)
+        # Gravity cannot load the vertical first axis: its compliance is undetermined.
+        self.assertIn("compliance shoulder_pan_joint",
+                      [t["parameter"] for u in determined["joint_compliance"]["undetermined"] for t in u["terms"]])
+        self.assertEqual(d["scheme"], "leave one posture out")
+        self.assertEqual(d["cause"], "geometric")
+        held = {h["model"]: h for h in d["held_out"]}
+        self.assertLess(held["geometric"]["rms_m"], 0.5 * held["rigid"]["rms_m"])
+        self.assertTrue(all(p["std"] is None for p in d["cause_fit"]["parameters"] if not p["identifiable"]))
+
     def test_calibration_imports_fail_where_the_problem_is(self):
         rig = os.path.join(SRC, "examples", "robots", "ur10_rig.yaml")
         src = os.path.join(self.dir, "lab.csv")

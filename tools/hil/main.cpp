@@ -32,6 +32,7 @@ int main(int argc, char** argv) {
   add_validate(app);
   add_demo(app);
   add_stiffness(app);
+  add_calibrate(app);
   add_contact(app);
   add_rig(app);
   add_echo(app);

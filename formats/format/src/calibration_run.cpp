@@ -109,7 +109,8 @@ CalibrationRun parse_calibration_run(const std::string& text, const std::string&
   run.has_payload = t.has("payload_kg");
   for (const char* c : kPayloadCom)
     if (t.has(c) && !run.has_payload) throw FormatError(where(t.rows(), c), "a payload's centre of mass without payload_kg");
-  if (t.has("sigma_rad") && !run.has_orientation) throw FormatError(where(t.rows(), "sigma_rad"), "sigma_rad without a measured orientation (rx ry rz)");
+  if (t.has("sigma_rad") && !run.has_orientation)
+    throw FormatError(where(t.rows(), "sigma_rad"), "sigma_rad without a measured orientation (rx ry rz)");
   run.has_sigma = t.has("sigma_m");
 
   const std::size_t nj = robot.joints.size();
@@ -141,7 +142,8 @@ CalibrationRun parse_calibration_run(const std::string& text, const std::string&
     if (run.has_orientation) {
       Eigen::Vector3d rv;
       for (int k = 0; k < 3; ++k) rv[k] = t.numeric(kRotation[k])[r];
-      if (rv.norm() > 3.141592653589793 + 1e-9) throw FormatError(where(r, "rx"), "a rotation vector longer than π: give the shorter rotation (rad, not degrees?)");
+      if (rv.norm() > 3.141592653589793 + 1e-9)
+        throw FormatError(where(r, "rx"), "a rotation vector longer than π: give the shorter rotation (rad, not degrees?)");
       p.r_measured_rad = rv;
     }
     if (run.has_sigma) {
@@ -159,7 +161,8 @@ CalibrationRun parse_calibration_run(const std::string& text, const std::string&
     }
     for (const auto& tc : run.tilts) {
       const double v = t.numeric(tc.column)[r];
-      if (std::abs(v) > 0.5) throw FormatError(where(r, tc.column), "a tilt beyond 0.5 rad: an inclinometer's reading is in rad (degrees?)");
+      if (std::abs(v) > 0.5)
+        throw FormatError(where(r, tc.column), "a tilt beyond 0.5 rad: an inclinometer's reading is in rad (degrees?)");
       p.tilts_rad.push_back(v);
     }
     if (run.has_payload) {

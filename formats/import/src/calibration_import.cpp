@@ -73,7 +73,8 @@ CalibrationImportConfig parse_calibration_import_config(const std::string& text,
     o.only({"columns", "form", "unit"});
     c.orientation_columns = three_columns(o.req("columns"));
     if (o.has("form"))
-      c.orientation_form = o.child("form").choice<OrientationForm>({{"rpy", OrientationForm::rpy}, {"rotation_vector", OrientationForm::rotation_vector}});
+      c.orientation_form = o.child("form").choice<OrientationForm>({{"rpy", OrientationForm::rpy},
+                                                                    {"rotation_vector", OrientationForm::rotation_vector}});
     if (o.has("unit")) c.orientation_rad_per_unit = o.child("unit").choice<double>({{"rad", 1.0}, {"deg", 3.141592653589793 / 180.0}});
   }
   if (root.has("sigma_m")) c.sigma_m = root.child("sigma_m").num_positive();

@@ -105,8 +105,8 @@ TEST(UrdfRobot, ChainAgreesWithKdlSolversOnTheRealUr10) {
   ASSERT_EQ(spec.body_links.size(), 7u);
   EXPECT_EQ(spec.body_links.back(), "wrist_3_link");  // tool0 is fixed: folded into the tool frame
   ASSERT_EQ(spec.inertials.size(), 7u);
-  EXPECT_DOUBLE_EQ(spec.inertials[2].mass_kg, 12.93);                  // upper_arm_link
-  EXPECT_NEAR(spec.inertials[2].com_m.z(), 0.306, 1e-12);              // its centre of mass, in its frame
+  EXPECT_DOUBLE_EQ(spec.inertials[2].mass_kg, 12.93);                     // upper_arm_link
+  EXPECT_NEAR(spec.inertials[2].com_m.z(), 0.306, 1e-12);                 // its centre of mass, in its frame
   EXPECT_NEAR(spec.inertials[2].inertia_kgm2(2, 2), 0.036365625, 1e-12);  // about the centre of mass
   const hc::SerialRobot robot = hil::models::to_serial_robot(spec);
 
@@ -233,8 +233,9 @@ TEST(UrdfRobot, BadDescriptionsFailByName) {
   });
   EXPECT_NE(no_axis.find("joint 'j' has no axis direction"), std::string::npos) << no_axis;
   const auto fixed_only = message([&] {
-    hf::parse_urdf_robot("<robot name='f'><link name='a'/><link name='b'/><joint name='j' type='fixed'><parent link='a'/><child link='b'/></joint></robot>",
-                         "fixed.urdf", "a", "b");
+    hf::parse_urdf_robot(
+        "<robot name='f'><link name='a'/><link name='b'/><joint name='j' type='fixed'><parent link='a'/><child link='b'/></joint></robot>",
+        "fixed.urdf", "a", "b");
   });
   EXPECT_NE(fixed_only.find("no moving joint"), std::string::npos) << fixed_only;
   // In a rig: the rig's line and the URDF's complaint together; a missing file by its path.

@@ -25,14 +25,14 @@ struct CalibrationPosture {
   std::string id;       ///< `posture` column
   std::string station;  ///< `station` column; "1" when the file has none
   std::size_t line = 0;
-  Eigen::VectorXd q;                        ///< joint values in the robot's joint order (rad or m)
-  Eigen::Vector3d p_measured_m;             ///< the measured point in the station's frame
+  Eigen::VectorXd q;                              ///< joint values in the robot's joint order (rad or m)
+  Eigen::Vector3d p_measured_m;                   ///< the measured point in the station's frame
   std::optional<Eigen::Vector3d> r_measured_rad;  ///< rotation vector of the measured frame, when the run has one
-  double sigma_m = 0.0;    ///< standard deviation of each point coordinate; 0: not given (estimated)
-  double sigma_rad = 0.0;  ///< same for the rotation vector
-  std::vector<bool> flags;              ///< one per CalibrationRun::flag_names
-  std::vector<double> tilts_rad;        ///< one per CalibrationRun::tilts
-  double payload_kg = 0.0;              ///< carried at payload_com_m (tool frame)
+  double sigma_m = 0.0;                           ///< standard deviation of each point coordinate; 0: not given (estimated)
+  double sigma_rad = 0.0;                         ///< same for the rotation vector
+  std::vector<bool> flags;                        ///< one per CalibrationRun::flag_names
+  std::vector<double> tilts_rad;                  ///< one per CalibrationRun::tilts
+  double payload_kg = 0.0;                        ///< carried at payload_com_m (tool frame)
   Eigen::Vector3d payload_com_m = Eigen::Vector3d::Zero();
   std::optional<Eigen::Matrix<double, 6, 1>> wrench;  ///< external [f (N); m (N·m)] at the tool point, world frame
 };

@@ -24,7 +24,7 @@ struct CalibrationImportConfig {
   std::string station_column;        ///< empty: every posture from `station_value`
   std::string station_value = "1";
   std::map<std::string, std::string> joint_columns;  ///< robot joint -> source column; others by their own name
-  double joint_si_per_unit = 1.0;                     ///< rad (or m) per unit
+  double joint_si_per_unit = 1.0;                    ///< rad (or m) per unit
   std::array<std::string, 3> point_columns;
   double point_m_per_unit = 1.0;
   std::optional<std::array<std::string, 3>> orientation_columns;

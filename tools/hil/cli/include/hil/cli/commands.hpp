@@ -28,6 +28,7 @@ const Action& action();
 void add_validate(CLI::App& app);
 void add_demo(CLI::App& app);
 void add_stiffness(CLI::App& app);  // calibration (issue 4)
+void add_calibrate(CLI::App& app);  // point calibration of a calibration run (issue 28)
 void add_contact(CLI::App& app);    // contact identification (issue 5)
 void add_rig(CLI::App& app);        // fake-rig, acquire (issue 3)
 void add_echo(CLI::App& app);       // bus: print a topic

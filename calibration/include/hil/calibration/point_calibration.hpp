@@ -1,0 +1,132 @@
+#pragma once
+/// \file Calibration from measured points (docs/calibration.md, "Point calibration"): static postures
+/// of a robot, a point on its tool measured from one or more stations whose frames are unknown.
+/// The nuisance frames (each station's pose of the robot base, the tool point) are estimated with
+/// the model's parameters on one Levenberg-Marquardt, started in closed form; what the postures
+/// determine is found from the SVD of the Jacobian and named; candidate extensions of the rigid
+/// model are compared by held-out error (whole stations left out, or postures when there is one).
+/// Pure numerics (Eigen, hil::solver).
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <string>
+#include <vector>
+
+#include <hil/calibration/robot.hpp>
+
+namespace hil::calibration {
+
+/// One measured posture.
+struct PointObservation {
+  Eigen::VectorXd q;          ///< joint values (rad or m)
+  int station = 0;            ///< index of the station that measured it
+  Eigen::Vector3d p_station_m;  ///< the measured point in the station's frame
+  double payload_kg = 0.0;      ///< carried at payload_com_ee_m (tool frame): adds to the gravity load
+  Eigen::Vector3d payload_com_ee_m = Eigen::Vector3d::Zero();
+};
+
+/// What a rigid model may miss: each a model extension with its own parameters.
+enum class PointCandidate {
+  rigid,             ///< no extension: the nominal robot, the nuisance frames only
+  joint_offsets,     ///< θ_i added to every joint value (rad or m)
+  joint_compliance,  ///< joint springs under the gravity load: Δq_i = −c_i G_i(q), c_i in rad/(N·m) (needs inertials)
+  backlash,          ///< an offset b_i whose sign follows the gravity torque's: Δq_i = −b_i sign(G_i(q)) (needs inertials)
+  geometric,         ///< every joint frame's origin off by a small [translation; rotation] (6 per joint)
+};
+const char* to_string(PointCandidate c);
+/// \throws std::invalid_argument for an unknown name.
+PointCandidate point_candidate_from_string(const std::string& name);
+/// Every candidate but rigid, in a fixed order.
+std::vector<PointCandidate> point_candidates();
+/// A model: the rigid robot with a set of extensions (empty: rigid), e.g. {joint_offsets, joint_compliance}.
+using PointModel = std::vector<PointCandidate>;
+/// "rigid", "joint_offsets", "joint_offsets+joint_compliance".
+std::string to_string(const PointModel& m);
+/// Whether the candidate needs the robot's inertials.
+bool needs_inertials(PointCandidate c);
+
+struct PointParameter {
+  std::string name;  ///< e.g. "offset elbow_joint", "station A rz", "tool x"
+  std::string unit;  ///< rad, m, rad/(N·m)
+  std::string part;  ///< station, tool or the candidate's name
+  double value = 0.0;
+  double std = 0.0;  ///< standard deviation from the fit's covariance; NaN when not identifiable
+  bool identifiable = true;
+};
+
+/// A linear combination of parameters the postures do not determine (a null direction of the
+/// Jacobian), as "0.71 offset shoulder_pan_joint − 0.71 station 1 rz".
+struct Undetermined {
+  std::string text;
+  std::vector<std::pair<std::string, double>> terms;  ///< the combination's main terms (|coefficient| ≥ 0.1)
+};
+
+struct PointFit {
+  PointModel model;
+  std::vector<PointParameter> parameters;  ///< stations, tool, then the candidate's
+  std::vector<Eigen::Isometry3d> T_station_base;  ///< per station: a base point b maps to T b in the station's frame
+  Eigen::Vector3d tool_point_ee_m = Eigen::Vector3d::Zero();
+  Eigen::VectorXd residual_m;  ///< predicted − measured, 3 per posture
+  double rms_m = 0.0;          ///< of the 3-D distances
+  double max_m = 0.0;
+  double sigma_m = 0.0;        ///< noise per coordinate estimated from the residual, sqrt(SSR / (3N − rank))
+  int rank = 0;
+  int parameters_total = 0;
+  double condition = 0.0;  ///< of the identifiable part (scaled units)
+  std::vector<Undetermined> undetermined;
+  bool converged = false;
+};
+
+struct PointFitOptions {
+  Eigen::Vector3d tool_point_start_ee_m = Eigen::Vector3d::Zero();  ///< where the tool point is believed to be
+  bool fit_tool_point = true;
+  Eigen::Vector3d g_world = Eigen::Vector3d(0.0, 0.0, -9.80665);  ///< gravity in the robot's base frame
+  /// Singular values below this × the largest (in scaled units) count as undetermined.
+  double rank_tolerance = 1e-6;
+  /// The stations' names in parameter names ("station A rz"); empty: 1, 2, ...
+  std::vector<std::string> station_names;
+};
+
+/// Fits the model `candidate` to the postures. \throws std::invalid_argument for too few postures
+/// per station (3 at least, not on one line) or a candidate that needs inertials the robot lacks.
+PointFit fit_points(const SerialRobot& robot, const std::vector<PointObservation>& obs, int stations, const PointModel& model,
+                    const PointFitOptions& options = {});
+
+/// What the postures determine before anything is estimated: rank and undetermined combinations of
+/// the candidate's full model (nuisance frames included) at the nominal parameters.
+PointFit identifiability(const SerialRobot& robot, const std::vector<PointObservation>& obs, int stations, const PointModel& model,
+                         const PointFitOptions& options = {});
+
+/// Held-out error of one candidate.
+struct HeldOut {
+  PointModel model;
+  std::string scheme;             ///< "leave one station out" or "leave one posture out" / "k-fold"
+  Eigen::VectorXd error_m;        ///< per posture, the 3-D distance when it was held out
+  double rms_m = 0.0;
+};
+
+/// Cross-validation: with several stations each is left out in turn (its frame refitted on its own
+/// postures with the model held); with one, postures are left out in `folds` interleaved folds
+/// (0: one posture at a time) and predicted through the training fit's station frame.
+HeldOut held_out_error(const SerialRobot& robot, const std::vector<PointObservation>& obs, int stations, const PointModel& model,
+                       int folds = 0, const PointFitOptions& options = {});
+
+/// The rigid model against every candidate: the named cause by the rules in docs/calibration.md.
+struct PointComparison {
+  struct Row {
+    PointModel model;
+    HeldOut held_out;
+    double gain = 0.0;  ///< 1 − rms / rms_rigid
+    double z = 0.0;     ///< paired test of the squared held-out errors against the rigid model's
+    int parameters = 0;
+    int rank = 0;
+  };
+  HeldOut rigid;
+  std::vector<Row> rows;
+  int cause = -1;         ///< index in rows (a single candidate), or -1: none
+  int second_cause = -1;  ///< index in rows of the cause plus a second candidate that wins over the cause alone, or -1
+  std::string verdict;    ///< one sentence
+};
+PointComparison compare_point_candidates(const SerialRobot& robot, const std::vector<PointObservation>& obs, int stations,
+                                         const std::vector<PointCandidate>& candidates, int folds = 0, const PointFitOptions& options = {});
+
+}  // namespace hil::calibration

@@ -1,0 +1,523 @@
+#include <hil/calibration/point_calibration.hpp>
+
+#include <Eigen/SVD>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <sstream>
+#include <stdexcept>
+
+#include <hil/calibration/gravity.hpp>
+#include <hil/so3/so3.hpp>
+#include <hil/solver/levenberg_marquardt.hpp>
+
+namespace hil::calibration {
+namespace {
+
+// Scaled units for the solver and the rank test: what a calibration's parameters are typically
+// worth (mm, mrad; joint compliance in µrad/(N·m)).
+constexpr double kLengthScale_m = 1e-3;
+constexpr double kAngleScale_rad = 1e-3;
+constexpr double kComplianceScale = 1e-6;
+constexpr double kResidualScale_m = 1e-4;
+
+/// Where each block of parameters sits in x.
+struct Layout {
+  int stations = 0, dof = 0;
+  bool tool = true;
+  std::vector<std::pair<PointCandidate, int>> blocks;  ///< each extension and its first index
+  int tool_at = 0, size = 0;
+
+  Layout(int stations_, int dof_, bool tool_, const PointModel& model) : stations(stations_), dof(dof_), tool(tool_) {
+    tool_at = 6 * stations;
+    int at = tool_at + (tool ? 3 : 0);
+    for (const auto c : model) {
+      if (c == PointCandidate::rigid) continue;
+      blocks.emplace_back(c, at);
+      at += c == PointCandidate::geometric ? 6 * dof : dof;
+    }
+    size = at;
+  }
+  int block(PointCandidate c) const {
+    for (const auto& [k, at] : blocks)
+      if (k == c) return at;
+    return -1;
+  }
+};
+
+struct Problem {
+  const SerialRobot& robot;
+  const std::vector<PointObservation>& obs;
+  std::vector<Eigen::Isometry3d> T0;  ///< closed-form station frames; x perturbs them
+  Layout layout;
+  Eigen::Vector3d tool_fixed;  ///< when the tool point is not fitted
+  Eigen::Vector3d g_world;
+  std::vector<ChainPoses> nominal;  ///< rigid poses per posture (for the gravity load)
+  std::vector<Eigen::VectorXd> G;   ///< holding torques per posture, when a candidate needs them
+  std::vector<std::string> station_names;
+
+  Problem(const SerialRobot& r, const std::vector<PointObservation>& o, int stations, const PointModel& model, const PointFitOptions& opt)
+      : robot(r),
+        obs(o),
+        layout(stations, r.dof(), opt.fit_tool_point, model),
+        tool_fixed(opt.tool_point_start_ee_m),
+        g_world(opt.g_world),
+        station_names(opt.station_names) {
+    for (int s = static_cast<int>(station_names.size()); s < stations; ++s) station_names.push_back(std::to_string(s + 1));
+    bool gravity = false;
+    for (const auto c : model) gravity = gravity || needs_inertials(c);
+    if (gravity && robot.inertials.size() != static_cast<std::size_t>(robot.dof()) + 1)
+      throw std::invalid_argument("model " + to_string(model) + " needs the robot's inertials: give the robot as a URDF with <inertial> elements");
+    for (const auto& p : obs) {
+      nominal.push_back(forward(robot, p.q));
+      if (gravity) G.push_back(gravity_torques(robot, nominal.back(), g_world, p.payload_kg, p.payload_com_ee_m));
+    }
+  }
+
+  Eigen::Isometry3d station(const Eigen::VectorXd& x, int s) const {
+    Eigen::Isometry3d d = Eigen::Isometry3d::Identity();
+    d.linear() = so3::exp(Eigen::Vector3d(x.segment<3>(6 * s)));
+    d.translation() = x.segment<3>(6 * s + 3);
+    return d * T0[static_cast<std::size_t>(s)];
+  }
+  Eigen::Vector3d tool(const Eigen::VectorXd& x) const { return layout.tool ? Eigen::Vector3d(x.segment<3>(layout.tool_at)) : tool_fixed; }
+
+  /// The tool point in the robot's base frame (T_world_base included) at posture k.
+  Eigen::Vector3d point_base(const Eigen::VectorXd& x, std::size_t k) const {
+    const int n = robot.dof();
+    Eigen::VectorXd q = obs[k].q;
+    if (const int b = layout.block(PointCandidate::joint_offsets); b >= 0) q += x.segment(b, n);
+    if (const int b = layout.block(PointCandidate::joint_compliance); b >= 0) q -= x.segment(b, n).cwiseProduct(G[k]);
+    if (const int b = layout.block(PointCandidate::backlash); b >= 0)
+      for (int i = 0; i < n; ++i) q[i] -= x[b + i] * (G[k][i] > 0 ? 1.0 : G[k][i] < 0 ? -1.0 : 0.0);
+    const int geo = layout.block(PointCandidate::geometric);
+    Eigen::Isometry3d T = robot.T_world_base;
+    for (int i = 0; i < n; ++i) {
+      if (geo >= 0) {
+        Eigen::Isometry3d E = Eigen::Isometry3d::Identity();
+        E.translation() = x.segment<3>(geo + 6 * i);
+        E.linear() = so3::exp(Eigen::Vector3d(x.segment<3>(geo + 6 * i + 3)));
+        T = T * E;
+      }
+      T = T * dh_transform(robot.convention, robot.joints[static_cast<std::size_t>(i)], q[i]);
+    }
+    return T * (robot.T_flange_ee * tool(x));
+  }
+
+  /// r = (predicted − measured) / kResidualScale_m, 3 per posture.
+  void residual(const Eigen::VectorXd& x, Eigen::VectorXd& r) const {
+    r.resize(3 * static_cast<Eigen::Index>(obs.size()));
+    for (std::size_t k = 0; k < obs.size(); ++k)
+      r.segment<3>(3 * static_cast<Eigen::Index>(k)) = (station(x, obs[k].station) * point_base(x, k) - obs[k].p_station_m) / kResidualScale_m;
+  }
+
+  Eigen::VectorXd scale() const {
+    Eigen::VectorXd s(layout.size);
+    for (int i = 0; i < 6 * layout.stations; ++i) s[i] = i % 6 < 3 ? kAngleScale_rad : kLengthScale_m;
+    if (layout.tool) s.segment<3>(layout.tool_at).setConstant(kLengthScale_m);
+    for (const auto& [c, at] : layout.blocks) {
+      const int n = layout.dof;
+      if (c == PointCandidate::geometric) {
+        for (int i = 0; i < 6 * n; ++i) s[at + i] = i % 6 < 3 ? kLengthScale_m : kAngleScale_rad;
+      } else {
+        for (int i = 0; i < n; ++i) {
+          const bool prismatic = robot.joints[static_cast<std::size_t>(i)].kind == JointKind::prismatic;
+          s[at + i] = c == PointCandidate::joint_compliance ? kComplianceScale : prismatic ? kLengthScale_m : kAngleScale_rad;
+        }
+      }
+    }
+    return s;
+  }
+
+  /// ∂r/∂u by central differences (u = x / scale).
+  void jacobian(const Eigen::VectorXd& x, Eigen::MatrixXd& J, const Eigen::VectorXd& scale) const {
+    constexpr double h = 1e-3;
+    Eigen::VectorXd rp, rm, xp = x;
+    J.resize(3 * static_cast<Eigen::Index>(obs.size()), x.size());
+    for (Eigen::Index j = 0; j < x.size(); ++j) {
+      xp[j] = x[j] + h * scale[j];
+      residual(xp, rp);
+      xp[j] = x[j] - h * scale[j];
+      residual(xp, rm);
+      xp[j] = x[j];
+      J.col(j) = (rp - rm) / (2.0 * h);
+    }
+  }
+
+  std::vector<std::string> names(std::vector<std::string>& units, std::vector<std::string>& parts) const {
+    std::vector<std::string> n;
+    const char* axes[] = {"rx", "ry", "rz", "x", "y", "z"};
+    for (int s = 0; s < layout.stations; ++s)
+      for (int a = 0; a < 6; ++a) {
+        n.push_back("station " + station_names[static_cast<std::size_t>(s)] + " " + axes[a]);
+        units.push_back(a < 3 ? "rad" : "m");
+        parts.push_back("station");
+      }
+    if (layout.tool)
+      for (int a = 3; a < 6; ++a) {
+        n.push_back(std::string("tool ") + axes[a]);
+        units.push_back("m");
+        parts.push_back("tool");
+      }
+    for (const auto& [c, at] : layout.blocks) {
+      for (int i = 0; i < layout.dof; ++i) {
+        const auto& row = robot.joints[static_cast<std::size_t>(i)];
+        const bool prismatic = row.kind == JointKind::prismatic;
+        if (c == PointCandidate::geometric) {
+          for (int a = 0; a < 6; ++a) {
+            n.push_back("frame " + row.name + " " + (a < 3 ? std::string("d") + axes[a + 3] : std::string(axes[a - 3])));
+            units.push_back(a < 3 ? "m" : "rad");
+            parts.push_back(to_string(c));
+          }
+          continue;
+        }
+        const char* what = c == PointCandidate::joint_offsets ? "offset " : c == PointCandidate::joint_compliance ? "compliance " : "backlash ";
+        n.push_back(what + row.name);
+        units.push_back(c == PointCandidate::joint_compliance ? (prismatic ? "m/N" : "rad/(N·m)") : prismatic ? "m" : "rad");
+        parts.push_back(to_string(c));
+      }
+    }
+    return n;
+  }
+};
+
+/// Rigid transform T minimising Σ |T b_i − m_i|² (Kabsch/Horn, by SVD).
+Eigen::Isometry3d kabsch(const std::vector<Eigen::Vector3d>& b, const std::vector<Eigen::Vector3d>& m, int station) {
+  if (b.size() < 3) throw std::invalid_argument("station " + std::to_string(station) + ": at least 3 postures are needed to place its frame");
+  Eigen::Vector3d cb = Eigen::Vector3d::Zero(), cm = Eigen::Vector3d::Zero();
+  for (std::size_t i = 0; i < b.size(); ++i) cb += b[i], cm += m[i];
+  cb /= static_cast<double>(b.size());
+  cm /= static_cast<double>(b.size());
+  Eigen::Matrix3d H = Eigen::Matrix3d::Zero();
+  for (std::size_t i = 0; i < b.size(); ++i) H += (b[i] - cb) * (m[i] - cm).transpose();
+  Eigen::JacobiSVD<Eigen::Matrix3d> svd(H, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  if (svd.singularValues()[1] < 1e-12 * std::max(1.0, svd.singularValues()[0]))
+    throw std::invalid_argument("station " + std::to_string(station) + ": its postures' points lie on a line: its frame is not determined");
+  Eigen::Matrix3d D = Eigen::Matrix3d::Identity();
+  D(2, 2) = (svd.matrixV() * svd.matrixU().transpose()).determinant() < 0 ? -1.0 : 1.0;
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear() = svd.matrixV() * D * svd.matrixU().transpose();
+  T.translation() = cm - T.linear() * cb;
+  return T;
+}
+
+std::vector<Eigen::Isometry3d> closed_form_stations(const Problem& P, const Eigen::VectorXd& x) {
+  std::vector<Eigen::Isometry3d> T;
+  for (int s = 0; s < P.layout.stations; ++s) {
+    std::vector<Eigen::Vector3d> b, m;
+    for (std::size_t k = 0; k < P.obs.size(); ++k)
+      if (P.obs[k].station == s) b.push_back(P.point_base(x, k)), m.push_back(P.obs[k].p_station_m);
+    T.push_back(kabsch(b, m, s));
+  }
+  return T;
+}
+
+/// Rank, condition, covariance and undetermined combinations of the fit at x.
+void analyse(const Problem& P, const Eigen::VectorXd& x, const Eigen::VectorXd& r, const PointFitOptions& opt, PointFit& out) {
+  const Eigen::VectorXd scale = P.scale();
+  Eigen::MatrixXd J;
+  P.jacobian(x, J, scale);
+  Eigen::JacobiSVD<Eigen::MatrixXd> svd(J, Eigen::ComputeThinV);
+  const Eigen::VectorXd& sv = svd.singularValues();
+  const double tol = opt.rank_tolerance * (sv.size() ? sv[0] : 0.0);
+  int rank = 0;
+  while (rank < sv.size() && sv[rank] > tol) ++rank;
+  out.rank = rank;
+  out.parameters_total = static_cast<int>(x.size());
+  out.condition = rank > 0 ? sv[0] / sv[rank - 1] : 0.0;
+  const Eigen::Index m = r.size();
+  const double ssr = (r * kResidualScale_m).squaredNorm();
+  out.sigma_m = m > rank ? std::sqrt(ssr / static_cast<double>(m - rank)) : std::numeric_limits<double>::quiet_NaN();
+
+  std::vector<std::string> units, parts;
+  const auto names = P.names(units, parts);
+  // Columns of V beyond the rank (plus those of a J with fewer rows than columns).
+  Eigen::MatrixXd Vnull;
+  {
+    Eigen::JacobiSVD<Eigen::MatrixXd> full(J, Eigen::ComputeFullV);
+    Vnull = full.matrixV().rightCols(x.size() - rank);
+  }
+  const Eigen::MatrixXd Vr = svd.matrixV().leftCols(rank);
+  const Eigen::VectorXd inv2 = sv.head(rank).cwiseInverse().cwiseAbs2();
+  const double s2 = std::pow(out.sigma_m / kResidualScale_m, 2);
+  out.parameters.clear();
+  for (Eigen::Index j = 0; j < x.size(); ++j) {
+    PointParameter p;
+    p.name = names[static_cast<std::size_t>(j)];
+    p.unit = units[static_cast<std::size_t>(j)];
+    p.part = parts[static_cast<std::size_t>(j)];
+    p.value = x[j];
+    p.identifiable = Vnull.cols() == 0 || Vnull.row(j).norm() < 1e-2;
+    const double var_u = s2 * (Vr.row(j).cwiseAbs2().transpose().cwiseProduct(inv2)).sum();
+    p.std = p.identifiable ? std::sqrt(var_u) * scale[j] : std::numeric_limits<double>::quiet_NaN();
+    out.parameters.push_back(p);
+  }
+  out.undetermined.clear();
+  for (Eigen::Index c = 0; c < Vnull.cols(); ++c) {
+    Eigen::VectorXd v = Vnull.col(c);
+    Eigen::Index big = 0;
+    v.cwiseAbs().maxCoeff(&big);
+    if (v[big] < 0) v = -v;
+    Undetermined u;
+    std::vector<Eigen::Index> order(static_cast<std::size_t>(v.size()));
+    for (Eigen::Index i = 0; i < v.size(); ++i) order[static_cast<std::size_t>(i)] = i;
+    std::sort(order.begin(), order.end(), [&](auto a, auto b) { return std::abs(v[a]) > std::abs(v[b]); });
+    std::ostringstream t;
+    t.precision(2);
+    for (const auto i : order) {
+      if (std::abs(v[i]) < 0.1 || u.terms.size() >= 6) break;
+      u.terms.emplace_back(names[static_cast<std::size_t>(i)], v[i]);
+      t << (u.terms.size() == 1 ? (v[i] < 0 ? "−" : "") : (v[i] < 0 ? " − " : " + ")) << std::fixed << std::abs(v[i]) << " "
+        << names[static_cast<std::size_t>(i)];
+    }
+    u.text = t.str();
+    out.undetermined.push_back(u);
+  }
+  // Station frames as the fit leaves them: the parameters' values are the perturbations of the
+  // closed-form start; report each station's frame as a whole.
+  out.T_station_base.clear();
+  for (int s = 0; s < P.layout.stations; ++s) {
+    const Eigen::Isometry3d T = P.station(x, s);
+    out.T_station_base.push_back(T);
+    const Eigen::Vector3d rv = so3::log(Eigen::Matrix3d(T.linear()));
+    for (int a = 0; a < 3; ++a) out.parameters[static_cast<std::size_t>(6 * s + a)].value = rv[a];
+    for (int a = 0; a < 3; ++a) out.parameters[static_cast<std::size_t>(6 * s + 3 + a)].value = T.translation()[a];
+  }
+  out.tool_point_ee_m = P.tool(x);
+}
+
+struct Solved {
+  Eigen::VectorXd x, r;
+  bool converged = false;
+};
+
+Solved solve(const Problem& P, const Eigen::VectorXd& x0, const std::vector<bool>& fixed) {
+  solver::Problem sp;
+  const Eigen::VectorXd scale = P.scale();
+  sp.scale = scale;
+  sp.fixed = fixed;
+  sp.residual = [&](const Eigen::VectorXd& x, Eigen::VectorXd& r) {
+    P.residual(x, r);
+    return r.squaredNorm();
+  };
+  sp.jacobian = [&](const Eigen::VectorXd& x, const Eigen::VectorXd&, Eigen::MatrixXd& J) { P.jacobian(x, J, scale); };
+  solver::Options o;
+  o.max_iterations = 100;
+  o.relative_decrease = 1e-12;
+  const auto res = solver::levenberg_marquardt(sp, x0, o);
+  return {res.x, res.r, res.converged};
+}
+
+Eigen::VectorXd start(const Problem& P, const PointFitOptions& opt) {
+  Eigen::VectorXd x = Eigen::VectorXd::Zero(P.layout.size);
+  if (P.layout.tool) x.segment<3>(P.layout.tool_at) = opt.tool_point_start_ee_m;
+  return x;
+}
+
+void finish(const Problem& P, const Solved& s, const PointFitOptions& opt, PointFit& out) {
+  analyse(P, s.x, s.r, opt, out);
+  out.converged = s.converged;
+  out.residual_m = s.r * kResidualScale_m;
+  const Eigen::Index n = out.residual_m.size() / 3;
+  double ss = 0.0;
+  out.max_m = 0.0;
+  for (Eigen::Index k = 0; k < n; ++k) {
+    const double d = out.residual_m.segment<3>(3 * k).norm();
+    ss += d * d;
+    out.max_m = std::max(out.max_m, d);
+  }
+  out.rms_m = n ? std::sqrt(ss / static_cast<double>(n)) : 0.0;
+}
+
+}  // namespace
+
+const char* to_string(PointCandidate c) {
+  switch (c) {
+    case PointCandidate::rigid: return "rigid";
+    case PointCandidate::joint_offsets: return "joint_offsets";
+    case PointCandidate::joint_compliance: return "joint_compliance";
+    case PointCandidate::backlash: return "backlash";
+    case PointCandidate::geometric: return "geometric";
+  }
+  return "rigid";
+}
+
+std::string to_string(const PointModel& m) {
+  std::string s;
+  for (const auto c : m)
+    if (c != PointCandidate::rigid) s += (s.empty() ? "" : "+") + std::string(to_string(c));
+  return s.empty() ? "rigid" : s;
+}
+
+PointCandidate point_candidate_from_string(const std::string& name) {
+  for (const auto c : {PointCandidate::rigid, PointCandidate::joint_offsets, PointCandidate::joint_compliance, PointCandidate::backlash,
+                       PointCandidate::geometric})
+    if (name == to_string(c)) return c;
+  throw std::invalid_argument("unknown candidate '" + name + "' (rigid, joint_offsets, joint_compliance, backlash, geometric)");
+}
+
+std::vector<PointCandidate> point_candidates() {
+  return {PointCandidate::joint_offsets, PointCandidate::joint_compliance, PointCandidate::backlash, PointCandidate::geometric};
+}
+
+bool needs_inertials(PointCandidate c) { return c == PointCandidate::joint_compliance || c == PointCandidate::backlash; }
+
+PointFit fit_points(const SerialRobot& robot, const std::vector<PointObservation>& obs, int stations, const PointModel& model,
+                    const PointFitOptions& opt) {
+  Problem P(robot, obs, stations, model, opt);
+  Eigen::VectorXd x = start(P, opt);
+  P.T0 = closed_form_stations(P, x);
+  const Solved s = solve(P, x, {});
+  PointFit out;
+  out.model = model;
+  finish(P, s, opt, out);
+  return out;
+}
+
+PointFit identifiability(const SerialRobot& robot, const std::vector<PointObservation>& obs, int stations, const PointModel& model,
+                         const PointFitOptions& opt) {
+  Problem P(robot, obs, stations, model, opt);
+  const Eigen::VectorXd x = start(P, opt);
+  P.T0 = closed_form_stations(P, x);
+  Eigen::VectorXd r;
+  P.residual(x, r);
+  PointFit out;
+  out.model = model;
+  finish(P, {x, r, false}, opt, out);
+  return out;
+}
+
+HeldOut held_out_error(const SerialRobot& robot, const std::vector<PointObservation>& obs, int stations, const PointModel& model, int folds,
+                       const PointFitOptions& opt) {
+  HeldOut h;
+  h.model = model;
+  h.error_m = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(obs.size()));
+  if (stations >= 2) {
+    h.scheme = "leave one station out";
+    for (int out_s = 0; out_s < stations; ++out_s) {
+      // Train on the other stations (renumbered), then place the held-out station's frame on its
+      // own postures with everything else held.
+      std::vector<PointObservation> train, test;
+      std::vector<std::size_t> test_index;
+      for (std::size_t k = 0; k < obs.size(); ++k) {
+        if (obs[k].station == out_s) {
+          test.push_back(obs[k]);
+          test.back().station = 0;
+          test_index.push_back(k);
+        } else {
+          train.push_back(obs[k]);
+          if (train.back().station > out_s) --train.back().station;
+        }
+      }
+      Problem Ptr(robot, train, stations - 1, model, opt);
+      Eigen::VectorXd x = start(Ptr, opt);
+      Ptr.T0 = closed_form_stations(Ptr, x);
+      const Solved fit = solve(Ptr, x, {});
+      Problem Pte(robot, test, 1, model, opt);
+      Eigen::VectorXd xt(Pte.layout.size);
+      xt.head<6>().setZero();
+      xt.tail(xt.size() - 6) = fit.x.tail(fit.x.size() - 6 * (stations - 1));
+      Pte.T0 = closed_form_stations(Pte, xt);
+      std::vector<bool> fixed(static_cast<std::size_t>(xt.size()), true);
+      for (int i = 0; i < 6; ++i) fixed[static_cast<std::size_t>(i)] = false;
+      const Solved placed = solve(Pte, xt, fixed);
+      for (std::size_t i = 0; i < test.size(); ++i)
+        h.error_m[static_cast<Eigen::Index>(test_index[i])] = placed.r.segment<3>(3 * static_cast<Eigen::Index>(i)).norm() * kResidualScale_m;
+    }
+  } else {
+    const int k_folds = folds <= 0 ? static_cast<int>(obs.size()) : std::min<int>(folds, static_cast<int>(obs.size()));
+    h.scheme = k_folds == static_cast<int>(obs.size()) ? "leave one posture out" : std::to_string(k_folds) + "-fold over postures";
+    for (int f = 0; f < k_folds; ++f) {
+      std::vector<PointObservation> train;
+      for (std::size_t k = 0; k < obs.size(); ++k)
+        if (static_cast<int>(k) % k_folds != f) train.push_back(obs[k]);
+      Problem Ptr(robot, train, 1, model, opt);
+      Eigen::VectorXd x = start(Ptr, opt);
+      Ptr.T0 = closed_form_stations(Ptr, x);
+      const Solved fit = solve(Ptr, x, {});
+      Problem Pall(robot, obs, 1, model, opt);
+      Pall.T0 = Ptr.T0;
+      Eigen::VectorXd r;
+      Pall.residual(fit.x, r);
+      for (std::size_t k = 0; k < obs.size(); ++k)
+        if (static_cast<int>(k) % k_folds == f) h.error_m[static_cast<Eigen::Index>(k)] = r.segment<3>(3 * static_cast<Eigen::Index>(k)).norm() * kResidualScale_m;
+    }
+  }
+  h.rms_m = std::sqrt(h.error_m.squaredNorm() / static_cast<double>(std::max<Eigen::Index>(1, h.error_m.size())));
+  return h;
+}
+
+namespace {
+
+/// Paired z of the squared held-out errors: how surely `b` predicts better than `a`.
+double paired_z(const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
+  const Eigen::VectorXd d = a.cwiseAbs2() - b.cwiseAbs2();
+  const double n = static_cast<double>(d.size());
+  if (n < 2) return 0.0;
+  const double mean = d.mean();
+  const double sd = std::sqrt((d.array() - mean).square().sum() / (n - 1.0));
+  return sd > 0 ? mean / (sd / std::sqrt(n)) : (mean > 0 ? std::numeric_limits<double>::infinity() : 0.0);
+}
+
+}  // namespace
+
+PointComparison compare_point_candidates(const SerialRobot& robot, const std::vector<PointObservation>& obs, int stations,
+                                         const std::vector<PointCandidate>& candidates, int folds, const PointFitOptions& opt) {
+  // The rules, fixed before any data (docs/calibration.md, "Point calibration"): a candidate is a
+  // cause when it lowers the held-out error by at least kMinGain with a paired z of at least kMinZ;
+  // the cause is the one with the largest gain; a second cause is a candidate added to the cause
+  // that passes the same rules against the cause alone.
+  constexpr double kMinGain = 0.05, kMinZ = 2.0;
+  PointComparison c;
+  c.rigid = held_out_error(robot, obs, stations, {}, folds, opt);
+  auto row = [&](const PointModel& m, const HeldOut& base) {
+    PointComparison::Row r;
+    r.model = m;
+    r.held_out = held_out_error(robot, obs, stations, m, folds, opt);
+    r.gain = base.rms_m > 0 ? 1.0 - r.held_out.rms_m / base.rms_m : 0.0;
+    r.z = paired_z(base.error_m, r.held_out.error_m);
+    const PointFit f = identifiability(robot, obs, stations, m, opt);
+    r.parameters = f.parameters_total;
+    r.rank = f.rank;
+    return r;
+  };
+  for (const auto cand : candidates) {
+    if (cand == PointCandidate::rigid) continue;
+    if (needs_inertials(cand) && robot.inertials.size() != static_cast<std::size_t>(robot.dof()) + 1) continue;
+    c.rows.push_back(row({cand}, c.rigid));
+  }
+  double best = -1.0;
+  for (std::size_t i = 0; i < c.rows.size(); ++i)
+    if (c.rows[i].gain >= kMinGain && c.rows[i].z >= kMinZ && c.rows[i].gain > best) best = c.rows[i].gain, c.cause = static_cast<int>(i);
+  std::ostringstream v;
+  v.precision(3);
+  if (c.cause < 0) {
+    v << "no candidate predicts the held-out postures better than the rigid model by the rules (gain ≥ 5 %, z ≥ 2): rigid model's held-out "
+         "error "
+      << c.rigid.rms_m * 1e3 << " mm RMS";
+    c.verdict = v.str();
+    return c;
+  }
+  const auto cause = c.rows[static_cast<std::size_t>(c.cause)];
+  double best2 = -1.0;
+  const std::size_t singles = c.rows.size();
+  for (std::size_t i = 0; i < singles; ++i) {
+    if (static_cast<int>(i) == c.cause) continue;
+    PointModel m = cause.model;
+    m.push_back(c.rows[i].model.front());
+    auto r = row(m, cause.held_out);
+    c.rows.push_back(r);
+    if (r.gain >= kMinGain && r.z >= kMinZ && r.gain > best2) best2 = r.gain, c.second_cause = static_cast<int>(c.rows.size() - 1);
+  }
+  v << "cause: " << to_string(cause.model) << " (held-out error " << c.rigid.rms_m * 1e3 << " → " << cause.held_out.rms_m * 1e3
+    << " mm RMS, gain " << cause.gain * 100 << " %, z " << cause.z << ")";
+  if (c.second_cause >= 0) {
+    const auto& s = c.rows[static_cast<std::size_t>(c.second_cause)];
+    v << "; second: " << to_string(s.model) << " (→ " << s.held_out.rms_m * 1e3 << " mm, a further " << s.gain * 100 << " %)";
+  }
+  c.verdict = v.str();
+  return c;
+}
+
+}  // namespace hil::calibration

@@ -1,0 +1,77 @@
+// `hil calibrate RUN --rig RIG`: a calibration run (measured points of static postures) against the
+// rig's robot: what the postures determine, the rigid model with the station frames and the tool
+// point fitted, the candidate extensions by held-out error, the named cause (docs/calibration.md,
+// "Point calibration"). The work is hil::services::point_calibration's.
+#include <fmt/format.h>
+
+#include <iostream>
+#include <sstream>
+
+#include <hil/cli/commands.hpp>
+#include <hil/error/error.hpp>
+#include <hil/format/output.hpp>
+#include <hil/services/point_calibration.hpp>
+
+namespace hil::cli {
+
+namespace {
+
+struct CalibrateArgs {
+  std::string run, rig, json, candidates, tool, report;
+  int folds = 0;
+};
+
+Eigen::Vector3d parse_point(const std::string& text) {
+  Eigen::Vector3d p;
+  char c1 = 0, c2 = 0;
+  std::istringstream in(text);
+  if (!(in >> p.x() >> c1 >> p.y() >> c2 >> p.z()) || c1 != ',' || c2 != ',' || !in.eof() || !p.allFinite())
+    throw CLI::ValidationError("--tool-point", "expected X,Y,Z in metres, found '" + text + "'");
+  return p;
+}
+
+int calibrate(const CalibrateArgs& a) {
+  services::point_calibration::Options o;
+  if (!a.candidates.empty()) {
+    o.candidates.clear();
+    std::istringstream in(a.candidates);
+    std::string name;
+    while (std::getline(in, name, ',')) {
+      try {
+        o.candidates.push_back(calibration::point_candidate_from_string(name));
+      } catch (const std::invalid_argument& e) {
+        throw CLI::ValidationError("--candidates", e.what());
+      }
+    }
+  }
+  o.folds = a.folds;
+  if (!a.tool.empty()) o.tool_point_start_ee_m = parse_point(a.tool);
+  const auto report = services::point_calibration::run(a.run, a.rig, o);
+  auto& text = format::human(format::is_stdout(a.json));
+  services::point_calibration::print(text, report);
+  if (!a.json.empty()) format::write_json(a.json, services::point_calibration::to_json(report));
+  if (!a.report.empty()) {
+    services::point_calibration::write_report(report, a.report);
+    text << fmt::format("report: {}/index.html\n", a.report);
+  }
+  return 0;
+}
+
+}  // namespace
+
+void add_calibrate(CLI::App& app) {
+  auto* cmd = app.add_subcommand("calibrate",
+                                 "What a rigid robot model misses on a calibration run (measured points of static postures): station "
+                                 "frames and tool point fitted, candidates by held-out error, the named cause");
+  static CalibrateArgs args;
+  cmd->add_option("RUN", args.run, "calibration run (CSV, docs/formats.md; hil import writes one from a lab's table)")->required();
+  cmd->add_option("--rig", args.rig, "rig file with the robot (a URDF for the gravity candidates)")->required();
+  cmd->add_option("--candidates", args.candidates, "comma-separated: joint_offsets, joint_compliance, backlash, geometric (default: all)");
+  cmd->add_option("--folds", args.folds, "one station: postures left out in this many folds (default 0: one at a time)")->check(CLI::Range(0, 100000));
+  cmd->add_option("--tool-point", args.tool, "where the measured point is believed to be in the tool frame, X,Y,Z m (default 0,0,0)");
+  cmd->add_option("--json", args.json, "also write the result as JSON (hil.point_calibration) to OUT, or - for stdout (text to stderr)");
+  cmd->add_option("--report", args.report, "also write an HTML report (index.html, figures/) to this folder");
+  cmd->callback([] { set_action([] { return calibrate(args); }); });
+}
+
+}  // namespace hil::cli
