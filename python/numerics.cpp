@@ -18,6 +18,7 @@
 #include <hil/models/contact.hpp>
 #include <hil/services/diagnose_output.hpp>
 #include <hil/services/diagnose_run.hpp>
+#include <hil/services/point_calibration.hpp>
 #include <hil/models/stiffness.hpp>
 #include <hil/models/stiffness_model.hpp>
 
@@ -181,6 +182,28 @@ py::dict identify_stiffness(const Path& table_path, const Path& rig, double nois
   return to_python(j);
 }
 
+py::dict calibrate(const Path& run, const Path& rig, const std::vector<std::string>& candidates, int folds) {
+  if (folds < 0) throw py::value_error("folds: expected >= 0 (0: one posture at a time)");
+  services::point_calibration::Options o;
+  if (!candidates.empty()) {
+    o.candidates.clear();
+    for (const auto& c : candidates) {
+      try {
+        o.candidates.push_back(calibration::point_candidate_from_string(c));
+      } catch (const std::invalid_argument& e) {
+        throw py::value_error(std::string("candidates: ") + e.what());
+      }
+    }
+  }
+  o.folds = folds;
+  nlohmann::json j;
+  {
+    py::gil_scoped_release free;
+    j = services::point_calibration::to_json(services::point_calibration::run(run.string(), rig.string(), o));
+  }
+  return to_python(j);
+}
+
 /// The rig's contact scene along a trajectory file (as `hil contact simulate` without --inject),
 /// as arrays: what the model predicts, and what a sensor would measure.
 py::dict simulate_contact(const Path& rig_path, const Path& trajectory, const py::object& K, const py::object& mu,
@@ -267,6 +290,10 @@ void add_numerics(py::module_& m) {
         py::arg("noise_rot_rad") = 0.0, py::arg("neglect_below") = 2.0,
         "Elastostatic calibration of the rig's robot from a stiffness-experiment table, as "
         "`hil stiffness identify --json`: kept parameters with std, ci95 and PNR, reduction, ranks, residuals.");
+  m.def("calibrate", &calibrate, py::arg("run"), py::arg("rig"), py::arg("candidates") = std::vector<std::string>{}, py::arg("folds") = 0,
+        "A calibration run (static postures, measured points) against the rig's robot, as `hil calibrate --json`: what the "
+        "postures determine per model, the rigid fit with its station frames and tool point, every candidate's held-out error, "
+        "the named cause and its fit.");
 }
 
 }  // namespace hil::python

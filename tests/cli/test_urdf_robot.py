@@ -15,6 +15,9 @@ EX = os.path.join(SRC, "examples", "stiffness")
 DH_RIG = os.path.join(EX, "kr270_like.yaml")
 URDF_RIG = os.path.join(EX, "kr270_like_urdf.yaml")
 TABLE = os.path.join(EX, "table.csv")
+UR10_DATA = os.path.join(SRC, "..", "shared", "data", "ur10-calibration", "calibration.csv")
+UR10_RIG = os.path.join(SRC, "examples", "robots", "ur10_rig.yaml")
+UR10_MAP = os.path.join(SRC, "examples", "import", "ur10_calibration.yaml")
 
 
 def hil(*args, timeout=300):
@@ -27,6 +30,15 @@ class UrdfRobot(unittest.TestCase):
 
     def tearDown(self):
         shutil.rmtree(self.dir, ignore_errors=True)
+
+    def import_ur10(self):
+        """The real UR10 postures as a calibration run (skips when ../shared is not beside the clone)."""
+        if not os.path.exists(UR10_DATA):
+            self.skipTest("the shared UR10 data is not beside the clone")
+        out = os.path.join(self.dir, "ur10.csv")
+        r = hil("import", UR10_DATA, "--config", UR10_MAP, "--rig", UR10_RIG, "--out", out)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        return out, r
 
     def json_of(self, *args):
         r = hil(*args, "--json", "-")
@@ -102,14 +114,8 @@ class UrdfRobot(unittest.TestCase):
 
 
     def test_the_real_ur10_table_imports_into_a_calibration_run(self):
-        data = os.path.join(SRC, "..", "shared", "data", "ur10-calibration", "calibration.csv")
-        if not os.path.exists(data):
-            self.skipTest("the shared UR10 data is not beside the clone")
-        rig = os.path.join(SRC, "examples", "robots", "ur10_rig.yaml")
-        cfg = os.path.join(SRC, "examples", "import", "ur10_calibration.yaml")
-        out = os.path.join(self.dir, "ur10.csv")
-        r = hil("import", data, "--config", cfg, "--rig", rig, "--out", out)
-        self.assertEqual(r.returncode, 0, r.stderr)
+        out, r = self.import_ur10()
+        rig = UR10_RIG
         self.assertIn("23 postures of robot 'ur10'", r.stdout)
         d = self.json_of("validate", out, "--rig", rig)
         self.assertEqual(d["kind"], "calibration_run")
@@ -138,18 +144,13 @@ class UrdfRobot(unittest.TestCase):
         self.assertLess(np.abs(Rv - R).max(), 1e-12)
         self.assertAlmostEqual(float(first["px"]), 0.9088284523365023, delta=1e-15)
         # Once written, not again without --force.
-        r = hil("import", data, "--config", cfg, "--rig", rig, "--out", out)
+        r = hil("import", UR10_DATA, "--config", UR10_MAP, "--rig", rig, "--out", out)
         self.assertNotEqual(r.returncode, 0)
         self.assertIn("--force", r.stderr)
 
     def test_the_real_ur10_calibration_names_what_the_rigid_urdf_misses(self):
-        data = os.path.join(SRC, "..", "shared", "data", "ur10-calibration", "calibration.csv")
-        if not os.path.exists(data):
-            self.skipTest("the shared UR10 data is not beside the clone")
-        rig = os.path.join(SRC, "examples", "robots", "ur10_rig.yaml")
-        run = os.path.join(self.dir, "ur10.csv")
-        r = hil("import", data, "--config", os.path.join(SRC, "examples", "import", "ur10_calibration.yaml"), "--rig", rig, "--out", run)
-        self.assertEqual(r.returncode, 0, r.stderr)
+        run, _ = self.import_ur10()
+        rig = UR10_RIG
         report = os.path.join(self.dir, "report")
         d = self.json_of("calibrate", run, "--rig", rig, "--report", report)
         with open(os.path.join(report, "index.html")) as f:
@@ -181,7 +182,7 @@ class UrdfRobot(unittest.TestCase):
         self.assertTrue(all(p["std"] is None for p in d["cause_fit"]["parameters"] if not p["identifiable"]))
 
     def test_calibration_imports_fail_where_the_problem_is(self):
-        rig = os.path.join(SRC, "examples", "robots", "ur10_rig.yaml")
+        rig = UR10_RIG
         src = os.path.join(self.dir, "lab.csv")
         cfg = os.path.join(self.dir, "map.yaml")
         joints = ["shoulder_pan_joint", "shoulder_lift_joint", "elbow_joint", "wrist_1_joint", "wrist_2_joint", "wrist_3_joint"]

@@ -131,6 +131,24 @@ def test_a_urdf_robot_reads_and_identifies_as_its_dh_table():
         assert vb[k] == pytest.approx(va[k], rel=1e-6), k
 
 
+@needs_cli
+def test_calibrate_a_real_calibration_run(tmp_path):
+    data = os.path.join(SRC, "..", "shared", "data", "ur10-calibration", "calibration.csv")
+    if not os.path.exists(data):
+        pytest.skip("the shared UR10 data is not beside the clone")
+    rig = os.path.join(SRC, "examples", "robots", "ur10_rig.yaml")
+    run = str(tmp_path / "ur10.csv")
+    p = subprocess.run([HIL_EXE, "import", data, "--config", os.path.join(SRC, "examples", "import", "ur10_calibration.yaml"),
+                        "--rig", rig, "--out", run], capture_output=True, text=True)
+    assert p.returncode == 0, p.stderr
+    d = hil.calibrate(run, rig, candidates=["joint_offsets"], folds=4)
+    assert d["format"] == "hil.point_calibration"
+    assert d["rigid"]["rms_m"] == pytest.approx(10.865e-3, abs=5e-5)
+    assert [h["model"] for h in d["held_out"]] == ["rigid", "joint_offsets"]
+    with pytest.raises(ValueError, match="unknown candidate 'tilt'"):
+        hil.calibrate(run, rig, candidates=["tilt"])
+
+
 def test_run_sources_keep_the_device_identity(tmp_path):
     shutil.copytree(RUN, tmp_path / "run")
     (tmp_path / "run" / "run.yaml").write_text(
