@@ -58,17 +58,14 @@ struct Problem {
   std::vector<std::string> station_names;
 
   Problem(const SerialRobot& r, const std::vector<PointObservation>& o, int stations, const PointModel& model, const PointFitOptions& opt)
-      : robot(r),
-        obs(o),
-        layout(stations, r.dof(), opt.fit_tool_point, model),
-        tool_fixed(opt.tool_point_start_ee_m),
-        g_world(opt.g_world),
+      : robot(r), obs(o), layout(stations, r.dof(), opt.fit_tool_point, model), tool_fixed(opt.tool_point_start_ee_m), g_world(opt.g_world),
         station_names(opt.station_names) {
     for (int s = static_cast<int>(station_names.size()); s < stations; ++s) station_names.push_back(std::to_string(s + 1));
     bool gravity = false;
     for (const auto c : model) gravity = gravity || needs_inertials(c);
     if (gravity && robot.inertials.size() != static_cast<std::size_t>(robot.dof()) + 1)
-      throw std::invalid_argument("model " + to_string(model) + " needs the robot's inertials: give the robot as a URDF with <inertial> elements");
+      throw std::invalid_argument("model " + to_string(model) +
+                                  " needs the robot's inertials: give the robot as a URDF with <inertial> elements");
     for (const auto& p : obs) {
       nominal.push_back(forward(robot, p.q));
       if (gravity) G.push_back(gravity_torques(robot, nominal.back(), g_world, p.payload_kg, p.payload_com_ee_m));
@@ -109,7 +106,8 @@ struct Problem {
   void residual(const Eigen::VectorXd& x, Eigen::VectorXd& r) const {
     r.resize(3 * static_cast<Eigen::Index>(obs.size()));
     for (std::size_t k = 0; k < obs.size(); ++k)
-      r.segment<3>(3 * static_cast<Eigen::Index>(k)) = (station(x, obs[k].station) * point_base(x, k) - obs[k].p_station_m) / kResidualScale_m;
+      r.segment<3>(3 * static_cast<Eigen::Index>(k)) = (station(x, obs[k].station) * point_base(x, k) - obs[k].p_station_m) /
+                                                       kResidualScale_m;
   }
 
   Eigen::VectorXd scale() const {
@@ -172,7 +170,9 @@ struct Problem {
           }
           continue;
         }
-        const char* what = c == PointCandidate::joint_offsets ? "offset " : c == PointCandidate::joint_compliance ? "compliance " : "backlash ";
+        const char* what = c == PointCandidate::joint_offsets      ? "offset "
+                           : c == PointCandidate::joint_compliance ? "compliance "
+                                                                   : "backlash ";
         n.push_back(what + row.name);
         units.push_back(c == PointCandidate::joint_compliance ? (prismatic ? "m/N" : "rad/(N·m)") : prismatic ? "m" : "rad");
         parts.push_back(to_string(c));
@@ -184,7 +184,8 @@ struct Problem {
 
 /// Rigid transform T minimising Σ |T b_i − m_i|² (Kabsch/Horn, by SVD).
 Eigen::Isometry3d kabsch(const std::vector<Eigen::Vector3d>& b, const std::vector<Eigen::Vector3d>& m, int station) {
-  if (b.size() < 3) throw std::invalid_argument("station " + std::to_string(station) + ": at least 3 postures are needed to place its frame");
+  if (b.size() < 3)
+    throw std::invalid_argument("station " + std::to_string(station) + ": at least 3 postures are needed to place its frame");
   Eigen::Vector3d cb = Eigen::Vector3d::Zero(), cm = Eigen::Vector3d::Zero();
   for (std::size_t i = 0; i < b.size(); ++i) cb += b[i], cm += m[i];
   cb /= static_cast<double>(b.size());
@@ -423,7 +424,8 @@ HeldOut held_out_error(const SerialRobot& robot, const std::vector<PointObservat
       for (int i = 0; i < 6; ++i) fixed[static_cast<std::size_t>(i)] = false;
       const Solved placed = solve(Pte, xt, fixed);
       for (std::size_t i = 0; i < test.size(); ++i)
-        h.error_m[static_cast<Eigen::Index>(test_index[i])] = placed.r.segment<3>(3 * static_cast<Eigen::Index>(i)).norm() * kResidualScale_m;
+        h.error_m[static_cast<Eigen::Index>(test_index[i])] = placed.r.segment<3>(3 * static_cast<Eigen::Index>(i)).norm() *
+                                                              kResidualScale_m;
     }
   } else {
     const int k_folds = folds <= 0 ? static_cast<int>(obs.size()) : std::min<int>(folds, static_cast<int>(obs.size()));
@@ -441,7 +443,8 @@ HeldOut held_out_error(const SerialRobot& robot, const std::vector<PointObservat
       Eigen::VectorXd r;
       Pall.residual(fit.x, r);
       for (std::size_t k = 0; k < obs.size(); ++k)
-        if (static_cast<int>(k) % k_folds == f) h.error_m[static_cast<Eigen::Index>(k)] = r.segment<3>(3 * static_cast<Eigen::Index>(k)).norm() * kResidualScale_m;
+        if (static_cast<int>(k) % k_folds == f)
+          h.error_m[static_cast<Eigen::Index>(k)] = r.segment<3>(3 * static_cast<Eigen::Index>(k)).norm() * kResidualScale_m;
     }
   }
   h.rms_m = std::sqrt(h.error_m.squaredNorm() / static_cast<double>(std::max<Eigen::Index>(1, h.error_m.size())));

@@ -13,11 +13,11 @@
 namespace hil::test {
 
 struct PointTruth {
-  Eigen::VectorXd joint_offset_rad;      ///< added to the commanded joint values
-  Eigen::VectorXd joint_compliance;      ///< rad/(N·m): each joint turns by −c·G under the holding torque G
-  std::vector<Eigen::Isometry3d> T_station_base;  ///< per station
+  Eigen::VectorXd joint_offset_rad;                        ///< added to the commanded joint values
+  Eigen::VectorXd joint_compliance;                        ///< rad/(N·m): each joint turns by −c·G under the holding torque G
+  std::vector<Eigen::Isometry3d> T_station_base;           ///< per station
   Eigen::Vector3d tool_point_m = Eigen::Vector3d::Zero();  ///< in the tip link's frame
-  double noise_m = 0.0;                  ///< per coordinate
+  double noise_m = 0.0;                                    ///< per coordinate
 };
 
 struct PointSample {

@@ -89,13 +89,13 @@ void print(std::ostream& os, const Report& r) {
     for (const auto& u : d.undetermined) os << "      " << u.text << "\n";
   }
   for (const auto& s : r.skipped) os << "  skipped: " << s << "\n";
-  os << fmt::format("rigid model, station frames and tool point fitted: {:.3f} mm RMS, {:.3f} mm max; tool point [{:.4f}, {:.4f}, {:.4f}] m\n",
-                    r.rigid.rms_m * 1e3, r.rigid.max_m * 1e3, r.rigid.tool_point_ee_m.x(), r.rigid.tool_point_ee_m.y(),
-                    r.rigid.tool_point_ee_m.z());
+  os << fmt::format(
+      "rigid model, station frames and tool point fitted: {:.3f} mm RMS, {:.3f} mm max; tool point [{:.4f}, {:.4f}, {:.4f}] m\n",
+      r.rigid.rms_m * 1e3, r.rigid.max_m * 1e3, r.rigid.tool_point_ee_m.x(), r.rigid.tool_point_ee_m.y(), r.rigid.tool_point_ee_m.z());
   os << fmt::format("candidates, held-out error ({}):\n", r.comparison.rigid.scheme);
   os << fmt::format("  {:<34} {:>6} {:>5} {:>12} {:>8} {:>7}\n", "model", "params", "rank", "held-out mm", "gain %", "z");
-  os << fmt::format("  {:<34} {:>6} {:>5} {:>12.3f} {:>8} {:>7}\n", "rigid", r.determined.front().parameters_total, r.determined.front().rank,
-                    r.comparison.rigid.rms_m * 1e3, "", "");
+  os << fmt::format("  {:<34} {:>6} {:>5} {:>12.3f} {:>8} {:>7}\n", "rigid", r.determined.front().parameters_total,
+                    r.determined.front().rank, r.comparison.rigid.rms_m * 1e3, "", "");
   for (std::size_t i = 0; i < r.comparison.rows.size(); ++i) {
     const auto& row = r.comparison.rows[i];
     const bool cause = static_cast<int>(i) == r.comparison.cause || static_cast<int>(i) == r.comparison.second_cause;
@@ -150,11 +150,18 @@ nlohmann::json to_json(const Report& r) {
   };
   j["determined"] = json::array();
   for (const auto& d : r.determined)
-    j["determined"].push_back({{"model", hc::to_string(d.model)}, {"rank", d.rank}, {"parameters_total", d.parameters_total}, {"undetermined", fit_json(d)["undetermined"]}});
+    j["determined"].push_back({{"model", hc::to_string(d.model)},
+                               {"rank", d.rank},
+                               {"parameters_total", d.parameters_total},
+                               {"undetermined", fit_json(d)["undetermined"]}});
   j["rigid"] = fit_json(r.rigid);
   j["held_out"] = json::array();
   auto errors = [](const Eigen::VectorXd& e) { return std::vector<double>(e.data(), e.data() + e.size()); };
-  j["held_out"].push_back({{"model", "rigid"}, {"rms_m", r.comparison.rigid.rms_m}, {"gain", 0.0}, {"z", 0.0}, {"against", "rigid"},
+  j["held_out"].push_back({{"model", "rigid"},
+                           {"rms_m", r.comparison.rigid.rms_m},
+                           {"gain", 0.0},
+                           {"z", 0.0},
+                           {"against", "rigid"},
                            {"error_m", errors(r.comparison.rigid.error_m)}});
   for (std::size_t i = 0; i < r.comparison.rows.size(); ++i) {
     const auto& row = r.comparison.rows[i];
@@ -168,7 +175,9 @@ nlohmann::json to_json(const Report& r) {
   }
   auto name_of = [&](int i) { return i < 0 ? json(nullptr) : json(hc::to_string(r.comparison.rows[static_cast<std::size_t>(i)].model)); };
   j["cause"] = name_of(r.comparison.cause);
-  j["second_cause"] = r.comparison.second_cause < 0 ? json(nullptr) : json(hc::to_string(r.comparison.rows[static_cast<std::size_t>(r.comparison.second_cause)].model.back()));
+  j["second_cause"] = r.comparison.second_cause < 0
+                          ? json(nullptr)
+                          : json(hc::to_string(r.comparison.rows[static_cast<std::size_t>(r.comparison.second_cause)].model.back()));
   j["verdict"] = r.comparison.verdict;
   j["cause_fit"] = r.cause ? fit_json(*r.cause) : json(nullptr);
   j["skipped"] = r.skipped;
@@ -184,20 +193,24 @@ void write_report(const Report& r, const std::string& dir) {
   rp::Verdict v;
   v.kind = named ? "cause" : "none";
   v.headline = named ? "What the rigid model misses: " + hc::to_string(cause_row->model) +
-                           (cmp.second_cause >= 0 ? " and " + std::string(hc::to_string(cmp.rows[static_cast<std::size_t>(cmp.second_cause)].model.back())) : "")
+                           (cmp.second_cause >= 0
+                                ? " and " + std::string(hc::to_string(cmp.rows[static_cast<std::size_t>(cmp.second_cause)].model.back()))
+                                : "")
                      : "No candidate predicts the held-out postures better than the rigid model";
   v.facts.push_back({"postures", fmt::format("{} from {} station(s)", r.run.postures.size(), r.run.stations.size())});
   v.facts.push_back({"rigid model, frames fitted", fmt::format("{:.2f} mm RMS, {:.2f} mm max", r.rigid.rms_m * 1e3, r.rigid.max_m * 1e3)});
   v.facts.push_back({"held-out error (" + cmp.rigid.scheme + ")",
-                     named ? fmt::format("{:.2f} → {:.2f} mm RMS (gain {:.1f} %, z {:.2f})", cmp.rigid.rms_m * 1e3, cause_row->held_out.rms_m * 1e3,
-                                         cause_row->gain * 100, cause_row->z)
+                     named ? fmt::format("{:.2f} → {:.2f} mm RMS (gain {:.1f} %, z {:.2f})", cmp.rigid.rms_m * 1e3,
+                                         cause_row->held_out.rms_m * 1e3, cause_row->gain * 100, cause_row->z)
                            : fmt::format("{:.2f} mm RMS", cmp.rigid.rms_m * 1e3)});
   if (r.cause)
-    v.facts.push_back({"determined", fmt::format("{} of {} parameters of {} (with the nuisance frames)", r.cause->rank, r.cause->parameters_total,
-                                                 hc::to_string(r.cause->model))});
-  v.next = named ? "Calibrate the determined parameters of " + hc::to_string(r.cause->model) +
-                       "; add postures that separate the undetermined combinations listed below before trusting the rest."
-                 : "Compare the rigid model's residual with the measuring device's noise: if it is larger, the effect is outside the candidates.";
+    v.facts.push_back({"determined", fmt::format("{} of {} parameters of {} (with the nuisance frames)", r.cause->rank,
+                                                 r.cause->parameters_total, hc::to_string(r.cause->model))});
+  v.next =
+      named
+          ? "Calibrate the determined parameters of " + hc::to_string(r.cause->model) +
+                "; add postures that separate the undetermined combinations listed below before trusting the rest."
+          : "Compare the rigid model's residual with the measuring device's noise: if it is larger, the effect is outside the candidates.";
   page.verdict(v);
 
   page.heading("What the postures determine");
@@ -224,7 +237,8 @@ void write_report(const Report& r, const std::string& dir) {
     const auto& row = cmp.rows[i];
     const bool combined = row.model.size() > 1;
     rows.push_back({hc::to_string(row.model), fmt::format("{:.3f}", row.held_out.rms_m * 1e3), fmt::format("{:.1f}", row.gain * 100),
-                    std::isfinite(row.z) ? fmt::format("{:.2f}", row.z) : "∞", combined ? hc::to_string(hc::PointModel{row.model.front()}) : "rigid"});
+                    std::isfinite(row.z) ? fmt::format("{:.2f}", row.z) : "∞",
+                    combined ? hc::to_string(hc::PointModel{row.model.front()}) : "rigid"});
     if (static_cast<int>(i) == cmp.cause || static_cast<int>(i) == cmp.second_cause) bold.push_back(rows.size() - 1);
     bars.groups.push_back(hc::to_string(row.model));
     bars.value[0].push_back(row.held_out.rms_m * 1e3);
@@ -278,7 +292,8 @@ void write_report(const Report& r, const std::string& dir) {
     std::vector<rp::Interval> forest;
     for (const auto& p : r.cause->parameters) {
       if (p.part == "station") continue;
-      rows.push_back({p.name, fmt::format("{:.6g}", p.value), p.identifiable ? fmt::format("± {:.3g}", 1.96 * p.std) : "not determined", p.unit});
+      rows.push_back({p.name, fmt::format("{:.6g}", p.value), p.identifiable ? fmt::format("± {:.3g}", 1.96 * p.std) : "not determined",
+                      p.unit});
       if (p.identifiable && p.part != "tool") {
         rp::Interval in;
         in.name = p.name;

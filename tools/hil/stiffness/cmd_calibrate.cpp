@@ -67,7 +67,8 @@ void add_calibrate(CLI::App& app) {
   cmd->add_option("RUN", args.run, "calibration run (CSV, docs/formats.md; hil import writes one from a lab's table)")->required();
   cmd->add_option("--rig", args.rig, "rig file with the robot (a URDF for the gravity candidates)")->required();
   cmd->add_option("--candidates", args.candidates, "comma-separated: joint_offsets, joint_compliance, backlash, geometric (default: all)");
-  cmd->add_option("--folds", args.folds, "one station: postures left out in this many folds (default 0: one at a time)")->check(CLI::Range(0, 100000));
+  cmd->add_option("--folds", args.folds, "one station: postures left out in this many folds (default 0: one at a time)")
+      ->check(CLI::Range(0, 100000));
   cmd->add_option("--tool-point", args.tool, "where the measured point is believed to be in the tool frame, X,Y,Z m (default 0,0,0)");
   cmd->add_option("--json", args.json, "also write the result as JSON (hil.point_calibration) to OUT, or - for stdout (text to stderr)");
   cmd->add_option("--report", args.report, "also write an HTML report (index.html, figures/) to this folder");

@@ -17,8 +17,8 @@ namespace hil::calibration {
 
 /// One measured posture.
 struct PointObservation {
-  Eigen::VectorXd q;          ///< joint values (rad or m)
-  int station = 0;            ///< index of the station that measured it
+  Eigen::VectorXd q;            ///< joint values (rad or m)
+  int station = 0;              ///< index of the station that measured it
   Eigen::Vector3d p_station_m;  ///< the measured point in the station's frame
   double payload_kg = 0.0;      ///< carried at payload_com_ee_m (tool frame): adds to the gravity load
   Eigen::Vector3d payload_com_ee_m = Eigen::Vector3d::Zero();
@@ -62,13 +62,13 @@ struct Undetermined {
 
 struct PointFit {
   PointModel model;
-  std::vector<PointParameter> parameters;  ///< stations, tool, then the candidate's
+  std::vector<PointParameter> parameters;         ///< stations, tool, then the candidate's
   std::vector<Eigen::Isometry3d> T_station_base;  ///< per station: a base point b maps to T b in the station's frame
   Eigen::Vector3d tool_point_ee_m = Eigen::Vector3d::Zero();
   Eigen::VectorXd residual_m;  ///< predicted − measured, 3 per posture
   double rms_m = 0.0;          ///< of the 3-D distances
   double max_m = 0.0;
-  double sigma_m = 0.0;        ///< noise per coordinate estimated from the residual, sqrt(SSR / (3N − rank))
+  double sigma_m = 0.0;  ///< noise per coordinate estimated from the residual, sqrt(SSR / (3N − rank))
   int rank = 0;
   int parameters_total = 0;
   double condition = 0.0;  ///< of the identifiable part (scaled units)
@@ -99,8 +99,8 @@ PointFit identifiability(const SerialRobot& robot, const std::vector<PointObserv
 /// Held-out error of one candidate.
 struct HeldOut {
   PointModel model;
-  std::string scheme;             ///< "leave one station out" or "leave one posture out" / "k-fold"
-  Eigen::VectorXd error_m;        ///< per posture, the 3-D distance when it was held out
+  std::string scheme;       ///< "leave one station out" or "leave one posture out" / "k-fold"
+  Eigen::VectorXd error_m;  ///< per posture, the 3-D distance when it was held out
   double rms_m = 0.0;
 };
 

@@ -30,7 +30,7 @@ struct Report {
   calibration::PointFit rigid;
   calibration::PointComparison comparison;
   std::optional<calibration::PointFit> cause;  ///< the named cause's fit (with the second cause when there is one)
-  std::vector<std::string> skipped;             ///< candidates left out, with why
+  std::vector<std::string> skipped;            ///< candidates left out, with why
 };
 
 /// \throws error::FormatError for bad files, std::invalid_argument for data that cannot be fitted.
