@@ -219,7 +219,9 @@ void analyse(const Problem& P, const Eigen::VectorXd& x, const Eigen::VectorXd& 
   const Eigen::VectorXd scale = P.scale();
   Eigen::MatrixXd J;
   P.jacobian(x, J, scale);
-  Eigen::JacobiSVD<Eigen::MatrixXd> svd(J, Eigen::ComputeThinV);
+  // Full V: its columns beyond the rank are the null directions (more of them when J has fewer
+  // rows than columns).
+  Eigen::JacobiSVD<Eigen::MatrixXd> svd(J, Eigen::ComputeFullV);
   const Eigen::VectorXd& sv = svd.singularValues();
   const double tol = opt.rank_tolerance * (sv.size() ? sv[0] : 0.0);
   int rank = 0;
@@ -233,12 +235,7 @@ void analyse(const Problem& P, const Eigen::VectorXd& x, const Eigen::VectorXd& 
 
   std::vector<std::string> units, parts;
   const auto names = P.names(units, parts);
-  // Columns of V beyond the rank (plus those of a J with fewer rows than columns).
-  Eigen::MatrixXd Vnull;
-  {
-    Eigen::JacobiSVD<Eigen::MatrixXd> full(J, Eigen::ComputeFullV);
-    Vnull = full.matrixV().rightCols(x.size() - rank);
-  }
+  const Eigen::MatrixXd Vnull = svd.matrixV().rightCols(x.size() - rank);
   const Eigen::MatrixXd Vr = svd.matrixV().leftCols(rank);
   const Eigen::VectorXd inv2 = sv.head(rank).cwiseInverse().cwiseAbs2();
   const double s2 = std::pow(out.sigma_m / kResidualScale_m, 2);
