@@ -180,6 +180,16 @@ class UrdfRobot(unittest.TestCase):
         held = {h["model"]: h for h in d["held_out"]}
         self.assertLess(held["geometric"]["rms_m"], 0.5 * held["rigid"]["rms_m"])
         self.assertTrue(all(p["std"] is None for p in d["cause_fit"]["parameters"] if not p["identifiable"]))
+        # Bad options are named, with what was expected.
+        r = hil("calibrate", run, "--rig", rig, "--tool-point", "0.1,0.2")
+        self.assertEqual(r.returncode, 2)
+        self.assertIn("expected X,Y,Z in metres, found '0.1,0.2'", r.stderr)
+        r = hil("calibrate", run, "--rig", rig, "--candidates", "joint_offsets,bending")
+        self.assertEqual(r.returncode, 2)
+        self.assertIn("unknown candidate 'bending'", r.stderr)
+        r = hil("calibrate", run, "--rig", os.path.join(EX, "kr270_like.yaml"))
+        self.assertEqual(r.returncode, 2)  # the run's joints are not that robot's
+        self.assertIn("'a1'", r.stderr)
 
     def test_calibration_imports_fail_where_the_problem_is(self):
         rig = UR10_RIG

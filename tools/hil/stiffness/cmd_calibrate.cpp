@@ -6,6 +6,8 @@
 
 #include <iostream>
 #include <sstream>
+#include <stdexcept>
+#include <vector>
 
 #include <hil/cli/commands.hpp>
 #include <hil/error/error.hpp>
@@ -26,24 +28,36 @@ Eigen::Vector3d parse_point(const std::string& text) {
   char c1 = 0, c2 = 0;
   std::istringstream in(text);
   if (!(in >> p.x() >> c1 >> p.y() >> c2 >> p.z()) || c1 != ',' || c2 != ',' || !in.eof() || !p.allFinite())
-    throw CLI::ValidationError("--tool-point", "expected X,Y,Z in metres, found '" + text + "'");
+    throw std::invalid_argument("expected X,Y,Z in metres, found '" + text + "'");
   return p;
+}
+
+std::vector<calibration::PointCandidate> parse_candidates(const std::string& text) {
+  std::vector<calibration::PointCandidate> out;
+  std::istringstream in(text);
+  std::string name;
+  while (std::getline(in, name, ',')) out.push_back(calibration::point_candidate_from_string(name));
+  return out;
+}
+
+/// A CLI11 check from a parser that throws: bad values are usage errors (exit 2) found at parsing.
+template <class Parse>
+CLI::Validator checked_by(Parse parse, const std::string& what) {
+  return CLI::Validator(
+      [parse](std::string& s) {
+        try {
+          parse(s);
+        } catch (const std::invalid_argument& e) {
+          return std::string(e.what());
+        }
+        return std::string();
+      },
+      what);
 }
 
 int calibrate(const CalibrateArgs& a) {
   services::point_calibration::Options o;
-  if (!a.candidates.empty()) {
-    o.candidates.clear();
-    std::istringstream in(a.candidates);
-    std::string name;
-    while (std::getline(in, name, ',')) {
-      try {
-        o.candidates.push_back(calibration::point_candidate_from_string(name));
-      } catch (const std::invalid_argument& e) {
-        throw CLI::ValidationError("--candidates", e.what());
-      }
-    }
-  }
+  if (!a.candidates.empty()) o.candidates = parse_candidates(a.candidates);
   o.folds = a.folds;
   if (!a.tool.empty()) o.tool_point_start_ee_m = parse_point(a.tool);
   const auto report = services::point_calibration::run(a.run, a.rig, o);
@@ -66,10 +80,12 @@ void add_calibrate(CLI::App& app) {
   static CalibrateArgs args;
   cmd->add_option("RUN", args.run, "calibration run (CSV, docs/formats.md; hil import writes one from a lab's table)")->required();
   cmd->add_option("--rig", args.rig, "rig file with the robot (a URDF for the gravity candidates)")->required();
-  cmd->add_option("--candidates", args.candidates, "comma-separated: joint_offsets, joint_compliance, backlash, geometric (default: all)");
+  cmd->add_option("--candidates", args.candidates, "comma-separated: joint_offsets, joint_compliance, backlash, geometric (default: all)")
+      ->check(checked_by(parse_candidates, "NAME[,NAME...]"));
   cmd->add_option("--folds", args.folds, "one station: postures left out in this many folds (default 0: one at a time)")
       ->check(CLI::Range(0, 100000));
-  cmd->add_option("--tool-point", args.tool, "where the measured point is believed to be in the tool frame, X,Y,Z m (default 0,0,0)");
+  cmd->add_option("--tool-point", args.tool, "where the measured point is believed to be in the tool frame, X,Y,Z m (default 0,0,0)")
+      ->check(checked_by(parse_point, "X,Y,Z"));
   cmd->add_option("--json", args.json, "also write the result as JSON (hil.point_calibration) to OUT, or - for stdout (text to stderr)");
   cmd->add_option("--report", args.report, "also write an HTML report (index.html, figures/) to this folder");
   cmd->callback([] { set_action([] { return calibrate(args); }); });
