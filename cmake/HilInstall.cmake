@@ -14,6 +14,7 @@ set(_hil_exports
   hil_so3 so3
   hil_error error
   hil_solver solver
+  hil_parallel parallel
   hil_calibration calibration
   hil_contact_id contact_id
   hil_format format

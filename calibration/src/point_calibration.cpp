@@ -9,6 +9,7 @@
 #include <stdexcept>
 
 #include <hil/calibration/gravity.hpp>
+#include <hil/parallel/run_tasks.hpp>
 #include <hil/so3/so3.hpp>
 #include <hil/solver/levenberg_marquardt.hpp>
 
@@ -56,10 +57,11 @@ struct Problem {
   std::vector<ChainPoses> nominal;  ///< rigid poses per posture (for the gravity load)
   std::vector<Eigen::VectorXd> G;   ///< holding torques per posture, when a candidate needs them
   std::vector<std::string> station_names;
+  bool analytic = true;
 
   Problem(const SerialRobot& r, const std::vector<PointObservation>& o, int stations, const PointModel& model, const PointFitOptions& opt)
       : robot(r), obs(o), layout(stations, r.dof(), opt.fit_tool_point, model), tool_fixed(opt.tool_point_start_ee_m), g_world(opt.g_world),
-        station_names(opt.station_names) {
+        station_names(opt.station_names), analytic(opt.analytic_jacobian) {
     for (int s = static_cast<int>(station_names.size()); s < stations; ++s) station_names.push_back(std::to_string(s + 1));
     bool gravity = false;
     for (const auto c : model) gravity = gravity || needs_inertials(c);
@@ -80,26 +82,67 @@ struct Problem {
   }
   Eigen::Vector3d tool(const Eigen::VectorXd& x) const { return layout.tool ? Eigen::Vector3d(x.segment<3>(layout.tool_at)) : tool_fixed; }
 
-  /// The tool point in the robot's base frame (T_world_base included) at posture k.
-  Eigen::Vector3d point_base(const Eigen::VectorXd& x, std::size_t k) const {
+  /// Joint values of posture k as the model moves them (offsets, springs, backlash).
+  Eigen::VectorXd effective_q(const Eigen::VectorXd& x, std::size_t k) const {
     const int n = robot.dof();
     Eigen::VectorXd q = obs[k].q;
     if (const int b = layout.block(PointCandidate::joint_offsets); b >= 0) q += x.segment(b, n);
     if (const int b = layout.block(PointCandidate::joint_compliance); b >= 0) q -= x.segment(b, n).cwiseProduct(G[k]);
     if (const int b = layout.block(PointCandidate::backlash); b >= 0)
-      for (int i = 0; i < n; ++i) q[i] -= x[b + i] * (G[k][i] > 0 ? 1.0 : G[k][i] < 0 ? -1.0 : 0.0);
+      for (int i = 0; i < n; ++i) q[i] -= x[b + i] * sign(G[k][i]);
+    return q;
+  }
+  static double sign(double v) { return v > 0 ? 1.0 : v < 0 ? -1.0 : 0.0; }
+
+  /// What the closed-form Jacobian needs of the chain at one posture, per joint i: the frame before
+  /// its geometric error E_i, the frame after it, and the joint's axis and a point on it (base
+  /// frame). Scratch storage, reused between postures.
+  struct Chain {
+    std::vector<Eigen::Isometry3d> before_error, after_error;
+    std::vector<Eigen::Vector3d> axis, on_axis;
+    Eigen::Matrix3d R_base_ee;
+  };
+
+  /// The tool point in the robot's base frame (T_world_base included) at posture k; with `chain`,
+  /// what the Jacobian needs of the walk.
+  Eigen::Vector3d point_base(const Eigen::VectorXd& x, std::size_t k, Chain* chain = nullptr) const {
+    const int n = robot.dof();
+    const Eigen::VectorXd q = effective_q(x, k);
     const int geo = layout.block(PointCandidate::geometric);
+    if (chain) {
+      for (auto* v : {&chain->before_error, &chain->after_error}) v->resize(static_cast<std::size_t>(n));
+      for (auto* v : {&chain->axis, &chain->on_axis}) v->resize(static_cast<std::size_t>(n));
+    }
     Eigen::Isometry3d T = robot.T_world_base;
     for (int i = 0; i < n; ++i) {
+      const auto ui = static_cast<std::size_t>(i);
+      if (chain) chain->before_error[ui] = T;
       if (geo >= 0) {
         Eigen::Isometry3d E = Eigen::Isometry3d::Identity();
         E.translation() = x.segment<3>(geo + 6 * i);
         E.linear() = so3::exp(Eigen::Vector3d(x.segment<3>(geo + 6 * i + 3)));
         T = T * E;
       }
-      T = T * dh_transform(robot.convention, robot.joints[static_cast<std::size_t>(i)], q[i]);
+      const DhRow& row = robot.joints[ui];
+      const Eigen::Isometry3d A = dh_transform(robot.convention, row, q[i]);
+      if (chain) {
+        // The joint's axis as forward() finds it: standard DH, z of the frame before the row;
+        // modified, z of the frame after it; URDF, the row's axis in its joint frame.
+        chain->after_error[ui] = T;
+        if (robot.convention == DhConvention::urdf) {
+          chain->axis[ui] = T.linear() * (row.T_parent_joint.linear() * row.axis);
+          chain->on_axis[ui] = T * row.T_parent_joint.translation();
+        } else {
+          const Eigen::Isometry3d at = robot.convention == DhConvention::standard ? T : T * A;
+          chain->axis[ui] = at.linear().col(2);
+          chain->on_axis[ui] = at.translation();
+        }
+      }
+      T = T * A;
     }
-    return T * (robot.T_flange_ee * tool(x));
+    const Eigen::Isometry3d T_ee = T * robot.T_flange_ee;
+    if (chain) chain->R_base_ee = T_ee.linear();
+    return T_ee * tool(x);
   }
 
   /// r = (predicted − measured) / kResidualScale_m, 3 per posture.
@@ -128,8 +171,55 @@ struct Problem {
     return s;
   }
 
-  /// ∂r/∂u by central differences (u = x / scale).
+  /// ∂r/∂u (u = x / scale).
   void jacobian(const Eigen::VectorXd& x, Eigen::MatrixXd& J, const Eigen::VectorXd& scale) const {
+    if (analytic) jacobian_closed_form(x, J);
+    else jacobian_central_differences(x, J, scale);
+    for (Eigen::Index j = 0; j < x.size(); ++j) J.col(j) *= scale[j];
+  }
+
+  /// ∂r/∂x: the chain walked once per posture. Joint values enter through q_eff (offsets, springs
+  /// and backlash are each a multiple of ∂p/∂q_i); a frame error E_i = (t_i, exp(ω_i)) moves the
+  /// point by the frame before it (t_i) and by the rotation Jacobian of exp(ω_i) (ω_i); a station's
+  /// perturbation likewise.
+  void jacobian_closed_form(const Eigen::VectorXd& x, Eigen::MatrixXd& J) const {
+    const int n = robot.dof();
+    J.setZero(3 * static_cast<Eigen::Index>(obs.size()), x.size());
+    const int off = layout.block(PointCandidate::joint_offsets), comp = layout.block(PointCandidate::joint_compliance),
+              back = layout.block(PointCandidate::backlash), geo = layout.block(PointCandidate::geometric);
+    Chain chain;
+    for (std::size_t k = 0; k < obs.size(); ++k) {
+      const Eigen::Index row = 3 * static_cast<Eigen::Index>(k);
+      const Eigen::Vector3d p = point_base(x, k, &chain);
+      const int s = obs[k].station;
+      const Eigen::Matrix3d R_station = station(x, s).linear();
+      J.block<3, 3>(row, 6 * s) = so3::rotate_jacobian(Eigen::Vector3d(x.segment<3>(6 * s)), T0[static_cast<std::size_t>(s)] * p);
+      J.block<3, 3>(row, 6 * s + 3).setIdentity();
+      if (layout.tool) J.block<3, 3>(row, layout.tool_at) = R_station * chain.R_base_ee;
+      for (int i = 0; i < n; ++i) {
+        const auto ui = static_cast<std::size_t>(i);
+        const Eigen::Vector3d dp_dq = R_station * (robot.joints[ui].kind == JointKind::prismatic
+                                                       ? chain.axis[ui]
+                                                       : Eigen::Vector3d(chain.axis[ui].cross(p - chain.on_axis[ui])));
+        if (off >= 0) J.block<3, 1>(row, off + i) = dp_dq;
+        if (comp >= 0) J.block<3, 1>(row, comp + i) = -G[k][i] * dp_dq;
+        if (back >= 0) J.block<3, 1>(row, back + i) = -sign(G[k][i]) * dp_dq;
+        if (geo >= 0) {
+          const Eigen::Matrix3d R_before = chain.before_error[ui].linear();
+          J.block<3, 3>(row, geo + 6 * i) = R_station * R_before;
+          // p in the frame after E_i's rotation, before its translation is added back: w with
+          // p = before * (t + exp(ω) w).
+          const Eigen::Vector3d w = chain.after_error[ui].inverse() * p;
+          J.block<3, 3>(row, geo + 6 * i + 3) = R_station * R_before *
+                                                so3::rotate_jacobian(Eigen::Vector3d(x.segment<3>(geo + 6 * i + 3)), w);
+        }
+      }
+    }
+    J /= kResidualScale_m;
+  }
+
+  /// ∂r/∂x by central differences.
+  void jacobian_central_differences(const Eigen::VectorXd& x, Eigen::MatrixXd& J, const Eigen::VectorXd& scale) const {
     constexpr double h = 1e-3;
     Eigen::VectorXd rp, rm, xp = x;
     J.resize(3 * static_cast<Eigen::Index>(obs.size()), x.size());
@@ -139,7 +229,7 @@ struct Problem {
       xp[j] = x[j] - h * scale[j];
       residual(xp, rm);
       xp[j] = x[j];
-      J.col(j) = (rp - rm) / (2.0 * h);
+      J.col(j) = (rp - rm) / (2.0 * h * scale[j]);
     }
   }
 
@@ -386,65 +476,157 @@ PointFit identifiability(const SerialRobot& robot, const std::vector<PointObserv
   return out;
 }
 
-HeldOut held_out_error(const SerialRobot& robot, const std::vector<PointObservation>& obs, int stations, const PointModel& model, int folds,
-                       const PointFitOptions& opt) {
+namespace {
+
+/// How the postures are held out: whole stations when there are several, else postures in
+/// interleaved folds.
+struct FoldScheme {
+  std::string name;
+  int count = 0;
+  bool by_station = false;
+};
+
+FoldScheme fold_scheme(std::size_t postures, int stations, int folds) {
+  if (stations >= 2) return {"leave one station out", stations, true};
+  const int n = static_cast<int>(postures);
+  const int k = folds <= 0 ? n : std::min(folds, n);
+  return {k == n ? "leave one posture out" : std::to_string(k) + "-fold over postures", k, false};
+}
+
+/// Fold f of the scheme: fits the model without the fold's postures and writes their held-out
+/// distances (only theirs) into error_m.
+void held_out_fold(const SerialRobot& robot, const std::vector<PointObservation>& obs, int stations, const PointModel& model,
+                   const FoldScheme& scheme, int f, const PointFitOptions& opt, Eigen::VectorXd& error_m) {
+  if (scheme.by_station) {
+    // Train on the other stations (renumbered), then place the held-out station's frame on its
+    // own postures with everything else held.
+    std::vector<PointObservation> train, test;
+    std::vector<std::size_t> test_index;
+    for (std::size_t k = 0; k < obs.size(); ++k) {
+      if (obs[k].station == f) {
+        test.push_back(obs[k]);
+        test.back().station = 0;
+        test_index.push_back(k);
+      } else {
+        train.push_back(obs[k]);
+        if (train.back().station > f) --train.back().station;
+      }
+    }
+    Problem Ptr(robot, train, stations - 1, model, opt);
+    Eigen::VectorXd x = start(Ptr, opt);
+    Ptr.T0 = closed_form_stations(Ptr, x);
+    const Solved fit = solve(Ptr, x, {});
+    Problem Pte(robot, test, 1, model, opt);
+    Eigen::VectorXd xt(Pte.layout.size);
+    xt.head<6>().setZero();
+    xt.tail(xt.size() - 6) = fit.x.tail(fit.x.size() - 6 * (stations - 1));
+    Pte.T0 = closed_form_stations(Pte, xt);
+    std::vector<bool> fixed(static_cast<std::size_t>(xt.size()), true);
+    for (int i = 0; i < 6; ++i) fixed[static_cast<std::size_t>(i)] = false;
+    const Solved placed = solve(Pte, xt, fixed);
+    for (std::size_t i = 0; i < test.size(); ++i)
+      error_m[static_cast<Eigen::Index>(test_index[i])] = placed.r.segment<3>(3 * static_cast<Eigen::Index>(i)).norm() * kResidualScale_m;
+    return;
+  }
+  std::vector<PointObservation> train;
+  for (std::size_t k = 0; k < obs.size(); ++k)
+    if (static_cast<int>(k) % scheme.count != f) train.push_back(obs[k]);
+  Problem Ptr(robot, train, 1, model, opt);
+  Eigen::VectorXd x = start(Ptr, opt);
+  Ptr.T0 = closed_form_stations(Ptr, x);
+  const Solved fit = solve(Ptr, x, {});
+  Problem Pall(robot, obs, 1, model, opt);
+  Pall.T0 = Ptr.T0;
+  Eigen::VectorXd r;
+  Pall.residual(fit.x, r);
+  for (std::size_t k = 0; k < obs.size(); ++k)
+    if (static_cast<int>(k) % scheme.count == f)
+      error_m[static_cast<Eigen::Index>(k)] = r.segment<3>(3 * static_cast<Eigen::Index>(k)).norm() * kResidualScale_m;
+}
+
+HeldOut empty_held_out(const PointModel& model, const FoldScheme& scheme, std::size_t postures) {
   HeldOut h;
   h.model = model;
-  h.error_m = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(obs.size()));
-  if (stations >= 2) {
-    h.scheme = "leave one station out";
-    for (int out_s = 0; out_s < stations; ++out_s) {
-      // Train on the other stations (renumbered), then place the held-out station's frame on its
-      // own postures with everything else held.
-      std::vector<PointObservation> train, test;
-      std::vector<std::size_t> test_index;
-      for (std::size_t k = 0; k < obs.size(); ++k) {
-        if (obs[k].station == out_s) {
-          test.push_back(obs[k]);
-          test.back().station = 0;
-          test_index.push_back(k);
-        } else {
-          train.push_back(obs[k]);
-          if (train.back().station > out_s) --train.back().station;
-        }
-      }
-      Problem Ptr(robot, train, stations - 1, model, opt);
-      Eigen::VectorXd x = start(Ptr, opt);
-      Ptr.T0 = closed_form_stations(Ptr, x);
-      const Solved fit = solve(Ptr, x, {});
-      Problem Pte(robot, test, 1, model, opt);
-      Eigen::VectorXd xt(Pte.layout.size);
-      xt.head<6>().setZero();
-      xt.tail(xt.size() - 6) = fit.x.tail(fit.x.size() - 6 * (stations - 1));
-      Pte.T0 = closed_form_stations(Pte, xt);
-      std::vector<bool> fixed(static_cast<std::size_t>(xt.size()), true);
-      for (int i = 0; i < 6; ++i) fixed[static_cast<std::size_t>(i)] = false;
-      const Solved placed = solve(Pte, xt, fixed);
-      for (std::size_t i = 0; i < test.size(); ++i)
-        h.error_m[static_cast<Eigen::Index>(test_index[i])] = placed.r.segment<3>(3 * static_cast<Eigen::Index>(i)).norm() *
-                                                              kResidualScale_m;
-    }
-  } else {
-    const int k_folds = folds <= 0 ? static_cast<int>(obs.size()) : std::min<int>(folds, static_cast<int>(obs.size()));
-    h.scheme = k_folds == static_cast<int>(obs.size()) ? "leave one posture out" : std::to_string(k_folds) + "-fold over postures";
-    for (int f = 0; f < k_folds; ++f) {
-      std::vector<PointObservation> train;
-      for (std::size_t k = 0; k < obs.size(); ++k)
-        if (static_cast<int>(k) % k_folds != f) train.push_back(obs[k]);
-      Problem Ptr(robot, train, 1, model, opt);
-      Eigen::VectorXd x = start(Ptr, opt);
-      Ptr.T0 = closed_form_stations(Ptr, x);
-      const Solved fit = solve(Ptr, x, {});
-      Problem Pall(robot, obs, 1, model, opt);
-      Pall.T0 = Ptr.T0;
-      Eigen::VectorXd r;
-      Pall.residual(fit.x, r);
-      for (std::size_t k = 0; k < obs.size(); ++k)
-        if (static_cast<int>(k) % k_folds == f)
-          h.error_m[static_cast<Eigen::Index>(k)] = r.segment<3>(3 * static_cast<Eigen::Index>(k)).norm() * kResidualScale_m;
-    }
-  }
+  h.scheme = scheme.name;
+  h.error_m = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(postures));
+  return h;
+}
+
+void finish_held_out(HeldOut& h) {
   h.rms_m = std::sqrt(h.error_m.squaredNorm() / static_cast<double>(std::max<Eigen::Index>(1, h.error_m.size())));
+}
+
+/// Held-out errors and identifiability of several models at once: every (model, fold) fit and
+/// every model's rank is one task, the models with the most parameters first so that the longest
+/// tasks do not come last.
+struct Evaluated {
+  HeldOut held_out;
+  int parameters = 0, rank = 0;
+};
+std::vector<Evaluated> evaluate(const SerialRobot& robot, const std::vector<PointObservation>& obs, int stations,
+                                const std::vector<PointModel>& models, int folds, const PointFitOptions& opt) {
+  const FoldScheme scheme = fold_scheme(obs.size(), stations, folds);
+  std::vector<Evaluated> out;
+  for (const auto& m : models) out.push_back({empty_held_out(m, scheme, obs.size()), 0, 0});
+  struct Task {
+    std::size_t model;
+    int fold;  ///< -1: the model's identifiability
+    int size;
+  };
+  std::vector<Task> tasks;
+  for (std::size_t i = 0; i < models.size(); ++i) {
+    const int size = Layout(stations, robot.dof(), opt.fit_tool_point, models[i]).size;
+    for (int f = -1; f < scheme.count; ++f) tasks.push_back({i, f, size});
+  }
+  std::stable_sort(tasks.begin(), tasks.end(), [](const Task& a, const Task& b) { return a.size > b.size; });
+  PointFitOptions inner = opt;
+  inner.threads = 1;
+  parallel::run_tasks(tasks.size(), parallel::worker_count(tasks.size(), opt.threads), [&](std::size_t t, std::size_t) {
+    const Task& task = tasks[t];
+    Evaluated& e = out[task.model];
+    if (task.fold >= 0) {
+      held_out_fold(robot, obs, stations, models[task.model], scheme, task.fold, inner, e.held_out.error_m);
+      return;
+    }
+    const PointFit f = identifiability(robot, obs, stations, models[task.model], inner);
+    e.parameters = f.parameters_total;
+    e.rank = f.rank;
+  });
+  for (auto& e : out) finish_held_out(e.held_out);
+  return out;
+}
+
+}  // namespace
+
+std::pair<Eigen::MatrixXd, Eigen::MatrixXd> detail::point_jacobians(const SerialRobot& robot, const std::vector<PointObservation>& obs,
+                                                                    int stations, const PointModel& model, const Eigen::VectorXd& dx,
+                                                                    const PointFitOptions& opt) {
+  Problem P(robot, obs, stations, model, opt);
+  Eigen::VectorXd x = start(P, opt);
+  P.T0 = closed_form_stations(P, x);
+  if (dx.size() != x.size())
+    throw std::invalid_argument("point_jacobians: dx has " + std::to_string(dx.size()) + " entries, the model " + std::to_string(x.size()));
+  x += dx;
+  const Eigen::VectorXd scale = P.scale();
+  std::pair<Eigen::MatrixXd, Eigen::MatrixXd> J;
+  P.analytic = true;
+  P.jacobian(x, J.first, scale);
+  P.analytic = false;
+  P.jacobian(x, J.second, scale);
+  return J;
+}
+
+HeldOut held_out_error(const SerialRobot& robot, const std::vector<PointObservation>& obs, int stations, const PointModel& model, int folds,
+                       const PointFitOptions& opt) {
+  const FoldScheme scheme = fold_scheme(obs.size(), stations, folds);
+  HeldOut h = empty_held_out(model, scheme, obs.size());
+  PointFitOptions inner = opt;
+  inner.threads = 1;
+  parallel::run_tasks(static_cast<std::size_t>(scheme.count), parallel::worker_count(static_cast<std::size_t>(scheme.count), opt.threads),
+                      [&](std::size_t f, std::size_t) {
+                        held_out_fold(robot, obs, stations, model, scheme, static_cast<int>(f), inner, h.error_m);
+                      });
+  finish_held_out(h);
   return h;
 }
 
@@ -470,23 +652,25 @@ PointComparison compare_point_candidates(const SerialRobot& robot, const std::ve
   // that passes the same rules against the cause alone.
   constexpr double kMinGain = 0.05, kMinZ = 2.0;
   PointComparison c;
-  c.rigid = held_out_error(robot, obs, stations, {}, folds, opt);
-  auto row = [&](const PointModel& m, const HeldOut& base) {
+  auto row = [&](const Evaluated& e, const HeldOut& base) {
     PointComparison::Row r;
-    r.model = m;
-    r.held_out = held_out_error(robot, obs, stations, m, folds, opt);
+    r.model = e.held_out.model;
+    r.held_out = e.held_out;
     r.gain = base.rms_m > 0 ? 1.0 - r.held_out.rms_m / base.rms_m : 0.0;
     r.z = paired_z(base.error_m, r.held_out.error_m);
-    const PointFit f = identifiability(robot, obs, stations, m, opt);
-    r.parameters = f.parameters_total;
-    r.rank = f.rank;
+    r.parameters = e.parameters;
+    r.rank = e.rank;
     return r;
   };
+  std::vector<PointModel> singles{{}};
   for (const auto cand : candidates) {
     if (cand == PointCandidate::rigid) continue;
     if (needs_inertials(cand) && robot.inertials.size() != static_cast<std::size_t>(robot.dof()) + 1) continue;
-    c.rows.push_back(row({cand}, c.rigid));
+    singles.push_back({cand});
   }
+  const auto first = evaluate(robot, obs, stations, singles, folds, opt);
+  c.rigid = first[0].held_out;
+  for (std::size_t i = 1; i < first.size(); ++i) c.rows.push_back(row(first[i], c.rigid));
   double best = -1.0;
   for (std::size_t i = 0; i < c.rows.size(); ++i)
     if (c.rows[i].gain >= kMinGain && c.rows[i].z >= kMinZ && c.rows[i].gain > best) best = c.rows[i].gain, c.cause = static_cast<int>(i);
@@ -500,14 +684,17 @@ PointComparison compare_point_candidates(const SerialRobot& robot, const std::ve
     return c;
   }
   const auto cause = c.rows[static_cast<std::size_t>(c.cause)];
-  double best2 = -1.0;
-  const std::size_t singles = c.rows.size();
-  for (std::size_t i = 0; i < singles; ++i) {
+  std::vector<PointModel> pairs;
+  for (std::size_t i = 0; i < c.rows.size(); ++i) {
     if (static_cast<int>(i) == c.cause) continue;
     PointModel m = cause.model;
     m.push_back(c.rows[i].model.front());
-    auto r = row(m, cause.held_out);
-    c.rows.push_back(r);
+    pairs.push_back(m);
+  }
+  double best2 = -1.0;
+  for (const auto& e : evaluate(robot, obs, stations, pairs, folds, opt)) {
+    c.rows.push_back(row(e, cause.held_out));
+    const auto& r = c.rows.back();
     if (r.gain >= kMinGain && r.z >= kMinZ && r.gain > best2) best2 = r.gain, c.second_cause = static_cast<int>(c.rows.size() - 1);
   }
   v << "cause: " << to_string(cause.model) << " (held-out error " << c.rigid.rms_m * 1e3 << " → " << cause.held_out.rms_m * 1e3

@@ -1,19 +1,17 @@
 #include <hil/diagnose/engine.hpp>
+#include <hil/parallel/run_tasks.hpp>
 #include <hil/solver/levenberg_marquardt.hpp>
 
 #include <Eigen/QR>
 #include <Eigen/SVD>
 #include <algorithm>
-#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <limits>
 #include <list>
 #include <map>
 #include <optional>
-#include <exception>
 #include <stdexcept>
-#include <thread>
 
 #include <fmt/format.h>
 #include <fmt/ranges.h>
@@ -615,30 +613,6 @@ void model_form_intervals(Score& s, const std::vector<ModelFamily::ModelForm>& f
   }
 }
 
-/// Runs task(i, worker) for every i < n on `workers` threads (worker 0 is the caller's), each
-/// worker taking the next task not yet taken. Every task writes only its own results, so the
-/// outcome does not depend on the schedule. Rethrows the exception of the lowest failed task.
-template <class Task>
-void run_tasks(std::size_t n, std::size_t workers, Task&& task) {
-  std::vector<std::exception_ptr> failed(n);
-  std::atomic<std::size_t> next{0};
-  auto work = [&](std::size_t w) {
-    for (std::size_t i = next.fetch_add(1); i < n; i = next.fetch_add(1)) {
-      try {
-        task(i, w);
-      } catch (...) {
-        failed[i] = std::current_exception();
-      }
-    }
-  };
-  std::vector<std::thread> pool;
-  for (std::size_t w = 1; w < workers; ++w) pool.emplace_back(work, w);
-  work(0);
-  for (auto& t : pool) t.join();
-  for (const auto& e : failed)
-    if (e) std::rethrow_exception(e);
-}
-
 }  // namespace
 
 Score score(const ModelFamily& m, const Observations& obs, const CvOptions& o, const Score* extends) {
@@ -721,10 +695,9 @@ Score score(const ModelFamily& m, const Observations& obs, const CvOptions& o, c
   const std::vector<ModelFamily::ModelForm> forms = o.model_forms ? m.model_forms() : std::vector<ModelFamily::ModelForm>{};
   std::vector<Fit> form_fits(forms.size());
   const std::size_t tasks = forms.size() + folds.size();
-  const std::size_t workers = std::max<std::size_t>(1, std::min<std::size_t>(tasks, o.threads > 0 ? static_cast<std::size_t>(o.threads)
-                                                                                                  : std::thread::hardware_concurrency()));
+  const std::size_t workers = parallel::worker_count(tasks, o.threads);
   std::vector<std::optional<DesignCache>> worker_cache(workers);
-  run_tasks(tasks, workers, [&](std::size_t i, std::size_t w) {
+  parallel::run_tasks(tasks, workers, [&](std::size_t i, std::size_t w) {
     if (i < forms.size()) {
       form_fits[i] = model_form_fit(*forms[i].model, m, s, obs, all, o.fit);
       return;

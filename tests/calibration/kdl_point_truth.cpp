@@ -10,7 +10,7 @@
 namespace hil::test {
 
 std::vector<PointSample> generate_points(const std::string& urdf, const std::string& base, const std::string& tip, const PointTruth& truth,
-                                         int n, std::mt19937& rng) {
+                                         int n, std::mt19937& rng, const std::vector<std::pair<double, double>>& range_rad) {
   KDL::Tree tree;
   if (!kdl_parser::treeFromFile(urdf, tree)) throw std::runtime_error("KDL cannot read " + urdf);
   KDL::Chain chain;
@@ -20,11 +20,14 @@ std::vector<PointSample> generate_points(const std::string& urdf, const std::str
   KDL::ChainDynParam dyn(chain, KDL::Vector(0.0, 0.0, -9.80665));
   std::normal_distribution<double> noise(0.0, truth.noise_m);
   const int stations = static_cast<int>(truth.T_station_base.size());
+  if (!range_rad.empty() && range_rad.size() != dof) throw std::invalid_argument("one joint range per joint of the chain");
   std::vector<PointSample> out;
   for (int k = 0; k < n; ++k) {
     PointSample s;
     s.q.resize(dof);
-    for (unsigned j = 0; j < dof; ++j) {
+    for (unsigned j = 0; j < dof && !range_rad.empty(); ++j)
+      s.q[j] = std::uniform_real_distribution<double>(range_rad[j].first, range_rad[j].second)(rng);
+    for (unsigned j = 0; j < dof && range_rad.empty(); ++j) {
       // Shoulder lift in [-2.6, -0.5], elbow in [-2.5, 2.5] away from the stretched arm: postures a
       // lab would measure (the arm above the table, not folded into itself).
       const double lo = j == 1 ? -2.6 : j == 2 ? 0.4 : -3.0, hi = j == 1 ? -0.5 : j == 2 ? 2.5 : 3.0;

@@ -8,6 +8,7 @@
 #include <Eigen/Geometry>
 #include <random>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace hil::test {
@@ -26,10 +27,11 @@ struct PointSample {
   Eigen::Vector3d p_station_m;
 };
 
-/// `n` postures drawn uniformly in [-limit, limit] per joint (fewer for the shoulder lift and elbow,
-/// which keep the arm above its base), spread over the stations in turn, measured with noise.
+/// `n` postures drawn uniformly per joint in `range_rad` (lower, upper per joint; when empty, a UR
+/// arm's: [-3, 3] except the shoulder lift and elbow, which keep the arm above its base), spread
+/// over the stations in turn, measured with noise.
 std::vector<PointSample> generate_points(const std::string& urdf, const std::string& base, const std::string& tip, const PointTruth& truth,
-                                         int n, std::mt19937& rng);
+                                         int n, std::mt19937& rng, const std::vector<std::pair<double, double>>& range_rad = {});
 
 /// A random station frame: a rotation of up to `angle_rad` about a random axis, a translation of up
 /// to `distance_m` per axis.

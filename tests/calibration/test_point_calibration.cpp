@@ -151,3 +151,129 @@ TEST(PointCalibration, TooFewPosturesOrMissingInertialsAreRefusedByName) {
     EXPECT_NE(std::string(e.what()).find("inertials"), std::string::npos) << e.what();
   }
 }
+
+namespace {
+
+/// A random point in a model's parameter space, every block moved by a realistic-to-large amount
+/// (rotations up to 0.1 rad so that the rotation Jacobians' Jr(ω) matters).
+Eigen::VectorXd random_dx(std::mt19937& rng, int stations, int dof, const hc::PointModel& model) {
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  std::vector<double> v;
+  for (int s = 0; s < stations; ++s)
+    for (int a = 0; a < 6; ++a) v.push_back((a < 3 ? 0.1 : 0.2) * u(rng));
+  for (int a = 0; a < 3; ++a) v.push_back(0.05 * u(rng));
+  for (const auto c : model) {
+    for (int i = 0; i < dof; ++i) {
+      if (c == hc::PointCandidate::geometric)
+        for (int a = 0; a < 6; ++a) v.push_back((a < 3 ? 0.05 : 0.1) * u(rng));
+      else v.push_back((c == hc::PointCandidate::joint_compliance ? 2e-5 : 0.05) * u(rng));
+    }
+  }
+  return Eigen::Map<Eigen::VectorXd>(v.data(), static_cast<Eigen::Index>(v.size()));
+}
+
+/// Largest column error of the closed-form Jacobian relative to the column's size (columns below
+/// 1e-3 of the largest, such as a wrist's compliance under almost no torque, relative to that
+/// floor: there the differences' rounding is all that differs).
+double worst_column_error(const std::pair<Eigen::MatrixXd, Eigen::MatrixXd>& J) {
+  const double floor = 1e-3 * J.second.colwise().norm().maxCoeff();
+  double worst = 0.0;
+  for (Eigen::Index j = 0; j < J.first.cols(); ++j)
+    worst = std::max(worst, (J.first.col(j) - J.second.col(j)).norm() / std::max(floor, J.second.col(j).norm()));
+  return worst;
+}
+
+std::vector<hc::PointObservation> random_postures(std::mt19937& rng, int dof, int n, int stations) {
+  std::vector<hc::PointObservation> obs(static_cast<std::size_t>(n));
+  std::uniform_real_distribution<double> q(-2.5, 2.5), p(-1.0, 1.0);
+  for (int k = 0; k < n; ++k) {
+    auto& o = obs[static_cast<std::size_t>(k)];
+    o.q.resize(dof);
+    for (int j = 0; j < dof; ++j) o.q[j] = q(rng);
+    o.station = k % stations;
+    o.p_station_m = Eigen::Vector3d(p(rng), p(rng), p(rng));
+  }
+  return obs;
+}
+
+}  // namespace
+
+// The closed-form Jacobian (the one every fit uses) against central differences of the residual,
+// away from the start, for URDF, standard-DH and modified-DH robots and a prismatic joint.
+TEST(PointCalibration, ClosedFormJacobianEqualsCentralDifferences) {
+  std::mt19937 rng(4404);
+  struct Case {
+    std::string what;
+    hc::SerialRobot robot;
+    std::vector<hc::PointModel> models;
+  };
+  std::vector<Case> cases;
+  const hc::PointModel all = {hc::PointCandidate::joint_offsets, hc::PointCandidate::joint_compliance, hc::PointCandidate::backlash,
+                              hc::PointCandidate::geometric};
+  cases.push_back({"UR10 (URDF)",
+                   ur10(),
+                   {{},
+                    {hc::PointCandidate::joint_offsets},
+                    {hc::PointCandidate::joint_compliance},
+                    {hc::PointCandidate::backlash},
+                    {hc::PointCandidate::geometric},
+                    all}});
+  const hc::PointModel kinematic = {hc::PointCandidate::joint_offsets, hc::PointCandidate::geometric};
+  cases.push_back({"KR-270-like (standard DH)", hc::kr270_like(), {{hc::PointCandidate::geometric}, kinematic}});
+  hc::SerialRobot modified = hc::kr270_like();
+  modified.convention = hc::DhConvention::modified;
+  modified.T_flange_ee.translation() = Eigen::Vector3d(0.01, 0.02, 0.15);
+  cases.push_back({"KR-270-like read as modified DH", modified, {kinematic}});
+  hc::SerialRobot prismatic = hc::kr270_like();
+  prismatic.joints[2].kind = hc::JointKind::prismatic;
+  cases.push_back({"a prismatic third joint", prismatic, {kinematic}});
+  for (const auto& c : cases) {
+    const int stations = 2;
+    const auto obs = random_postures(rng, c.robot.dof(), 12, stations);
+    for (const auto& m : c.models) {
+      const auto J = hc::detail::point_jacobians(c.robot, obs, stations, m, random_dx(rng, stations, c.robot.dof(), m));
+      ASSERT_EQ(J.first.rows(), J.second.rows());
+      ASSERT_EQ(J.first.cols(), J.second.cols());
+      EXPECT_LT(worst_column_error(J), 1e-6) << c.what << ", model " << hc::to_string(m);
+    }
+  }
+}
+
+// The folds and candidate models run on several threads; the outcome must be the serial one,
+// bit for bit, and the closed-form fits must land where the central-difference fits do.
+TEST(PointCalibration, ThreadsAndJacobianChoiceDoNotChangeTheResult) {
+  std::mt19937 rng(4505);
+  const hc::SerialRobot robot = ur10();
+  auto truth = base_truth(rng, 3);
+  truth.joint_offset_rad = Eigen::VectorXd::Zero(6);
+  truth.joint_offset_rad[1] = 2e-3;
+  const auto obs = observations(hil::test::generate_points(kUr10, "base_link", "wrist_3_link", truth, 36, rng));
+  hc::PointFitOptions one, two;
+  one.threads = 1;
+  two.threads = 2;
+  const auto a = hc::compare_point_candidates(robot, obs, 3, hc::point_candidates(), 0, one);
+  const auto b = hc::compare_point_candidates(robot, obs, 3, hc::point_candidates(), 0, two);
+  EXPECT_EQ(a.verdict, b.verdict);
+  ASSERT_EQ(a.rows.size(), b.rows.size());
+  for (std::size_t i = 0; i < a.rows.size(); ++i) {
+    EXPECT_EQ(a.rows[i].held_out.error_m, b.rows[i].held_out.error_m) << hc::to_string(a.rows[i].model);
+    EXPECT_EQ(a.rows[i].rank, b.rows[i].rank);
+  }
+  EXPECT_EQ(hc::to_string(a.rows[static_cast<std::size_t>(a.cause)].model), "joint_offsets") << a.verdict;
+
+  hc::PointFitOptions fd;
+  fd.analytic_jacobian = false;
+  const hc::PointModel m = {hc::PointCandidate::joint_offsets};
+  const auto closed = hc::fit_points(robot, obs, 3, m);
+  const auto differences = hc::fit_points(robot, obs, 3, m, fd);
+  EXPECT_NEAR(closed.rms_m, differences.rms_m, 1e-9);
+  EXPECT_EQ(closed.rank, differences.rank);
+  for (std::size_t j = 0; j < closed.parameters.size(); ++j) {
+    const auto& p = closed.parameters[j];
+    const auto& q = differences.parameters[j];
+    EXPECT_NEAR(p.value, q.value, 1e-7 + 1e-4 * std::abs(q.value)) << p.name;
+    if (p.identifiable) {
+      EXPECT_NEAR(p.std, q.std, 1e-4 * q.std) << p.name;
+    }
+  }
+}

@@ -9,6 +9,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <hil/calibration/robot.hpp>
@@ -84,6 +85,11 @@ struct PointFitOptions {
   double rank_tolerance = 1e-6;
   /// The stations' names in parameter names ("station A rz"); empty: 1, 2, ...
   std::vector<std::string> station_names;
+  /// Jacobians in closed form (the chain's joint axes, the frames' rotation Jacobians); false:
+  /// central differences of the residual, kept as the independent check of the closed form.
+  bool analytic_jacobian = true;
+  /// Workers for the folds and candidate models (0: every core). The results do not depend on it.
+  int threads = 0;
 };
 
 /// Fits the model `candidate` to the postures. \throws std::invalid_argument for too few postures
@@ -128,5 +134,13 @@ struct PointComparison {
 };
 PointComparison compare_point_candidates(const SerialRobot& robot, const std::vector<PointObservation>& obs, int stations,
                                          const std::vector<PointCandidate>& candidates, int folds = 0, const PointFitOptions& options = {});
+
+namespace detail {
+/// The residual's Jacobian (scaled units) at the closed-form start moved by `dx`, in closed form
+/// (first) and by central differences (second): what the tests check the closed form with.
+std::pair<Eigen::MatrixXd, Eigen::MatrixXd> point_jacobians(const SerialRobot& robot, const std::vector<PointObservation>& obs,
+                                                            int stations, const PointModel& model, const Eigen::VectorXd& dx,
+                                                            const PointFitOptions& options = {});
+}  // namespace detail
 
 }  // namespace hil::calibration
