@@ -451,6 +451,12 @@ std::vector<PointCandidate> point_candidates() {
 
 bool needs_inertials(PointCandidate c) { return c == PointCandidate::joint_compliance || c == PointCandidate::backlash; }
 
+bool contains(PointCandidate big, PointCandidate small) {
+  // A joint offset is a rotation of the joint's frame about the joint's own axis, one of the six
+  // directions of that frame's geometric error.
+  return big == PointCandidate::geometric && small == PointCandidate::joint_offsets;
+}
+
 PointFit fit_points(const SerialRobot& robot, const std::vector<PointObservation>& obs, int stations, const PointModel& model,
                     const PointFitOptions& opt) {
   Problem P(robot, obs, stations, model, opt);
@@ -671,6 +677,7 @@ PointComparison compare_point_candidates(const SerialRobot& robot, const std::ve
   const auto first = evaluate(robot, obs, stations, singles, folds, opt);
   c.rigid = first[0].held_out;
   for (std::size_t i = 1; i < first.size(); ++i) c.rows.push_back(row(first[i], c.rigid));
+  const std::size_t single_rows = c.rows.size();
   double best = -1.0;
   for (std::size_t i = 0; i < c.rows.size(); ++i)
     if (c.rows[i].gain >= kMinGain && c.rows[i].z >= kMinZ && c.rows[i].gain > best) best = c.rows[i].gain, c.cause = static_cast<int>(i);
@@ -686,9 +693,11 @@ PointComparison compare_point_candidates(const SerialRobot& robot, const std::ve
   const auto cause = c.rows[static_cast<std::size_t>(c.cause)];
   std::vector<PointModel> pairs;
   for (std::size_t i = 0; i < c.rows.size(); ++i) {
-    if (static_cast<int>(i) == c.cause) continue;
+    const PointCandidate other = c.rows[i].model.front();
+    // A candidate nested in the cause (or containing it) adds nothing a second cause could be.
+    if (static_cast<int>(i) == c.cause || contains(cause.model.front(), other) || contains(other, cause.model.front())) continue;
     PointModel m = cause.model;
-    m.push_back(c.rows[i].model.front());
+    m.push_back(other);
     pairs.push_back(m);
   }
   double best2 = -1.0;
@@ -697,12 +706,54 @@ PointComparison compare_point_candidates(const SerialRobot& robot, const std::ve
     const auto& r = c.rows.back();
     if (r.gain >= kMinGain && r.z >= kMinZ && r.gain > best2) best2 = r.gain, c.second_cause = static_cast<int>(c.rows.size() - 1);
   }
-  v << "cause: " << to_string(cause.model) << " (held-out error " << c.rigid.rms_m * 1e3 << " → " << cause.held_out.rms_m * 1e3
-    << " mm RMS, gain " << cause.gain * 100 << " %, z " << cause.z << ")";
+  // Parsimony between nested candidates: a named candidate that contains a smaller one (geometric
+  // contains joint_offsets) gives way to it unless it predicts better than the smaller one by the
+  // same rules. Otherwise hidden joint offsets would be named "geometric", which explains them as
+  // well with five more parameters per joint.
+  const PointModel named = c.rows[static_cast<std::size_t>(c.second_cause >= 0 ? c.second_cause : c.cause)].model;
+  for (std::size_t at = 0; at < named.size() && c.reduced.empty(); ++at) {
+    for (const auto small : point_candidates()) {
+      if (!contains(named[at], small)) continue;
+      PointModel reduced = named;
+      reduced[at] = small;
+      const Evaluated e = evaluate(robot, obs, stations, {reduced}, folds, opt).front();
+      const HeldOut& big = c.rows[static_cast<std::size_t>(c.second_cause >= 0 ? c.second_cause : c.cause)].held_out;
+      const double gain = e.held_out.rms_m > 0 ? 1.0 - big.rms_m / e.held_out.rms_m : 0.0;
+      const double z = paired_z(e.held_out.error_m, big.error_m);
+      std::ostringstream why;
+      why.precision(3);
+      why << to_string(small) << " named, not " << to_string(named[at]) << ", which contains it and does not predict better by the rules ("
+          << e.held_out.rms_m * 1e3 << " → " << big.rms_m * 1e3 << " mm, gain " << gain * 100 << " %, z " << z << ")";
+      if (gain >= kMinGain && z >= kMinZ) break;
+      c.reduced = why.str();
+      // The smaller candidate takes the larger's place: as the cause (its single row), or as the
+      // second cause (the reduced pair's row against the cause alone).
+      int single = -1;
+      for (std::size_t i = 0; i < single_rows; ++i)
+        if (c.rows[i].model == PointModel{small}) single = static_cast<int>(i);
+      if (at == 0 && single < 0) {
+        c.rows.push_back(row(evaluate(robot, obs, stations, {{small}}, folds, opt).front(), c.rigid));
+        single = static_cast<int>(c.rows.size() - 1);
+      }
+      if (at == 0) c.cause = single;
+      if (named.size() == 1) {
+        c.second_cause = -1;
+        break;
+      }
+      c.rows.push_back(row(e, c.rows[static_cast<std::size_t>(c.cause)].held_out));
+      const auto& r = c.rows.back();
+      c.second_cause = r.gain >= kMinGain && r.z >= kMinZ ? static_cast<int>(c.rows.size() - 1) : -1;
+      break;
+    }
+  }
+  const auto& named_cause = c.rows[static_cast<std::size_t>(c.cause)];
+  v << "cause: " << to_string(named_cause.model) << " (held-out error " << c.rigid.rms_m * 1e3 << " → " << named_cause.held_out.rms_m * 1e3
+    << " mm RMS, gain " << named_cause.gain * 100 << " %, z " << named_cause.z << ")";
   if (c.second_cause >= 0) {
     const auto& s = c.rows[static_cast<std::size_t>(c.second_cause)];
     v << "; second: " << to_string(s.model) << " (→ " << s.held_out.rms_m * 1e3 << " mm, a further " << s.gain * 100 << " %)";
   }
+  if (!c.reduced.empty()) v << "; " << c.reduced;
   c.verdict = v.str();
   return c;
 }

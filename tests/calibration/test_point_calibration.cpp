@@ -277,3 +277,27 @@ TEST(PointCalibration, ThreadsAndJacobianChoiceDoNotChangeTheResult) {
     }
   }
 }
+
+// Hidden joint offsets and joint compliance: the geometric set explains the offsets as well as the
+// offsets do (a rotation of each frame about its joint's axis), with five more parameters per joint.
+// The smaller candidate it contains is named, and the geometric set's claim is stated and refused.
+TEST(PointCalibration, NestedCandidatesGiveWayToTheSmallerOne) {
+  std::mt19937 rng(4606);
+  const hc::SerialRobot robot = ur10();
+  auto truth = base_truth(rng, 3);
+  truth.joint_offset_rad = Eigen::VectorXd(6);
+  truth.joint_compliance = Eigen::VectorXd::Zero(6);
+  for (int j = 0; j < 6; ++j) truth.joint_offset_rad[j] = std::uniform_real_distribution<double>(-3e-3, 3e-3)(rng);
+  for (int j : {1, 2}) truth.joint_compliance[j] = std::uniform_real_distribution<double>(5e-6, 2e-5)(rng);
+  const auto obs = observations(hil::test::generate_points(kUr10, "base_link", "wrist_3_link", truth, 90, rng));
+  const auto cmp = hc::compare_point_candidates(robot, obs, 3, hc::point_candidates());
+  ASSERT_GE(cmp.cause, 0) << cmp.verdict;
+  EXPECT_EQ(hc::to_string(cmp.rows[static_cast<std::size_t>(cmp.cause)].model), "joint_offsets") << cmp.verdict;
+  ASSERT_GE(cmp.second_cause, 0) << cmp.verdict;
+  EXPECT_EQ(hc::to_string(cmp.rows[static_cast<std::size_t>(cmp.second_cause)].model), "joint_offsets+joint_compliance") << cmp.verdict;
+  EXPECT_NE(cmp.reduced.find("not geometric"), std::string::npos) << cmp.reduced;
+  // No pair of nested candidates is tried as a cause and its second.
+  for (const auto& r : cmp.rows) EXPECT_NE(hc::to_string(r.model), "joint_offsets+geometric");
+  EXPECT_TRUE(hc::contains(hc::PointCandidate::geometric, hc::PointCandidate::joint_offsets));
+  EXPECT_FALSE(hc::contains(hc::PointCandidate::joint_offsets, hc::PointCandidate::geometric));
+}

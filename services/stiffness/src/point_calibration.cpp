@@ -178,6 +178,7 @@ nlohmann::json to_json(const Report& r) {
   j["second_cause"] = r.comparison.second_cause < 0
                           ? json(nullptr)
                           : json(hc::to_string(r.comparison.rows[static_cast<std::size_t>(r.comparison.second_cause)].model.back()));
+  j["reduced"] = r.comparison.reduced.empty() ? json(nullptr) : json(r.comparison.reduced);
   j["verdict"] = r.comparison.verdict;
   j["cause_fit"] = r.cause ? fit_json(*r.cause) : json(nullptr);
   j["skipped"] = r.skipped;

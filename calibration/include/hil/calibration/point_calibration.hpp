@@ -44,6 +44,8 @@ using PointModel = std::vector<PointCandidate>;
 std::string to_string(const PointModel& m);
 /// Whether the candidate needs the robot's inertials.
 bool needs_inertials(PointCandidate c);
+/// Whether every effect of `small` is one of `big`'s (joint offsets are a part of the geometric set).
+bool contains(PointCandidate big, PointCandidate small);
 
 struct PointParameter {
   std::string name;  ///< e.g. "offset elbow_joint", "station A rz", "tool x"
@@ -130,7 +132,10 @@ struct PointComparison {
   std::vector<Row> rows;
   int cause = -1;         ///< index in rows (a single candidate), or -1: none
   int second_cause = -1;  ///< index in rows of the cause plus a second candidate that wins over the cause alone, or -1
-  std::string verdict;    ///< one sentence
+  /// When a named candidate gave way to a smaller one it contains (geometric to joint_offsets):
+  /// why, with the held-out figures; empty otherwise.
+  std::string reduced;
+  std::string verdict;  ///< one sentence
 };
 PointComparison compare_point_candidates(const SerialRobot& robot, const std::vector<PointObservation>& obs, int stations,
                                          const std::vector<PointCandidate>& candidates, int folds = 0, const PointFitOptions& options = {});
