@@ -301,3 +301,40 @@ TEST(PointCalibration, NestedCandidatesGiveWayToTheSmallerOne) {
   EXPECT_TRUE(hc::contains(hc::PointCandidate::geometric, hc::PointCandidate::joint_offsets));
   EXPECT_FALSE(hc::contains(hc::PointCandidate::joint_offsets, hc::PointCandidate::geometric));
 }
+
+// With the measurement noise stated, `none` is a finding (the rigid model is within it) and a
+// residual above it with no candidate passing is `unexplained`, not `none`.
+TEST(PointCalibration, StatedNoiseTellsNoneFromUnexplained) {
+  std::mt19937 rng(4707);
+  const hc::SerialRobot robot = ur10();
+  const auto clean = base_truth(rng, 2);
+  auto obs = observations(hil::test::generate_points(kUr10, "base_link", "wrist_3_link", clean, 60, rng));
+  const auto unstated = hc::compare_point_candidates(robot, obs, 2, hc::point_candidates());
+  EXPECT_FALSE(unstated.noise.stated);
+  EXPECT_EQ(unstated.kind, "none");
+  EXPECT_NE(unstated.verdict.find("no measurement noise stated"), std::string::npos) << unstated.verdict;
+
+  for (auto& o : obs) o.sigma_m = clean.noise_m;
+  const auto within = hc::compare_point_candidates(robot, obs, 2, hc::point_candidates());
+  ASSERT_TRUE(within.noise.stated);
+  EXPECT_TRUE(within.noise.within) << within.verdict;
+  EXPECT_EQ(within.kind, "none");
+  EXPECT_EQ(within.cause, -1);
+  EXPECT_EQ(within.noise.dof, 3 * 60 - 15);  // two stations' frames (6 each) and the tool point (3)
+  EXPECT_NEAR(within.noise.rms_over_sigma, 1.0, 0.25);
+
+  for (auto& o : obs) o.sigma_m = clean.noise_m / 5;  // a device believed five times better than it is
+  const auto above = hc::compare_point_candidates(robot, obs, 2, hc::point_candidates());
+  EXPECT_FALSE(above.noise.within);
+  EXPECT_EQ(above.kind, "unexplained") << above.verdict;
+  EXPECT_NE(above.verdict.find("times the stated noise"), std::string::npos) << above.verdict;
+
+  auto truth = base_truth(rng, 2);
+  truth.joint_offset_rad = Eigen::VectorXd::Zero(6);
+  truth.joint_offset_rad[2] = 1e-3;
+  auto moved = observations(hil::test::generate_points(kUr10, "base_link", "wrist_3_link", truth, 60, rng));
+  for (auto& o : moved) o.sigma_m = truth.noise_m;
+  const auto named = hc::compare_point_candidates(robot, moved, 2, hc::point_candidates());
+  EXPECT_FALSE(named.noise.within);
+  EXPECT_EQ(named.kind, "cause") << named.verdict;
+}

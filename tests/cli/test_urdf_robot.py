@@ -191,6 +191,35 @@ class UrdfRobot(unittest.TestCase):
         self.assertEqual(r.returncode, 2)  # the run's joints are not that robot's
         self.assertIn("'a1'", r.stderr)
 
+    def with_sigma(self, run, sigma_m):
+        """The run with a stated noise: a sigma_m column on every posture."""
+        out = os.path.join(self.dir, f"sigma_{sigma_m}.csv")
+        with open(run) as f, open(out, "w") as g:
+            header = True
+            for line in f:
+                if line.startswith("#") or not line.strip():
+                    g.write(line)
+                    continue
+                g.write(line.rstrip("\n") + (",sigma_m\n" if header else f",{sigma_m}\n"))
+                header = False
+        return out
+
+    def test_the_stated_noise_decides_none(self):
+        run, _ = self.import_ur10()
+        d = self.json_of("calibrate", self.with_sigma(run, 0.0005), "--rig", UR10_RIG, "--candidates", "joint_offsets,geometric")
+        self.assertEqual(d["kind"], "cause")
+        self.assertFalse(d["noise"]["within"])
+        self.assertGreater(d["noise"]["rms_over_sigma"], 10)  # 10.9 mm RMS of 3-D distance against 0.5 mm per coordinate
+        # A device stated 20 mm per coordinate: the rigid model is within it, nothing is named.
+        d = self.json_of("calibrate", self.with_sigma(run, 0.02), "--rig", UR10_RIG, "--candidates", "joint_offsets,geometric")
+        self.assertEqual(d["kind"], "none")
+        self.assertIsNone(d["cause"])
+        self.assertTrue(d["noise"]["within"])
+        self.assertIn("within the stated measurement noise", d["verdict"])
+        # Without a stated noise the JSON says so.
+        d = self.json_of("calibrate", run, "--rig", UR10_RIG, "--candidates", "joint_offsets")
+        self.assertIsNone(d["noise"])
+
     def test_calibration_imports_fail_where_the_problem_is(self):
         rig = UR10_RIG
         src = os.path.join(self.dir, "lab.csv")

@@ -33,6 +33,7 @@ Report run(const std::string& run_path, const std::string& rig_path, const Optio
     o.p_station_m = p.p_measured_m;
     o.payload_kg = p.payload_kg;
     o.payload_com_ee_m = p.payload_com_m;
+    o.sigma_m = p.sigma_m;
     r.observations.push_back(o);
   }
   const int stations = static_cast<int>(r.run.stations.size());
@@ -103,6 +104,10 @@ void print(std::ostream& os, const Report& r) {
                       row.parameters, row.rank, row.held_out.rms_m * 1e3, row.gain * 100, row.z, cause ? "  <-" : "");
   }
   if (r.comparison.rows.size() > usable_count(r)) os << "  (* against the cause alone)\n";
+  if (const auto& n = r.comparison.noise; n.stated)
+    os << fmt::format("rigid model against the stated noise: χ² {:.1f} on {:.0f} degrees of freedom (99 % bound {:.1f}): {:.2f} σ, {}\n",
+                      n.chi2, n.dof, n.bound_99, n.rms_over_sigma, n.within ? "within the noise" : "above the noise");
+  else os << "no measurement noise stated (sigma_m column): the rigid model is not tested against it\n";
   os << "verdict: " << r.comparison.verdict << "\n";
   if (r.cause) {
     os << fmt::format("parameters of {} ({:.3f} mm RMS, noise estimate {:.3f} mm per coordinate):\n", hc::to_string(r.cause->model),
@@ -178,6 +183,12 @@ nlohmann::json to_json(const Report& r) {
   j["second_cause"] = r.comparison.second_cause < 0
                           ? json(nullptr)
                           : json(hc::to_string(r.comparison.rows[static_cast<std::size_t>(r.comparison.second_cause)].model.back()));
+  const auto& n = r.comparison.noise;
+  j["noise"] =
+      n.stated
+          ? json{{"chi2", n.chi2}, {"dof", n.dof}, {"bound_99", n.bound_99}, {"within", n.within}, {"rms_over_sigma", n.rms_over_sigma}}
+          : json(nullptr);
+  j["kind"] = r.comparison.kind;
   j["reduced"] = r.comparison.reduced.empty() ? json(nullptr) : json(r.comparison.reduced);
   j["verdict"] = r.comparison.verdict;
   j["cause_fit"] = r.cause ? fit_json(*r.cause) : json(nullptr);
@@ -192,26 +203,35 @@ void write_report(const Report& r, const std::string& dir) {
   const bool named = cmp.cause >= 0;
   const auto* cause_row = named ? &cmp.rows[static_cast<std::size_t>(cmp.cause)] : nullptr;
   rp::Verdict v;
-  v.kind = named ? "cause" : "none";
+  v.kind = cmp.kind;
   v.headline = named ? "What the rigid model misses: " + hc::to_string(cause_row->model) +
                            (cmp.second_cause >= 0
                                 ? " and " + std::string(hc::to_string(cmp.rows[static_cast<std::size_t>(cmp.second_cause)].model.back()))
                                 : "")
-                     : "No candidate predicts the held-out postures better than the rigid model";
+               : cmp.kind == "unexplained" ? "Unexplained: the rigid model misses more than the noise, and no candidate explains it"
+               : cmp.noise.stated          ? "Nothing to calibrate: the rigid model is within the stated measurement noise"
+                                           : "No candidate predicts the held-out postures better than the rigid model";
   v.facts.push_back({"postures", fmt::format("{} from {} station(s)", r.run.postures.size(), r.run.stations.size())});
   v.facts.push_back({"rigid model, frames fitted", fmt::format("{:.2f} mm RMS, {:.2f} mm max", r.rigid.rms_m * 1e3, r.rigid.max_m * 1e3)});
   v.facts.push_back({"held-out error (" + cmp.rigid.scheme + ")",
                      named ? fmt::format("{:.2f} → {:.2f} mm RMS (gain {:.1f} %, z {:.2f})", cmp.rigid.rms_m * 1e3,
                                          cause_row->held_out.rms_m * 1e3, cause_row->gain * 100, cause_row->z)
                            : fmt::format("{:.2f} mm RMS", cmp.rigid.rms_m * 1e3)});
+  if (cmp.noise.stated)
+    v.facts.push_back({"against the stated noise",
+                       fmt::format("χ² {:.1f} on {:.0f} dof (99 % bound {:.1f}): residual {:.2f} σ", cmp.noise.chi2, cmp.noise.dof,
+                                   cmp.noise.bound_99, cmp.noise.rms_over_sigma)});
   if (r.cause)
     v.facts.push_back({"determined", fmt::format("{} of {} parameters of {} (with the nuisance frames)", r.cause->rank,
                                                  r.cause->parameters_total, hc::to_string(r.cause->model))});
   v.next =
-      named
-          ? "Calibrate the determined parameters of " + hc::to_string(r.cause->model) +
-                "; add postures that separate the undetermined combinations listed below before trusting the rest."
-          : "Compare the rigid model's residual with the measuring device's noise: if it is larger, the effect is outside the candidates.";
+      named ? "Calibrate the determined parameters of " + hc::to_string(r.cause->model) +
+                  "; add postures that separate the undetermined combinations listed below before trusting the rest."
+      : cmp.kind == "unexplained"
+          ? "Look for an effect outside the candidates (link bending, base compliance, a measurement-device error), or check the stated "
+            "noise."
+      : cmp.noise.stated ? "Nothing to do: the nominal model with the fitted frames is as good as the measurement."
+                         : "State the measuring device's noise (sigma_m column) to tell 'within the noise' from 'unexplained'.";
   page.verdict(v);
 
   page.heading("What the postures determine");

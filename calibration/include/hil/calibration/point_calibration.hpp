@@ -23,6 +23,7 @@ struct PointObservation {
   Eigen::Vector3d p_station_m;  ///< the measured point in the station's frame
   double payload_kg = 0.0;      ///< carried at payload_com_ee_m (tool frame): adds to the gravity load
   Eigen::Vector3d payload_com_ee_m = Eigen::Vector3d::Zero();
+  double sigma_m = 0.0;  ///< the measurement's standard deviation per coordinate when the lab states it; 0: unknown
 };
 
 /// What a rigid model may miss: each a model extension with its own parameters.
@@ -129,12 +130,24 @@ struct PointComparison {
     int rank = 0;
   };
   HeldOut rigid;
+  /// The rigid fit against the stated measurement noise (every posture's sigma_m given): χ² of its
+  /// residual, Σ|r_k|²/σ_k², on 3N − rank degrees of freedom, and its 99 % quantile.
+  struct Noise {
+    bool stated = false;  ///< every posture has a sigma_m
+    double chi2 = 0.0, dof = 0.0, bound_99 = 0.0;
+    bool within = false;          ///< chi2 ≤ bound_99: the rigid model is within the noise
+    double rms_over_sigma = 0.0;  ///< sqrt(chi2 / dof): how many noise standard deviations the residual is
+  } noise;
   std::vector<Row> rows;
   int cause = -1;         ///< index in rows (a single candidate), or -1: none
   int second_cause = -1;  ///< index in rows of the cause plus a second candidate that wins over the cause alone, or -1
   /// When a named candidate gave way to a smaller one it contains (geometric to joint_offsets):
   /// why, with the held-out figures; empty otherwise.
   std::string reduced;
+  /// "cause" (a candidate is named), "none" (no candidate passes and the rigid model is within the
+  /// stated noise, or no noise is stated) or "unexplained" (no candidate passes, yet the rigid
+  /// model's residual is above the stated noise: something outside the library).
+  std::string kind = "none";
   std::string verdict;  ///< one sentence
 };
 PointComparison compare_point_candidates(const SerialRobot& robot, const std::vector<PointObservation>& obs, int stations,
