@@ -646,6 +646,14 @@ double chi_square_quantile_99(double dof) {
   return dof * std::pow(1.0 - a + z99 * std::sqrt(a), 3);
 }
 
+/// Σ|r_k|²/σ_k² of a fit to every posture, with the postures' stated noise.
+double chi_square(const PointFit& f, const std::vector<PointObservation>& obs) {
+  double chi2 = 0.0;
+  for (std::size_t k = 0; k < obs.size(); ++k)
+    chi2 += f.residual_m.segment<3>(3 * static_cast<Eigen::Index>(k)).squaredNorm() / (obs[k].sigma_m * obs[k].sigma_m);
+  return chi2;
+}
+
 /// Paired z of the squared held-out errors: how surely `b` predicts better than `a`.
 double paired_z(const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
   const Eigen::VectorXd d = a.cwiseAbs2() - b.cwiseAbs2();
@@ -691,8 +699,7 @@ PointComparison compare_point_candidates(const SerialRobot& robot, const std::ve
   c.noise.stated = !obs.empty() && std::all_of(obs.begin(), obs.end(), [](const PointObservation& p) { return p.sigma_m > 0.0; });
   if (c.noise.stated) {
     const PointFit rigid = fit_points(robot, obs, stations, {}, opt);
-    for (std::size_t k = 0; k < obs.size(); ++k)
-      c.noise.chi2 += rigid.residual_m.segment<3>(3 * static_cast<Eigen::Index>(k)).squaredNorm() / (obs[k].sigma_m * obs[k].sigma_m);
+    c.noise.chi2 = chi_square(rigid, obs);
     c.noise.dof = static_cast<double>(rigid.residual_m.size() - rigid.rank);
     c.noise.bound_99 = chi_square_quantile_99(c.noise.dof);
     c.noise.within = c.noise.chi2 <= c.noise.bound_99;
@@ -793,6 +800,20 @@ PointComparison compare_point_candidates(const SerialRobot& robot, const std::ve
     v << "; second: " << to_string(s.model) << " (→ " << s.held_out.rms_m * 1e3 << " mm, a further " << s.gain * 100 << " %)";
   }
   if (!c.reduced.empty()) v << "; " << c.reduced;
+  if (c.noise.stated) {
+    // Whether what was named explains the run down to the noise, or something else remains.
+    const PointModel& m = c.rows[static_cast<std::size_t>(c.second_cause >= 0 ? c.second_cause : c.cause)].model;
+    const PointFit f = fit_points(robot, obs, stations, m, opt);
+    c.noise.after_chi2 = chi_square(f, obs);
+    c.noise.after_dof = static_cast<double>(f.residual_m.size() - f.rank);
+    c.noise.after_bound_99 = chi_square_quantile_99(c.noise.after_dof);
+    c.noise.after_within = c.noise.after_chi2 <= c.noise.after_bound_99;
+    c.noise.after_rms_over_sigma = c.noise.after_dof > 0 ? std::sqrt(c.noise.after_chi2 / c.noise.after_dof) : 0.0;
+    if (c.noise.after_within) v << "; the named model leaves the stated noise (" << c.noise.after_rms_over_sigma << " σ)";
+    else
+      v << "; yet the named model still leaves " << c.noise.after_rms_over_sigma << " σ (χ² " << c.noise.after_chi2 << " on "
+        << c.noise.after_dof << " degrees of freedom, 99 % bound " << c.noise.after_bound_99 << "): something else remains";
+  }
   c.verdict = v.str();
   return c;
 }

@@ -337,4 +337,13 @@ TEST(PointCalibration, StatedNoiseTellsNoneFromUnexplained) {
   const auto named = hc::compare_point_candidates(robot, moved, 2, hc::point_candidates());
   EXPECT_FALSE(named.noise.within);
   EXPECT_EQ(named.kind, "cause") << named.verdict;
+  // The named offsets explain the run down to the noise...
+  EXPECT_TRUE(named.noise.after_within) << named.verdict;
+  EXPECT_NEAR(named.noise.after_rms_over_sigma, 1.0, 0.25);
+  // ...and stated five times too small, what was named no longer does: said, not hidden.
+  for (auto& o : moved) o.sigma_m = truth.noise_m / 5;
+  const auto short_of = hc::compare_point_candidates(robot, moved, 2, hc::point_candidates());
+  EXPECT_EQ(short_of.kind, "cause");
+  EXPECT_FALSE(short_of.noise.after_within);
+  EXPECT_NE(short_of.verdict.find("something else remains"), std::string::npos) << short_of.verdict;
 }

@@ -210,6 +210,9 @@ class UrdfRobot(unittest.TestCase):
         self.assertEqual(d["kind"], "cause")
         self.assertFalse(d["noise"]["within"])
         self.assertGreater(d["noise"]["rms_over_sigma"], 10)  # 10.9 mm RMS of 3-D distance against 0.5 mm per coordinate
+        # The geometric set leaves 2.6 mm RMS: still above a 0.5 mm device, and the verdict says so.
+        self.assertFalse(d["noise"]["after_cause"]["within"])
+        self.assertIn("something else remains", d["verdict"])
         # A device stated 20 mm per coordinate: the rigid model is within it, nothing is named.
         d = self.json_of("calibrate", self.with_sigma(run, 0.02), "--rig", UR10_RIG, "--candidates", "joint_offsets,geometric")
         self.assertEqual(d["kind"], "none")

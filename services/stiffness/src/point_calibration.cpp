@@ -184,10 +184,17 @@ nlohmann::json to_json(const Report& r) {
                           ? json(nullptr)
                           : json(hc::to_string(r.comparison.rows[static_cast<std::size_t>(r.comparison.second_cause)].model.back()));
   const auto& n = r.comparison.noise;
-  j["noise"] =
-      n.stated
-          ? json{{"chi2", n.chi2}, {"dof", n.dof}, {"bound_99", n.bound_99}, {"within", n.within}, {"rms_over_sigma", n.rms_over_sigma}}
-          : json(nullptr);
+  json noise = nullptr;
+  if (n.stated) {
+    noise = {{"chi2", n.chi2}, {"dof", n.dof}, {"bound_99", n.bound_99}, {"within", n.within}, {"rms_over_sigma", n.rms_over_sigma}};
+    noise["after_cause"] = r.comparison.cause < 0 ? json(nullptr)
+                                                  : json{{"chi2", n.after_chi2},
+                                                         {"dof", n.after_dof},
+                                                         {"bound_99", n.after_bound_99},
+                                                         {"within", n.after_within},
+                                                         {"rms_over_sigma", n.after_rms_over_sigma}};
+  }
+  j["noise"] = noise;
   j["kind"] = r.comparison.kind;
   j["reduced"] = r.comparison.reduced.empty() ? json(nullptr) : json(r.comparison.reduced);
   j["verdict"] = r.comparison.verdict;

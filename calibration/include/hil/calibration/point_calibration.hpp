@@ -137,6 +137,10 @@ struct PointComparison {
     double chi2 = 0.0, dof = 0.0, bound_99 = 0.0;
     bool within = false;          ///< chi2 ≤ bound_99: the rigid model is within the noise
     double rms_over_sigma = 0.0;  ///< sqrt(chi2 / dof): how many noise standard deviations the residual is
+    /// The same test of the named model (cause and second cause) fitted to every posture: whether
+    /// what was named explains the run down to the noise. Set when a cause is named.
+    double after_chi2 = 0.0, after_dof = 0.0, after_bound_99 = 0.0, after_rms_over_sigma = 0.0;
+    bool after_within = false;
   } noise;
   std::vector<Row> rows;
   int cause = -1;         ///< index in rows (a single candidate), or -1: none
