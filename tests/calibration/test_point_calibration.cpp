@@ -48,6 +48,14 @@ bool mentions(const std::vector<hc::Undetermined>& u, const std::string& name) {
   return false;
 }
 
+/// `n` UR10 postures from `stations` stations with one joint's offset hidden.
+std::vector<hc::PointObservation> one_offset_run(std::mt19937& rng, int stations, int joint, double offset_rad, int n) {
+  auto truth = base_truth(rng, stations);
+  truth.joint_offset_rad = Eigen::VectorXd::Zero(6);
+  truth.joint_offset_rad[joint] = offset_rad;
+  return observations(hil::test::generate_points(kUr10, "base_link", "wrist_3_link", truth, n, rng));
+}
+
 const hc::PointParameter& param(const hc::PointFit& f, const std::string& name) {
   for (const auto& p : f.parameters)
     if (p.name == name) return p;
@@ -120,10 +128,7 @@ TEST(PointCalibration, GravityComplianceIsNamedAndAcleanRobotHasNoCause) {
 TEST(PointCalibration, OneStationIsCrossValidatedByPostures) {
   std::mt19937 rng(4303);
   const hc::SerialRobot robot = ur10();
-  auto truth = base_truth(rng, 1);
-  truth.joint_offset_rad = Eigen::VectorXd::Zero(6);
-  truth.joint_offset_rad[2] = 4e-3;
-  const auto obs = observations(hil::test::generate_points(kUr10, "base_link", "wrist_3_link", truth, 30, rng));
+  const auto obs = one_offset_run(rng, 1, 2, 4e-3, 30);
   const auto h = hc::held_out_error(robot, obs, 1, {hc::PointCandidate::joint_offsets});
   EXPECT_EQ(h.scheme, "leave one posture out");
   EXPECT_EQ(h.error_m.size(), 30);
@@ -244,10 +249,7 @@ TEST(PointCalibration, ClosedFormJacobianEqualsCentralDifferences) {
 TEST(PointCalibration, ThreadsAndJacobianChoiceDoNotChangeTheResult) {
   std::mt19937 rng(4505);
   const hc::SerialRobot robot = ur10();
-  auto truth = base_truth(rng, 3);
-  truth.joint_offset_rad = Eigen::VectorXd::Zero(6);
-  truth.joint_offset_rad[1] = 2e-3;
-  const auto obs = observations(hil::test::generate_points(kUr10, "base_link", "wrist_3_link", truth, 36, rng));
+  const auto obs = one_offset_run(rng, 3, 1, 2e-3, 36);
   hc::PointFitOptions one, two;
   one.threads = 1;
   two.threads = 2;
@@ -329,11 +331,8 @@ TEST(PointCalibration, StatedNoiseTellsNoneFromUnexplained) {
   EXPECT_EQ(above.kind, "unexplained") << above.verdict;
   EXPECT_NE(above.verdict.find("times the stated noise"), std::string::npos) << above.verdict;
 
-  auto truth = base_truth(rng, 2);
-  truth.joint_offset_rad = Eigen::VectorXd::Zero(6);
-  truth.joint_offset_rad[2] = 1e-3;
-  auto moved = observations(hil::test::generate_points(kUr10, "base_link", "wrist_3_link", truth, 60, rng));
-  for (auto& o : moved) o.sigma_m = truth.noise_m;
+  auto moved = one_offset_run(rng, 2, 2, 1e-3, 60);
+  for (auto& o : moved) o.sigma_m = clean.noise_m;
   const auto named = hc::compare_point_candidates(robot, moved, 2, hc::point_candidates());
   EXPECT_FALSE(named.noise.within);
   EXPECT_EQ(named.kind, "cause") << named.verdict;
@@ -341,7 +340,7 @@ TEST(PointCalibration, StatedNoiseTellsNoneFromUnexplained) {
   EXPECT_TRUE(named.noise.after_within) << named.verdict;
   EXPECT_NEAR(named.noise.after_rms_over_sigma, 1.0, 0.25);
   // ...and stated five times too small, what was named no longer does: said, not hidden.
-  for (auto& o : moved) o.sigma_m = truth.noise_m / 5;
+  for (auto& o : moved) o.sigma_m = clean.noise_m / 5;
   const auto short_of = hc::compare_point_candidates(robot, moved, 2, hc::point_candidates());
   EXPECT_EQ(short_of.kind, "cause");
   EXPECT_FALSE(short_of.noise.after_within);
