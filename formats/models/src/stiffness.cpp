@@ -35,6 +35,7 @@ hc::SerialRobot to_serial_robot(const format::RobotSpec& spec) {
     r.joints.push_back(row);
   }
   for (const auto& in : spec.inertials) r.inertials.push_back({in.mass_kg, in.com_m, in.inertia_kgm2});
+  r.body_links = spec.body_links;
   r.T_world_base = spec.T_world_base.isometry();
   r.T_flange_ee = spec.T_flange_ee.isometry();
   return r;

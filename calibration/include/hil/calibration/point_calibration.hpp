@@ -24,6 +24,8 @@ struct PointObservation {
   double payload_kg = 0.0;      ///< carried at payload_com_ee_m (tool frame): adds to the gravity load
   Eigen::Vector3d payload_com_ee_m = Eigen::Vector3d::Zero();
   double sigma_m = 0.0;  ///< the measurement's standard deviation per coordinate when the lab states it; 0: unknown
+  std::vector<bool> flags;       ///< one per PointFitOptions::flag_names (an elbow or wrist flipped, ...)
+  std::vector<double> tilts_rad;  ///< one per PointFitOptions::tilts: measured tilts of named links (inclinometers)
 };
 
 /// What a rigid model may miss: each a model extension with its own parameters.
@@ -33,6 +35,10 @@ enum class PointCandidate {
   joint_compliance,  ///< joint springs under the gravity load: Δq_i = −c_i G_i(q), c_i in rad/(N·m) (needs inertials)
   backlash,          ///< an offset b_i whose sign follows the gravity torque's: Δq_i = −b_i sign(G_i(q)) (needs inertials)
   geometric,         ///< every joint frame's origin off by a small [translation; rotation] (6 per joint)
+  flag_offsets,      ///< per flag column, offsets θ_fi added to the joint values of the postures it flags (needs flags)
+  link_bending,      ///< named links bend: the chain beyond a link's mid-point turns by (L/EI)·M⊥, M the weight's
+                     ///< moment at that point, L the link's length in that posture; parameter 1/EI in 1/(N·m²) (needs inertials)
+  measured_tilt,     ///< the measured tilt columns applied to their links with gain 1, nothing fitted (needs tilts)
 };
 const char* to_string(PointCandidate c);
 /// \throws std::invalid_argument for an unknown name.
@@ -45,6 +51,11 @@ using PointModel = std::vector<PointCandidate>;
 std::string to_string(const PointModel& m);
 /// Whether the candidate needs the robot's inertials.
 bool needs_inertials(PointCandidate c);
+struct PointFitOptions;
+/// Whether the candidate can be fitted to these postures; when not, why (no inertials, no flag or
+/// tilt columns, no link long enough to bend).
+bool usable(PointCandidate c, const SerialRobot& robot, const std::vector<PointObservation>& obs, const PointFitOptions& options,
+            std::string* why = nullptr);
 /// Whether every effect of `small` is one of `big`'s (joint offsets are a part of the geometric set).
 bool contains(PointCandidate big, PointCandidate small);
 
@@ -93,6 +104,20 @@ struct PointFitOptions {
   bool analytic_jacobian = true;
   /// Workers for the folds and candidate models (0: every core). The results do not depend on it.
   int threads = 0;
+  /// The flag columns' names, in the order of PointObservation::flags ("elbow_flipped").
+  std::vector<std::string> flag_names;
+  /// A measured tilt: a rotation of body `body` (0: the base, i: the body joint i moves) about its
+  /// frame's x (axis 0) or y (axis 1) axis, one per PointObservation::tilts_rad.
+  struct Tilt {
+    int body = 0;
+    int axis = 0;
+    std::string name;  ///< the column, for messages
+  };
+  std::vector<Tilt> tilts;
+  /// Bodies (1..dof) that may bend for link_bending; empty: every body whose span (its joint's origin
+  /// to the next joint's, or to the flange) is at least kMinBendingSpan_m in the first posture.
+  std::vector<int> bending_bodies;
+  static constexpr double kMinBendingSpan_m = 0.2;
 };
 
 /// Fits the model `candidate` to the postures. \throws std::invalid_argument for too few postures
@@ -148,6 +173,14 @@ struct PointComparison {
   /// When a named candidate gave way to a smaller one it contains (geometric to joint_offsets):
   /// why, with the held-out figures; empty otherwise.
   std::string reduced;
+  /// Single candidates (indices in rows) that pass the rules against the rigid model and that the
+  /// cause does not beat by the same rules: what these postures cannot tell from it (a joint's
+  /// compliance and the bending of the link it holds both deflect in proportion to the weight).
+  std::vector<int> alternatives;
+  /// Candidates left out of the verdict because their fit to every posture is not physical (a
+  /// compliance, 1/EI or half-play below zero by more than 1.96 σ): "joint_compliance: compliance
+  /// elbow_joint = −3.1e-6 ± 0.8e-6 rad/(N·m)".
+  std::vector<std::string> not_physical;
   /// "cause" (a candidate is named), "none" (no candidate passes and the rigid model is within the
   /// stated noise, or no noise is stated) or "unexplained" (no candidate passes, yet the rigid
   /// model's residual is above the stated noise: something outside the library).

@@ -58,6 +58,8 @@ struct SerialRobot {
   Eigen::Isometry3d T_flange_ee = Eigen::Isometry3d::Identity();
   /// Bodies 0..N (empty when the description has none, as a DH table): what gravity loads.
   std::vector<BodyInertial> inertials;
+  /// Names of bodies 0..N (URDF links) when known, for messages and parameter names; may be empty.
+  std::vector<std::string> body_links;
 
   int dof() const { return static_cast<int>(joints.size()); }
 };
