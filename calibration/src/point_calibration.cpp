@@ -21,24 +21,44 @@ namespace {
 constexpr double kLengthScale_m = 1e-3;
 constexpr double kAngleScale_rad = 1e-3;
 constexpr double kComplianceScale = 1e-6;
+constexpr double kBendingScale = 1e-6;  ///< 1/EI in 1/(N·m²): a 0.6 m link of EI 1e5 N·m² under 100 N·m turns 0.6 mrad
 constexpr double kResidualScale_m = 1e-4;
+
+/// The bodies that may bend: the options' list, or every body spanning at least
+/// kMinBendingSpan_m in the first posture.
+std::vector<int> bending_bodies(const SerialRobot& robot, const std::vector<PointObservation>& obs, const PointFitOptions& opt);
 
 /// Where each block of parameters sits in x.
 struct Layout {
   int stations = 0, dof = 0;
   bool tool = true;
+  int flags = 0, bending = 0;                          ///< flag columns; bodies that may bend
   std::vector<std::pair<PointCandidate, int>> blocks;  ///< each extension and its first index
   int tool_at = 0, size = 0;
 
-  Layout(int stations_, int dof_, bool tool_, const PointModel& model) : stations(stations_), dof(dof_), tool(tool_) {
+  Layout(int stations_, int dof_, bool tool_, const PointModel& model, int flags_ = 0, int bending_ = 0)
+      : stations(stations_), dof(dof_), tool(tool_), flags(flags_), bending(bending_) {
     tool_at = 6 * stations;
     int at = tool_at + (tool ? 3 : 0);
     for (const auto c : model) {
       if (c == PointCandidate::rigid) continue;
       blocks.emplace_back(c, at);
-      at += c == PointCandidate::geometric ? 6 * dof : dof;
+      at += block_size(c);
     }
     size = at;
+  }
+  int block_size(PointCandidate c) const {
+    switch (c) {
+      case PointCandidate::geometric: return 6 * dof;
+      case PointCandidate::flag_offsets: return flags * dof;
+      case PointCandidate::link_bending: return bending;
+      case PointCandidate::measured_tilt:
+      case PointCandidate::rigid: return 0;
+      case PointCandidate::joint_offsets:
+      case PointCandidate::joint_compliance:
+      case PointCandidate::backlash: return dof;
+    }
+    return 0;
   }
   int block(PointCandidate c) const {
     for (const auto& [k, at] : blocks)
@@ -58,19 +78,65 @@ struct Problem {
   std::vector<Eigen::VectorXd> G;   ///< holding torques per posture, when a candidate needs them
   std::vector<std::string> station_names;
   bool analytic = true;
+  std::vector<std::string> flag_names;
+  std::vector<int> bend;  ///< bodies that may bend (link_bending), one parameter each
+  /// Per posture and bending body: the pivot (the span's mid-point, world) and v with the chain
+  /// beyond it turning by exp(v / EI): v = L · M⊥, the weight's bending moment there times the span.
+  std::vector<std::vector<Eigen::Vector3d>> bend_pivot, bend_v;
+  /// Per posture, the measured tilt of each body 0..N as a rotation vector in its frame (measured_tilt).
+  std::vector<std::vector<Eigen::Vector3d>> tilt;
 
   Problem(const SerialRobot& r, const std::vector<PointObservation>& o, int stations, const PointModel& model, const PointFitOptions& opt)
       : robot(r), obs(o), layout(stations, r.dof(), opt.fit_tool_point, model), tool_fixed(opt.tool_point_start_ee_m), g_world(opt.g_world),
-        station_names(opt.station_names), analytic(opt.analytic_jacobian) {
+        station_names(opt.station_names), analytic(opt.analytic_jacobian), flag_names(opt.flag_names) {
     for (int s = static_cast<int>(station_names.size()); s < stations; ++s) station_names.push_back(std::to_string(s + 1));
+    const auto uses = [&](PointCandidate c) { return std::find(model.begin(), model.end(), c) != model.end(); };
+    std::string why;
+    for (const auto c : model)
+      if (c != PointCandidate::rigid && !usable(c, robot, obs, opt, &why))
+        throw std::invalid_argument("model " + to_string(model) + ": " + why);
+    if (uses(PointCandidate::link_bending)) bend = bending_bodies(robot, obs, opt);
+    layout = Layout(stations, r.dof(), opt.fit_tool_point, model, static_cast<int>(flag_names.size()), static_cast<int>(bend.size()));
     bool gravity = false;
     for (const auto c : model) gravity = gravity || needs_inertials(c);
-    if (gravity && robot.inertials.size() != static_cast<std::size_t>(robot.dof()) + 1)
-      throw std::invalid_argument("model " + to_string(model) +
-                                  " needs the robot's inertials: give the robot as a URDF with <inertial> elements");
+    const int n = robot.dof();
     for (const auto& p : obs) {
       nominal.push_back(forward(robot, p.q));
       if (gravity) G.push_back(gravity_torques(robot, nominal.back(), g_world, p.payload_kg, p.payload_com_ee_m));
+      if (!bend.empty()) bending_loads(p, nominal.back());
+      if (uses(PointCandidate::measured_tilt)) {
+        tilt.emplace_back(static_cast<std::size_t>(n) + 1, Eigen::Vector3d::Zero());
+        for (std::size_t t = 0; t < opt.tilts.size(); ++t)
+          tilt.back()[static_cast<std::size_t>(opt.tilts[t].body)][opt.tilts[t].axis] += p.tilts_rad[t];
+      }
+    }
+  }
+
+  /// The bending loads of one posture on the nominal chain. The link's own weight is taken as spread
+  /// evenly along its span: its distal half, at three quarters of the span, loads the mid-point.
+  void bending_loads(const PointObservation& p, const ChainPoses& poses) {
+    const int n = robot.dof();
+    auto& pivots = bend_pivot.emplace_back();
+    auto& vs = bend_v.emplace_back();
+    for (const int b : bend) {
+      const auto ub = static_cast<std::size_t>(b);
+      const Eigen::Vector3d a = poses.p_world_joint_m[ub - 1];
+      const Eigen::Vector3d e = b < n ? poses.p_world_joint_m[ub] : poses.T_world_body[ub].translation();
+      const double L = (e - a).norm();
+      const Eigen::Vector3d mid = 0.5 * (a + e);
+      pivots.push_back(mid);
+      if (L < 1e-9) {  // a body named to bend that spans nothing: it cannot turn anything
+        vs.push_back(Eigen::Vector3d::Zero());
+        continue;
+      }
+      const Eigen::Vector3d u = (e - a) / L;
+      Eigen::Vector3d M = (poses.T_world_ee * p.payload_com_ee_m - mid).cross(p.payload_kg * g_world);
+      for (int j = b + 1; j <= n; ++j) {
+        const auto& in = robot.inertials[static_cast<std::size_t>(j)];
+        M += (poses.T_world_body[static_cast<std::size_t>(j)] * in.com_m - mid).cross(in.mass_kg * g_world);
+      }
+      M += (a + 0.75 * (e - a) - mid).cross(0.5 * robot.inertials[ub].mass_kg * g_world);
+      vs.push_back(L * (M - u * u.dot(M)));
     }
   }
 
@@ -90,6 +156,9 @@ struct Problem {
     if (const int b = layout.block(PointCandidate::joint_compliance); b >= 0) q -= x.segment(b, n).cwiseProduct(G[k]);
     if (const int b = layout.block(PointCandidate::backlash); b >= 0)
       for (int i = 0; i < n; ++i) q[i] -= x[b + i] * sign(G[k][i]);
+    if (const int b = layout.block(PointCandidate::flag_offsets); b >= 0)
+      for (int f = 0; f < layout.flags; ++f)
+        if (obs[k].flags[static_cast<std::size_t>(f)]) q += x.segment(b + f * n, n);
     return q;
   }
   static double sign(double v) { return v > 0 ? 1.0 : v < 0 ? -1.0 : 0.0; }
@@ -101,6 +170,10 @@ struct Problem {
     std::vector<Eigen::Isometry3d> before_error, after_error;
     std::vector<Eigen::Vector3d> axis, on_axis;
     Eigen::Matrix3d R_base_ee;
+    Eigen::Vector3d p_rigid;                     ///< the point before the links' bending
+    Eigen::Matrix3d R_bend;                      ///< ∂p/∂p_rigid: the bending turns, proximal first
+    std::vector<Eigen::Vector3d> w;              ///< per bending body: the point about its pivot, before its turn
+    std::vector<Eigen::Matrix3d> R_before_bend;  ///< per bending body: the product of the turns proximal to it
   };
 
   /// The tool point in the robot's base frame (T_world_base included) at posture k; with `chain`,
@@ -113,7 +186,9 @@ struct Problem {
       for (auto* v : {&chain->before_error, &chain->after_error}) v->resize(static_cast<std::size_t>(n));
       for (auto* v : {&chain->axis, &chain->on_axis}) v->resize(static_cast<std::size_t>(n));
     }
+    const bool tilted = !tilt.empty();
     Eigen::Isometry3d T = robot.T_world_base;
+    if (tilted) T.linear() = T.linear() * so3::exp(tilt[k][0]);
     for (int i = 0; i < n; ++i) {
       const auto ui = static_cast<std::size_t>(i);
       if (chain) chain->before_error[ui] = T;
@@ -139,10 +214,29 @@ struct Problem {
         }
       }
       T = T * A;
+      if (tilted) T.linear() = T.linear() * so3::exp(tilt[k][ui + 1]);
     }
     const Eigen::Isometry3d T_ee = T * robot.T_flange_ee;
-    if (chain) chain->R_base_ee = T_ee.linear();
-    return T_ee * tool(x);
+    Eigen::Vector3d p = T_ee * tool(x);
+    if (chain) chain->R_base_ee = T_ee.linear(), chain->p_rigid = p, chain->R_bend.setIdentity();
+    if (bend.empty()) return p;
+    // Each bending body turns the chain beyond its pivot; distal first, so that the proximal turns
+    // carry the distal ones (pivots and loads on the nominal chain: the deflections are small).
+    const int b0 = layout.block(PointCandidate::link_bending);
+    if (chain) chain->w.resize(bend.size()), chain->R_before_bend.resize(bend.size());
+    for (std::size_t l = bend.size(); l-- > 0;) {
+      const Eigen::Vector3d w = p - bend_pivot[k][l];
+      p = so3::exp(Eigen::Vector3d(x[b0 + static_cast<int>(l)] * bend_v[k][l])) * w + bend_pivot[k][l];
+      if (chain) chain->w[l] = w;
+    }
+    if (chain) {
+      for (std::size_t l = 0; l < bend.size(); ++l) {
+        chain->R_before_bend[l] = chain->R_bend;
+        chain->R_bend = chain->R_bend * so3::exp(Eigen::Vector3d(x[b0 + static_cast<int>(l)] * bend_v[k][l]));
+      }
+      chain->R_base_ee = chain->R_bend * chain->R_base_ee;
+    }
+    return p;
   }
 
   /// r = (predicted − measured) / kResidualScale_m, 3 per posture.
@@ -161,8 +255,14 @@ struct Problem {
       const int n = layout.dof;
       if (c == PointCandidate::geometric) {
         for (int i = 0; i < 6 * n; ++i) s[at + i] = i % 6 < 3 ? kLengthScale_m : kAngleScale_rad;
+      } else if (c == PointCandidate::link_bending) {
+        s.segment(at, layout.bending).setConstant(kBendingScale);
+      } else if (c == PointCandidate::flag_offsets) {
+        for (int f = 0; f < layout.flags; ++f)
+          for (int i = 0; i < n; ++i)
+            s[at + f * n + i] = robot.joints[static_cast<std::size_t>(i)].kind == JointKind::prismatic ? kLengthScale_m : kAngleScale_rad;
       } else {
-        for (int i = 0; i < n; ++i) {
+        for (int i = 0; i < layout.block_size(c); ++i) {
           const bool prismatic = robot.joints[static_cast<std::size_t>(i)].kind == JointKind::prismatic;
           s[at + i] = c == PointCandidate::joint_compliance ? kComplianceScale : prismatic ? kLengthScale_m : kAngleScale_rad;
         }
@@ -186,7 +286,8 @@ struct Problem {
     const int n = robot.dof();
     J.setZero(3 * static_cast<Eigen::Index>(obs.size()), x.size());
     const int off = layout.block(PointCandidate::joint_offsets), comp = layout.block(PointCandidate::joint_compliance),
-              back = layout.block(PointCandidate::backlash), geo = layout.block(PointCandidate::geometric);
+              back = layout.block(PointCandidate::backlash), geo = layout.block(PointCandidate::geometric),
+              flag = layout.block(PointCandidate::flag_offsets), bent = layout.block(PointCandidate::link_bending);
     Chain chain;
     for (std::size_t k = 0; k < obs.size(); ++k) {
       const Eigen::Index row = 3 * static_cast<Eigen::Index>(k);
@@ -196,22 +297,31 @@ struct Problem {
       J.block<3, 3>(row, 6 * s) = so3::rotate_jacobian(Eigen::Vector3d(x.segment<3>(6 * s)), T0[static_cast<std::size_t>(s)] * p);
       J.block<3, 3>(row, 6 * s + 3).setIdentity();
       if (layout.tool) J.block<3, 3>(row, layout.tool_at) = R_station * chain.R_base_ee;
+      // Everything before the bending moves the rigid point; the bending turns carry that motion.
+      const Eigen::Matrix3d R_out = R_station * chain.R_bend;
+      const Eigen::Vector3d& p_rigid = chain.p_rigid;
+      for (std::size_t l = 0; bent >= 0 && l < bend.size(); ++l) {
+        const int j = bent + static_cast<int>(l);
+        J.block<3, 1>(row, j) = R_station * chain.R_before_bend[l] *
+                                so3::rotate_jacobian(Eigen::Vector3d(x[j] * bend_v[k][l]), chain.w[l]) * bend_v[k][l];
+      }
       for (int i = 0; i < n; ++i) {
         const auto ui = static_cast<std::size_t>(i);
-        const Eigen::Vector3d dp_dq = R_station * (robot.joints[ui].kind == JointKind::prismatic
-                                                       ? chain.axis[ui]
-                                                       : Eigen::Vector3d(chain.axis[ui].cross(p - chain.on_axis[ui])));
+        const Eigen::Vector3d dp_dq = R_out * (robot.joints[ui].kind == JointKind::prismatic
+                                                   ? chain.axis[ui]
+                                                   : Eigen::Vector3d(chain.axis[ui].cross(p_rigid - chain.on_axis[ui])));
         if (off >= 0) J.block<3, 1>(row, off + i) = dp_dq;
+        for (int f = 0; flag >= 0 && f < layout.flags; ++f)
+          if (obs[k].flags[static_cast<std::size_t>(f)]) J.block<3, 1>(row, flag + f * n + i) = dp_dq;
         if (comp >= 0) J.block<3, 1>(row, comp + i) = -G[k][i] * dp_dq;
         if (back >= 0) J.block<3, 1>(row, back + i) = -sign(G[k][i]) * dp_dq;
         if (geo >= 0) {
           const Eigen::Matrix3d R_before = chain.before_error[ui].linear();
-          J.block<3, 3>(row, geo + 6 * i) = R_station * R_before;
+          J.block<3, 3>(row, geo + 6 * i) = R_out * R_before;
           // p in the frame after E_i's rotation, before its translation is added back: w with
           // p = before * (t + exp(ω) w).
-          const Eigen::Vector3d w = chain.after_error[ui].inverse() * p;
-          J.block<3, 3>(row, geo + 6 * i + 3) = R_station * R_before *
-                                                so3::rotate_jacobian(Eigen::Vector3d(x.segment<3>(geo + 6 * i + 3)), w);
+          const Eigen::Vector3d w = chain.after_error[ui].inverse() * p_rigid;
+          J.block<3, 3>(row, geo + 6 * i + 3) = R_out * R_before * so3::rotate_jacobian(Eigen::Vector3d(x.segment<3>(geo + 6 * i + 3)), w);
         }
       }
     }
@@ -249,7 +359,25 @@ struct Problem {
         parts.push_back("tool");
       }
     for (const auto& [c, at] : layout.blocks) {
-      for (int i = 0; i < layout.dof; ++i) {
+      if (c == PointCandidate::link_bending) {
+        for (const int b : bend) {
+          const auto ub = static_cast<std::size_t>(b);
+          n.push_back("bending " + (ub < robot.body_links.size() ? robot.body_links[ub] : "body " + std::to_string(b)));
+          units.push_back("1/(N·m²)");
+          parts.push_back(to_string(c));
+        }
+        continue;
+      }
+      if (c == PointCandidate::flag_offsets) {
+        for (const auto& flag : flag_names)
+          for (const auto& row : robot.joints) {
+            n.push_back("offset " + row.name + " when " + flag);
+            units.push_back(row.kind == JointKind::prismatic ? "m" : "rad");
+            parts.push_back(to_string(c));
+          }
+        continue;
+      }
+      for (int i = 0; i < (c == PointCandidate::geometric ? layout.dof : layout.block_size(c)); ++i) {
         const auto& row = robot.joints[static_cast<std::size_t>(i)];
         const bool prismatic = row.kind == JointKind::prismatic;
         if (c == PointCandidate::geometric) {
@@ -427,6 +555,9 @@ const char* to_string(PointCandidate c) {
     case PointCandidate::joint_compliance: return "joint_compliance";
     case PointCandidate::backlash: return "backlash";
     case PointCandidate::geometric: return "geometric";
+    case PointCandidate::flag_offsets: return "flag_offsets";
+    case PointCandidate::link_bending: return "link_bending";
+    case PointCandidate::measured_tilt: return "measured_tilt";
   }
   return "rigid";
 }
@@ -439,17 +570,81 @@ std::string to_string(const PointModel& m) {
 }
 
 PointCandidate point_candidate_from_string(const std::string& name) {
-  for (const auto c : {PointCandidate::rigid, PointCandidate::joint_offsets, PointCandidate::joint_compliance, PointCandidate::backlash,
-                       PointCandidate::geometric})
+  std::string all = "rigid";
+  for (const auto c : point_candidates()) {
     if (name == to_string(c)) return c;
-  throw std::invalid_argument("unknown candidate '" + name + "' (rigid, joint_offsets, joint_compliance, backlash, geometric)");
+    all += std::string(", ") + to_string(c);
+  }
+  if (name == "rigid") return PointCandidate::rigid;
+  throw std::invalid_argument("unknown candidate '" + name + "' (" + all + ")");
 }
 
 std::vector<PointCandidate> point_candidates() {
-  return {PointCandidate::joint_offsets, PointCandidate::joint_compliance, PointCandidate::backlash, PointCandidate::geometric};
+  return {PointCandidate::joint_offsets, PointCandidate::joint_compliance, PointCandidate::backlash,     PointCandidate::geometric,
+          PointCandidate::flag_offsets,  PointCandidate::link_bending,     PointCandidate::measured_tilt};
 }
 
-bool needs_inertials(PointCandidate c) { return c == PointCandidate::joint_compliance || c == PointCandidate::backlash; }
+bool needs_inertials(PointCandidate c) {
+  return c == PointCandidate::joint_compliance || c == PointCandidate::backlash || c == PointCandidate::link_bending;
+}
+
+namespace {
+std::vector<int> bending_bodies(const SerialRobot& robot, const std::vector<PointObservation>& obs, const PointFitOptions& opt) {
+  const int n = robot.dof();
+  if (!opt.bending_bodies.empty()) {
+    for (const int b : opt.bending_bodies)
+      if (b < 1 || b > n)
+        throw std::invalid_argument("bending body " + std::to_string(b) + ": the chain's moving bodies are 1.." + std::to_string(n));
+    return opt.bending_bodies;
+  }
+  std::vector<int> out;
+  if (obs.empty()) return out;
+  const ChainPoses poses = forward(robot, obs.front().q);
+  for (int b = 1; b <= n; ++b) {
+    const auto ub = static_cast<std::size_t>(b);
+    const Eigen::Vector3d e = b < n ? poses.p_world_joint_m[ub] : poses.T_world_body[ub].translation();
+    if ((e - poses.p_world_joint_m[ub - 1]).norm() >= PointFitOptions::kMinBendingSpan_m) out.push_back(b);
+  }
+  return out;
+}
+}  // namespace
+
+bool usable(PointCandidate c, const SerialRobot& robot, const std::vector<PointObservation>& obs, const PointFitOptions& opt,
+            std::string* why) {
+  const auto no = [&](const std::string& reason) {
+    if (why) *why = std::string(to_string(c)) + ": " + reason;
+    return false;
+  };
+  if (needs_inertials(c) && robot.inertials.size() != static_cast<std::size_t>(robot.dof()) + 1)
+    return no("needs the robot's inertials (a URDF with <inertial> elements)");
+  if (c == PointCandidate::flag_offsets) {
+    if (opt.flag_names.empty()) return no("needs flag columns (flag_<name>)");
+    for (std::size_t k = 0; k < obs.size(); ++k)
+      if (obs[k].flags.size() != opt.flag_names.size())
+        return no("posture " + std::to_string(k + 1) + " has " + std::to_string(obs[k].flags.size()) + " flags, the run names " +
+                  std::to_string(opt.flag_names.size()));
+    for (std::size_t f = 0; f < opt.flag_names.size(); ++f) {
+      const auto set = std::count_if(obs.begin(), obs.end(), [&](const PointObservation& p) { return p.flags[f]; });
+      if (set == 0 || set == static_cast<std::ptrdiff_t>(obs.size()))
+        return no("flag " + opt.flag_names[f] + " is set on " + (set == 0 ? "no posture" : "every posture") +
+                  ": its offsets are not told from the joints' own");
+    }
+  }
+  if (c == PointCandidate::measured_tilt) {
+    if (opt.tilts.empty()) return no("needs measured tilt columns (tilt_<link>_rx|ry)");
+    for (const auto& t : opt.tilts)
+      if (t.body < 0 || t.body > robot.dof() || (t.axis != 0 && t.axis != 1))
+        return no("tilt column " + t.name + ": body " + std::to_string(t.body) + " axis " + std::to_string(t.axis) + " (bodies 0.." +
+                  std::to_string(robot.dof()) + ", axes 0 = x, 1 = y)");
+    for (std::size_t k = 0; k < obs.size(); ++k)
+      if (obs[k].tilts_rad.size() != opt.tilts.size())
+        return no("posture " + std::to_string(k + 1) + " has " + std::to_string(obs[k].tilts_rad.size()) + " tilts, the run names " +
+                  std::to_string(opt.tilts.size()));
+  }
+  if (c == PointCandidate::link_bending && bending_bodies(robot, obs, opt).empty())
+    return no("no link spans " + std::to_string(PointFitOptions::kMinBendingSpan_m) + " m or more");
+  return true;
+}
 
 bool contains(PointCandidate big, PointCandidate small) {
   // A joint offset is a rotation of the joint's frame about the joint's own axis, one of the six
@@ -666,8 +861,40 @@ double paired_z(const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
 
 }  // namespace
 
+namespace {
+
+/// The links whose bending is physical: fits link_bending to every posture and drops, one at a
+/// time, the link whose 1/EI is furthest below zero beyond its 95 % interval (the elastostatic
+/// paper's model reduction: a parameter the data make unphysical leaves the model). Writes the
+/// links kept into opt.bending_bodies and why each other was dropped into `dropped`.
+void reduce_bending_links(const SerialRobot& robot, const std::vector<PointObservation>& obs, int stations, PointFitOptions& opt,
+                          std::vector<std::string>& dropped) {
+  opt.bending_bodies = bending_bodies(robot, obs, opt);
+  while (!opt.bending_bodies.empty()) {
+    const PointFit f = fit_points(robot, obs, stations, {PointCandidate::link_bending}, opt);
+    std::size_t worst = 0;
+    double worst_z = -1.96;
+    const PointParameter* worst_p = nullptr;
+    std::size_t l = 0;
+    for (const auto& p : f.parameters) {
+      if (p.part != to_string(PointCandidate::link_bending)) continue;
+      if (p.identifiable && p.std > 0 && p.value / p.std < worst_z) worst_z = p.value / p.std, worst = l, worst_p = &p;
+      ++l;
+    }
+    if (!worst_p) return;
+    std::ostringstream why;
+    why.precision(3);
+    why << worst_p->name << " dropped from link_bending: 1/EI = " << worst_p->value << " ± " << 1.96 * worst_p->std << " " << worst_p->unit
+        << " (95 %), below zero";
+    dropped.push_back(why.str());
+    opt.bending_bodies.erase(opt.bending_bodies.begin() + static_cast<std::ptrdiff_t>(worst));
+  }
+}
+
+}  // namespace
+
 PointComparison compare_point_candidates(const SerialRobot& robot, const std::vector<PointObservation>& obs, int stations,
-                                         const std::vector<PointCandidate>& candidates, int folds, const PointFitOptions& opt) {
+                                         const std::vector<PointCandidate>& candidates, int folds, const PointFitOptions& options) {
   // The rules, fixed before any data (docs/calibration.md, "Point calibration"): a candidate is a
   // cause when it lowers the held-out error by at least kMinGain with a paired z of at least kMinZ;
   // the cause is the one with the largest gain; a second cause is a candidate added to the cause
@@ -684,10 +911,15 @@ PointComparison compare_point_candidates(const SerialRobot& robot, const std::ve
     r.rank = e.rank;
     return r;
   };
+  PointFitOptions opt = options;
   std::vector<PointModel> singles{{}};
   for (const auto cand : candidates) {
-    if (cand == PointCandidate::rigid) continue;
-    if (needs_inertials(cand) && robot.inertials.size() != static_cast<std::size_t>(robot.dof()) + 1) continue;
+    if (cand == PointCandidate::rigid || !usable(cand, robot, obs, opt)) continue;
+    if (cand == PointCandidate::link_bending) {
+      reduce_bending_links(robot, obs, stations, opt, c.bending_dropped);
+      c.bending_bodies = opt.bending_bodies;
+      if (opt.bending_bodies.empty()) continue;
+    }
     singles.push_back({cand});
   }
   const auto first = evaluate(robot, obs, stations, singles, folds, opt);
@@ -705,9 +937,33 @@ PointComparison compare_point_candidates(const SerialRobot& robot, const std::ve
     c.noise.within = c.noise.chi2 <= c.noise.bound_99;
     c.noise.rms_over_sigma = c.noise.dof > 0 ? std::sqrt(c.noise.chi2 / c.noise.dof) : 0.0;
   }
+  // Physical validity of the models that pass the rules, on their fit to every posture: a
+  // compliance, 1/EI or half-play below zero by more than its 95 % interval is not a cause.
+  const auto physical_model = [&](const PointModel& m) {
+    const bool signed_part = std::any_of(m.begin(), m.end(), [](PointCandidate k) {
+      return k == PointCandidate::joint_compliance || k == PointCandidate::backlash || k == PointCandidate::link_bending;
+    });
+    if (!signed_part) return true;
+    const PointFit f = fit_points(robot, obs, stations, m, opt);
+    for (const auto& p : f.parameters) {
+      const bool positive = p.part == to_string(PointCandidate::joint_compliance) || p.part == to_string(PointCandidate::backlash) ||
+                            p.part == to_string(PointCandidate::link_bending);
+      if (!positive || !p.identifiable || !(p.value < -1.96 * p.std)) continue;
+      std::ostringstream why;
+      why.precision(3);
+      why << to_string(m) << ": " << p.name << " = " << p.value << " ± " << 1.96 * p.std << " " << p.unit << " (95 %), below zero";
+      c.not_physical.push_back(why.str());
+      return false;
+    }
+    return true;
+  };
+  std::vector<bool> physical(c.rows.size(), true);
+  for (std::size_t i = 0; i < c.rows.size(); ++i)
+    if (c.rows[i].gain >= kMinGain && c.rows[i].z >= kMinZ) physical[i] = physical_model(c.rows[i].model);
   double best = -1.0;
   for (std::size_t i = 0; i < c.rows.size(); ++i)
-    if (c.rows[i].gain >= kMinGain && c.rows[i].z >= kMinZ && c.rows[i].gain > best) best = c.rows[i].gain, c.cause = static_cast<int>(i);
+    if (physical[i] && c.rows[i].gain >= kMinGain && c.rows[i].z >= kMinZ && c.rows[i].gain > best)
+      best = c.rows[i].gain, c.cause = static_cast<int>(i);
   std::ostringstream v;
   v.precision(3);
   if (c.noise.stated && c.noise.within) {
@@ -732,6 +988,8 @@ PointComparison compare_point_candidates(const SerialRobot& robot, const std::ve
            "held-out error "
         << c.rigid.rms_m * 1e3 << " mm RMS (no measurement noise stated to test it against)";
     }
+    for (const auto& n : c.not_physical) v << "; not physical: " << n;
+    for (const auto& d : c.bending_dropped) v << "; " << d;
     c.verdict = v.str();
     return c;
   }
@@ -750,7 +1008,8 @@ PointComparison compare_point_candidates(const SerialRobot& robot, const std::ve
   for (const auto& e : evaluate(robot, obs, stations, pairs, folds, opt)) {
     c.rows.push_back(row(e, cause.held_out));
     const auto& r = c.rows.back();
-    if (r.gain >= kMinGain && r.z >= kMinZ && r.gain > best2) best2 = r.gain, c.second_cause = static_cast<int>(c.rows.size() - 1);
+    if (r.gain >= kMinGain && r.z >= kMinZ && r.gain > best2 && physical_model(r.model))
+      best2 = r.gain, c.second_cause = static_cast<int>(c.rows.size() - 1);
   }
   // Parsimony between nested candidates: a named candidate that contains a smaller one (geometric
   // contains joint_offsets) gives way to it unless it predicts better than the smaller one by the
@@ -793,13 +1052,33 @@ PointComparison compare_point_candidates(const SerialRobot& robot, const std::ve
     }
   }
   const auto& named_cause = c.rows[static_cast<std::size_t>(c.cause)];
+  // What these postures cannot tell from the cause: single candidates that pass the rules too and
+  // that the cause does not beat by them (nested ones are the parsimony rule's).
+  for (std::size_t i = 0; i < single_rows; ++i) {
+    const auto& r = c.rows[i];
+    if (static_cast<int>(i) == c.cause || !physical[i] || !(r.gain >= kMinGain && r.z >= kMinZ)) continue;
+    if (contains(r.model.front(), named_cause.model.front()) || contains(named_cause.model.front(), r.model.front())) continue;
+    const double gain = r.held_out.rms_m > 0 ? 1.0 - named_cause.held_out.rms_m / r.held_out.rms_m : 0.0;
+    if (!(gain >= kMinGain && paired_z(r.held_out.error_m, named_cause.held_out.error_m) >= kMinZ))
+      c.alternatives.push_back(static_cast<int>(i));
+  }
   v << "cause: " << to_string(named_cause.model) << " (held-out error " << c.rigid.rms_m * 1e3 << " → " << named_cause.held_out.rms_m * 1e3
     << " mm RMS, gain " << named_cause.gain * 100 << " %, z " << named_cause.z << ")";
+  if (!c.alternatives.empty()) {
+    v << "; not told apart from";
+    for (std::size_t a = 0; a < c.alternatives.size(); ++a) {
+      const auto& r = c.rows[static_cast<std::size_t>(c.alternatives[a])];
+      v << (a ? "," : "") << " " << to_string(r.model) << " (→ " << r.held_out.rms_m * 1e3 << " mm)";
+    }
+    v << " by these postures: each explains them as well within the rules";
+  }
   if (c.second_cause >= 0) {
     const auto& s = c.rows[static_cast<std::size_t>(c.second_cause)];
     v << "; second: " << to_string(s.model) << " (→ " << s.held_out.rms_m * 1e3 << " mm, a further " << s.gain * 100 << " %)";
   }
   if (!c.reduced.empty()) v << "; " << c.reduced;
+  for (const auto& n : c.not_physical) v << "; not physical: " << n;
+  for (const auto& d : c.bending_dropped) v << "; " << d;
   if (c.noise.stated) {
     // Whether what was named explains the run down to the noise, or something else remains.
     const PointModel& m = c.rows[static_cast<std::size_t>(c.second_cause >= 0 ? c.second_cause : c.cause)].model;

@@ -77,6 +77,11 @@ std::vector<Eigen::VectorXd> draw_postures(int n, const std::vector<std::pair<do
 }
 
 std::vector<Sample> generate(const Truth& t, const std::vector<Eigen::VectorXd>& postures, std::mt19937& rng) {
+  return generate(t, postures, {}, rng);
+}
+
+std::vector<Sample> generate(const Truth& t, const std::vector<Eigen::VectorXd>& postures, const std::vector<bool>& flags,
+                             std::mt19937& rng) {
   // --- The robot, from KDL only.
   // The file is read here: Debian's kdl_parser 1.14 treeFromFile dereferences a null model when the
   // file is missing, whereas treeFromString checks it.
@@ -96,6 +101,7 @@ std::vector<Sample> generate(const Truth& t, const std::vector<Eigen::VectorXd>&
 
   // --- The truth, checked.
   check_size(t.joint_offset_rad, dof, "joint_offset_rad");
+  check_size(t.flag_offset_rad, dof, "flag_offset_rad");
   check_size(t.joint_stiffness_Nm_per_rad, dof, "joint_stiffness_Nm_per_rad");
   check_size(t.backlash_rad, dof, "backlash_rad");
   check_size(t.backlash_friction_Nm, dof, "backlash_friction_Nm");
@@ -105,6 +111,10 @@ std::vector<Sample> generate(const Truth& t, const std::vector<Eigen::VectorXd>&
   if (!(t.base_stiffness_Nm_per_rad >= 0.0)) throw std::invalid_argument("base_stiffness_Nm_per_rad must be >= 0");
   if (!(t.payload_kg >= 0.0)) throw std::invalid_argument("payload_kg must be >= 0");
   if (!(t.noise_m >= 0.0)) throw std::invalid_argument("noise_m must be >= 0");
+  if (!(t.tilt_noise_rad >= 0.0)) throw std::invalid_argument("tilt_noise_rad must be >= 0");
+  if (!flags.empty() && flags.size() != postures.size())
+    throw std::invalid_argument("flags: " + std::to_string(flags.size()) + " for " + std::to_string(postures.size()) +
+                                " postures (give one per posture, or none)");
   if (t.T_station_base.empty()) throw std::invalid_argument("T_station_base: at least one station is needed");
   for (std::size_t k = 0; k < postures.size(); ++k)
     if (postures[k].size() != static_cast<Eigen::Index>(dof))
@@ -159,6 +169,10 @@ std::vector<Sample> generate(const Truth& t, const std::vector<Eigen::VectorXd>&
     Sample smp;
     smp.q = postures[k];
     smp.station = static_cast<int>(k % t.T_station_base.size());
+    smp.flag = !flags.empty() && flags[k];
+    // The posture's offsets: the flag's come on top of the joints' own, on the link side alike.
+    std::vector<double> offset(dof);
+    for (unsigned i = 0; i < dof; ++i) offset[i] = at(t.joint_offset_rad, i, 0.0) + (smp.flag ? at(t.flag_offset_rad, i, 0.0) : 0.0);
 
     // --- 1. Joints. The side of the play a joint under small torque sits on follows its last move:
     // the motor pushed the link, which lags behind it (−b after a positive move, +b after a negative).
@@ -168,7 +182,7 @@ std::vector<Sample> generate(const Truth& t, const std::vector<Eigen::VectorXd>&
       if (move < 0.0) side[i] = 1.0;
     }
     KDL::JntArray ql(dof), tau(dof);
-    for (unsigned i = 0; i < dof; ++i) ql(i) = smp.q[i] + at(t.joint_offset_rad, i, 0.0);
+    for (unsigned i = 0; i < dof; ++i) ql(i) = smp.q[i] + offset[i];
     if (joints_move) {
       // Equilibrium link side: ql = q + offset + b·side − τ(ql)/k, with τ the holding torque at the
       // link side and side = −sign τ where |τ| overcomes the friction. Fixed-point iteration: the
@@ -180,7 +194,7 @@ std::vector<Sample> generate(const Truth& t, const std::vector<Eigen::VectorXd>&
         for (unsigned i = 0; i < dof; ++i) {
           const double b = at(t.backlash_rad, i, 0.0), kj = at(t.joint_stiffness_Nm_per_rad, i, 0.0);
           s[i] = std::abs(tau(i)) > at(t.backlash_friction_Nm, i, 2.0) ? (tau(i) > 0.0 ? -1.0 : 1.0) : side[i];
-          const double next = smp.q[i] + at(t.joint_offset_rad, i, 0.0) + b * s[i] - (kj > 0.0 ? tau(i) / kj : 0.0);
+          const double next = smp.q[i] + offset[i] + b * s[i] - (kj > 0.0 ? tau(i) / kj : 0.0);
           change = std::max(change, std::abs(next - ql(i)));
           ql(i) = next;
         }
@@ -236,13 +250,18 @@ std::vector<Sample> generate(const Truth& t, const std::vector<Eigen::VectorXd>&
     }
 
     // --- 3. Base: the weight's moment about the base origin tilts it by M/k (about x and y only,
-    // gravity being vertical).
+    // gravity being vertical), a pure rotation about that origin (F_tilt.p stays zero). The base
+    // inclinometer reads the rotation vector; a rotation leaves its own axis unchanged, so it is the
+    // same in the untilted and in the tilted base frame.
     KDL::Frame F_tilt = KDL::Frame::Identity();
+    Vec tilt = Vec::Zero();
     if (t.base_stiffness_Nm_per_rad > 0.0) {
       Vec M = base_com.cross(base_mass * g) + c_payload.cross(t.payload_kg * g);
       for (unsigned i = 0; i < nseg; ++i) M += c[i].cross(m[i] * g);
-      F_tilt.M = rotation(M / t.base_stiffness_Nm_per_rad);
+      tilt = M / t.base_stiffness_Nm_per_rad;
+      F_tilt.M = rotation(tilt);
     }
+    smp.base_tilt_rad = tilt.head<2>();
 
     // --- The deflected chain and the measurement.
     f = F_tilt;
@@ -255,6 +274,10 @@ std::vector<Sample> generate(const Truth& t, const std::vector<Eigen::VectorXd>&
     smp.p_station_m = t.T_station_base[static_cast<std::size_t>(smp.station)] * smp.p_base_m;
     if (t.noise_m > 0.0)
       for (int a = 0; a < 3; ++a) smp.p_station_m[a] += t.noise_m * noise(rng);
+    // After the point's noise, and only when there is tilt noise: the stream of runs without it is
+    // unchanged.
+    if (t.tilt_noise_rad > 0.0)
+      for (int a = 0; a < 2; ++a) smp.base_tilt_rad[a] += t.tilt_noise_rad * noise(rng);
     out.push_back(smp);
   }
   return out;

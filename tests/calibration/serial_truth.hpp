@@ -13,6 +13,8 @@
 //   2. beams: cantilever deflections of the named links under the loads of that configuration;
 //   3. base: the whole chain tilted by the weight's moment over the base springs (every chain
 //      link, the payload and the base link's own inertial, which KDL keeps out of the chain).
+// A posture may carry a flag (an elbow or a wrist flipped): its joints then get flag_offset_rad on
+// top of joint_offset_rad, in step 1 like any offset.
 // Backlash side: −sign(τ) when |τ| exceeds the friction (gravity pushes the play over), otherwise
 // +1 after a positive move of that joint, −1 after a negative one, unchanged when it did not move,
 // +1 at the first posture. τ is KDL's holding torque (what the motor applies to hold the arm).
@@ -41,6 +43,7 @@ struct Beam {
 struct Truth {
   std::string urdf, base, tip;                 ///< URDF file and the chain base link → tip link
   Eigen::VectorXd joint_offset_rad;            ///< link side at commanded q + offset
+  Eigen::VectorXd flag_offset_rad;             ///< added to joint_offset_rad in the flagged postures only
   Eigen::VectorXd joint_stiffness_Nm_per_rad;  ///< joint springs; 0 = rigid joint
   Eigen::VectorXd backlash_rad;                ///< half of the play; 0 = none
   Eigen::VectorXd backlash_friction_Nm;        ///< |τ| above which gravity decides the side; empty = 2 N·m
@@ -51,6 +54,7 @@ struct Truth {
   std::vector<Eigen::Isometry3d> T_station_base;                ///< point_station = T * point_base (at least one)
   Eigen::Vector3d tool_point_m = Eigen::Vector3d::Zero();       ///< in the tip frame
   double noise_m = 0.0;                                         ///< Gaussian, per coordinate
+  double tilt_noise_rad = 0.0;                                  ///< Gaussian, per base inclinometer reading
 };
 
 struct Sample {
@@ -59,6 +63,13 @@ struct Sample {
   Eigen::Vector3d p_station_m;  ///< measured: station frame, with noise
   Eigen::Vector3d p_base_m;     ///< noiseless, base frame (for tests)
   Eigen::VectorXd q_link;       ///< link-side joint values after offsets, springs, backlash (for tests)
+  bool flag = false;            ///< the posture's flag, as given
+  /// The base inclinometer's reading, with noise: the x and y components of the rotation vector
+  /// (axis·angle) of the tilt the base springs give the whole chain, in the base frame. The tilt
+  /// turns about the base frame's origin: a point p of the chain (base coordinates, untilted) goes
+  /// to exp([rx, ry, 0]) · p. Gravity being along −z, the tilt's rotation vector has no z component.
+  /// Zero (noise only) when the base is rigid.
+  Eigen::Vector2d base_tilt_rad = Eigen::Vector2d::Zero();
 };
 
 /// Standard gravity, m/s², along −z of the (untilted) base frame.
@@ -69,9 +80,16 @@ std::vector<Eigen::VectorXd> draw_postures(int n, const std::vector<std::pair<do
 
 /// The measurements of `postures` in that order: backlash has hysteresis, so the order matters
 /// (the link side of a joint under small torque stays where the last move of that joint left it).
-/// Posture k is measured from station k % T_station_base.size(). Noise is drawn from `rng` only
-/// when noise_m > 0. Throws std::invalid_argument on a URDF KDL cannot read, a missing chain, an
-/// unknown or zero-length beam link, a vector of the wrong size or a negative stiffness.
+/// Posture k is measured from station k % T_station_base.size(). `flags` is empty (no posture
+/// flagged) or holds one flag per posture. Noise is drawn from `rng`, posture by posture: the
+/// point's three coordinates when noise_m > 0, then the inclinometer's x and y readings when
+/// tilt_noise_rad > 0 (so that without tilt noise the stream is the one of the runs before it
+/// existed, which the blind suite's seeds depend on). Throws std::invalid_argument on a URDF KDL
+/// cannot read, a missing chain, an unknown or zero-length beam link, a vector of the wrong size, a
+/// negative stiffness or noise, or a number of flags that is neither 0 nor one per posture.
+std::vector<Sample> generate(const Truth& t, const std::vector<Eigen::VectorXd>& postures, const std::vector<bool>& flags,
+                             std::mt19937& rng);
+/// The same with no posture flagged.
 std::vector<Sample> generate(const Truth& t, const std::vector<Eigen::VectorXd>& postures, std::mt19937& rng);
 
 /// A random station frame: a rotation of up to `angle_rad` about a random axis, a translation of up

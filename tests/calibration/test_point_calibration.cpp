@@ -346,3 +346,91 @@ TEST(PointCalibration, StatedNoiseTellsNoneFromUnexplained) {
   EXPECT_FALSE(short_of.noise.after_within);
   EXPECT_NE(short_of.verdict.find("something else remains"), std::string::npos) << short_of.verdict;
 }
+
+// The closed form also for the candidates that read flags and tilts and for the links' bending,
+// alone and with every other candidate, away from the start (bending turns of a few mrad, so the
+// turns' own rotation Jacobians and their carrying of the rest are both exercised).
+TEST(PointCalibration, ClosedFormJacobianOfFlagsTiltsAndBending) {
+  std::mt19937 rng(4407);
+  const hc::SerialRobot robot = ur10();
+  const int stations = 2;
+  auto obs = random_postures(rng, robot.dof(), 14, stations);
+  hc::PointFitOptions opt;
+  opt.flag_names = {"elbow_flipped", "wrist_flipped"};
+  opt.tilts = {{0, 0, "tilt_base_link_rx"}, {0, 1, "tilt_base_link_ry"}, {2, 0, "tilt_forearm_link_rx"}};
+  std::uniform_real_distribution<double> tilt(-2e-3, 2e-3);
+  for (std::size_t k = 0; k < obs.size(); ++k) {
+    obs[k].flags = {k % 2 == 0, k % 3 == 0};
+    obs[k].tilts_rad = {tilt(rng), tilt(rng), tilt(rng)};
+  }
+  const std::vector<hc::PointModel> models = {
+      {hc::PointCandidate::flag_offsets},
+      {hc::PointCandidate::link_bending},
+      {hc::PointCandidate::measured_tilt},
+      {hc::PointCandidate::geometric, hc::PointCandidate::link_bending, hc::PointCandidate::measured_tilt},
+      {hc::PointCandidate::joint_offsets, hc::PointCandidate::joint_compliance, hc::PointCandidate::backlash, hc::PointCandidate::geometric,
+       hc::PointCandidate::flag_offsets, hc::PointCandidate::link_bending, hc::PointCandidate::measured_tilt}};
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (const auto& m : models) {
+    // A step per parameter by its unit: what a calibration's parameters are worth, larger.
+    const auto params = hc::identifiability(robot, obs, stations, m, opt).parameters;
+    Eigen::VectorXd dx(static_cast<Eigen::Index>(params.size()));
+    for (std::size_t j = 0; j < params.size(); ++j) {
+      const auto& unit = params[j].unit;
+      dx[static_cast<Eigen::Index>(j)] = (unit == "rad" ? 0.05 : unit == "m" ? 0.05 : 2e-5) * u(rng);
+    }
+    const auto J = hc::detail::point_jacobians(robot, obs, stations, m, dx, opt);
+    ASSERT_EQ(J.first.cols(), J.second.cols());
+    EXPECT_LT(worst_column_error(J), 1e-6) << "model " << hc::to_string(m);
+  }
+  // The UR10's three links spanning 0.2 m or more bend (shoulder, upper arm, forearm), and each
+  // turn moves the point.
+  const auto params = hc::identifiability(robot, obs, stations, {hc::PointCandidate::link_bending}, opt).parameters;
+  ASSERT_EQ(params.size(), 6u * stations + 3 + 3);
+  EXPECT_EQ(params.back().name, "bending forearm_link");
+  EXPECT_EQ(params.back().unit, "1/(N·m²)");
+  const auto J = hc::detail::point_jacobians(robot, obs, stations, {hc::PointCandidate::link_bending},
+                                             Eigen::VectorXd::Zero(static_cast<Eigen::Index>(params.size())), opt);
+  EXPECT_GT(J.first.rightCols(3).colwise().norm().minCoeff(), 0.0);
+}
+
+// A telescopic column: its span runs from the prismatic joint's fixed origin to the next joint,
+// so its bending grows with the extension. With an arm of weight m g at r beyond the column's top
+// and the point at R, the point moves per unit 1/EI by L · m g r · sqrt(R² + L²/4) (the turn
+// L·M about the span's mid-point): the ratio between two extensions follows from that alone.
+TEST(PointCalibration, ATelescopicColumnBendsMoreWhenExtended) {
+  hc::SerialRobot robot;
+  robot.convention = hc::DhConvention::urdf;
+  hc::DhRow column;
+  column.name = "column_joint";
+  column.kind = hc::JointKind::prismatic;
+  column.T_parent_joint.translation() = Eigen::Vector3d(0, 0, 0.3);
+  column.lower = 0.0;
+  column.upper = 0.5;
+  hc::DhRow pan;
+  pan.name = "pan_joint";
+  pan.T_parent_joint.translation() = Eigen::Vector3d(0, 0, 0.5);
+  robot.joints = {column, pan};
+  const double m_kg = 10.0, r_m = 0.4, R_m = 1.0;
+  robot.inertials = {{20.0, Eigen::Vector3d::Zero(), Eigen::Matrix3d::Identity()},
+                     {5.0, Eigen::Vector3d(0, 0, 0.25), Eigen::Matrix3d::Identity()},
+                     {m_kg, Eigen::Vector3d(r_m, 0, 0), Eigen::Matrix3d::Identity()}};
+  std::vector<hc::PointObservation> obs(4);
+  const double ext[4][2] = {{0.0, 0.0}, {0.4, 0.0}, {0.0, 1.5}, {0.4, 1.5}};
+  for (int k = 0; k < 4; ++k) {
+    obs[static_cast<std::size_t>(k)].q = Eigen::Vector2d(ext[k][0], ext[k][1]);
+    obs[static_cast<std::size_t>(k)].p_station_m = hc::tool_pose(robot, obs[static_cast<std::size_t>(k)].q) * Eigen::Vector3d(R_m, 0, 0);
+  }
+  hc::PointFitOptions opt;
+  opt.tool_point_start_ee_m = Eigen::Vector3d(R_m, 0, 0);
+  const auto params = hc::identifiability(robot, obs, 1, {hc::PointCandidate::link_bending}, opt).parameters;
+  ASSERT_EQ(params.back().name, "bending body 1");  // only the column spans 0.2 m or more
+  const auto J = hc::detail::point_jacobians(robot, obs, 1, {hc::PointCandidate::link_bending},
+                                             Eigen::VectorXd::Zero(static_cast<Eigen::Index>(params.size())), opt);
+  const Eigen::Index col = J.first.cols() - 1;
+  const double retracted = J.first.block<3, 1>(0, col).norm(), extended = J.first.block<3, 1>(3, col).norm();
+  const auto expected = [&](double L) { return L * m_kg * 9.80665 * r_m * std::sqrt(R_m * R_m + L * L / 4); };
+  EXPECT_NEAR(extended / retracted, expected(0.9) / expected(0.5), 1e-9);
+  EXPECT_GT(extended / retracted, 1.8);
+  EXPECT_LT((J.first - J.second).norm(), 1e-6 * J.first.norm());
+}

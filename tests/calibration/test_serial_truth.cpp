@@ -1,8 +1,10 @@
 // The truth generator of the blind point-calibration tests (serial_truth.cpp) against what it claims:
 // KDL's forward kinematics when every effect is off, the cantilever closed forms on a one-link robot
 // built here, joint springs at their equilibrium, the two sides of backlash, the base tilting
-// towards the overhang, and bad input refused by name. The expectations are computed here, from KDL
-// and from the equations, not from the generator's own intermediate values.
+// towards the overhang, the offsets of flagged postures, the base inclinometer's reading and noise,
+// the random stream the blind suite's seeds depend on, and bad input refused by name. The
+// expectations are computed here, from KDL and from the equations, not from the generator's own
+// intermediate values.
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
@@ -614,4 +616,178 @@ TEST(SerialTruth, BadInputIsRefusedByName) {
   t.urdf = garbage.path.string();
   refused(t, {q}, "KDL cannot read");
   EXPECT_THROW(ts::draw_postures(3, {{1.0, 0.0}}, rng), std::invalid_argument);
+}
+
+TEST(SerialTruth, FlagOffsetsMoveExactlyTheFlaggedPostures) {
+  // Springs on, so the flag's offset must also reach the equilibrium (the holding torque is taken at
+  // the offset link side); joint offsets on, so the flag's must come on top of them.
+  ts::Truth t = ur10_truth();
+  t.joint_offset_rad = 1e-3 * vec({0.5, -1.0, 0.3, 0.0, 1.0, -0.4});
+  t.joint_stiffness_Nm_per_rad = vec({1e5, 5e4, 4e4, 1e4, 1e4, 5e3});
+  t.flag_offset_rad = 1e-3 * vec({0.0, 0.0, 1.5, -2.0, 0.8, 0.0});
+  std::mt19937 rng(13);
+  const auto postures = ts::draw_postures(30, std::vector<std::pair<double, double>>(6, {-3.0, 3.0}), rng);
+  std::vector<bool> flags;
+  for (std::size_t k = 0; k < postures.size(); ++k) flags.push_back(k % 3 == 0);
+  const auto s = ts::generate(t, postures, flags, rng);
+  // The expectations: the same robot with the flag's offsets made ordinary joint offsets (flagged
+  // postures), or without them (the others).
+  ts::Truth flagged = t, plain = t;
+  flagged.joint_offset_rad = t.joint_offset_rad + t.flag_offset_rad;
+  flagged.flag_offset_rad = {};
+  plain.flag_offset_rad = {};
+  const auto as_flagged = ts::generate(flagged, postures, rng), as_plain = ts::generate(plain, postures, rng);
+  ASSERT_EQ(s.size(), postures.size());
+  for (std::size_t k = 0; k < s.size(); ++k) {
+    EXPECT_EQ(s[k].flag, flags[k]) << k;
+    const ts::Sample& expected = flags[k] ? as_flagged[k] : as_plain[k];
+    EXPECT_LT((s[k].p_base_m - expected.p_base_m).norm(), 1e-12) << k;
+    EXPECT_LT((s[k].q_link - expected.q_link).cwiseAbs().maxCoeff(), 1e-12) << k;
+    if (flags[k]) {
+      EXPECT_GT((s[k].p_base_m - as_plain[k].p_base_m).norm(), 1e-4) << k;  // the flag does move them
+    }
+  }
+}
+
+TEST(SerialTruth, BaseTiltReadingIsTheTiltThePointsShow) {
+  // Everything that deflects the chain on, the base too: the reading must be the rotation that
+  // takes the chain on a rigid base to the chain on the springs, about the base origin.
+  ts::Truth t = ur10_truth();
+  t.joint_offset_rad = 1e-3 * vec({0.5, -1.0, 0.3, 0.0, 1.0, -0.4});
+  t.joint_stiffness_Nm_per_rad = vec({1e5, 5e4, 4e4, 1e4, 1e4, 5e3});
+  t.beams = {{"upper_arm_link", 5e4, 2e4}, {"forearm_link", 5e4, 0.0}};
+  t.payload_kg = 5.0;
+  t.payload_com_tip_m = Vec(0.02, -0.03, 0.1);
+  t.base_stiffness_Nm_per_rad = 3e5;
+  std::mt19937 rng(17);
+  const auto postures = ts::draw_postures(30, std::vector<std::pair<double, double>>(6, {-3.0, 3.0}), rng);
+  ts::Truth rigid_base = t;
+  rigid_base.base_stiffness_Nm_per_rad = 0.0;
+  const auto s = ts::generate(t, postures, rng), rigid = ts::generate(rigid_base, postures, rng);
+  for (std::size_t k = 0; k < s.size(); ++k) {
+    const Vec theta(s[k].base_tilt_rad.x(), s[k].base_tilt_rad.y(), 0.0);
+    EXPECT_GT(theta.norm(), 1e-5) << k;  // the arm's weight does tilt the base
+    EXPECT_LT(theta.norm(), 1e-2) << k;
+    const Vec turned = Eigen::AngleAxisd(theta.norm(), theta.normalized()) * rigid[k].p_base_m;
+    EXPECT_LT((turned - s[k].p_base_m).norm(), 1e-9) << k;
+    EXPECT_GT((rigid[k].p_base_m - s[k].p_base_m).norm(), 1e-5) << k;
+    EXPECT_EQ(rigid[k].base_tilt_rad, Eigen::Vector2d::Zero()) << k;  // a rigid base reads nothing
+  }
+}
+
+TEST(SerialTruth, BaseTiltReadingsHaveTheGivenNoise) {
+  for (double k_base : {0.0, 3e5}) {
+    ts::Truth t = ur10_truth();
+    t.base_stiffness_Nm_per_rad = k_base;
+    t.tilt_noise_rad = 1e-5;
+    std::mt19937 rng(19);
+    const auto postures = ts::draw_postures(2000, std::vector<std::pair<double, double>>(6, {-3.0, 3.0}), rng);
+    ts::Truth quiet = t;
+    quiet.tilt_noise_rad = 0.0;
+    const auto s = ts::generate(t, postures, rng), exact = ts::generate(quiet, postures, rng);
+    Eigen::Vector2d sum = Eigen::Vector2d::Zero(), sq = Eigen::Vector2d::Zero();
+    double cross = 0.0;
+    for (std::size_t k = 0; k < s.size(); ++k) {
+      const Eigen::Vector2d r = s[k].base_tilt_rad - exact[k].base_tilt_rad;
+      sum += r;
+      sq += r.cwiseProduct(r);
+      cross += r.x() * r.y();
+    }
+    const double n = static_cast<double>(s.size());
+    for (int a = 0; a < 2; ++a) {
+      EXPECT_NEAR(sum[a] / n, 0.0, 1e-6) << k_base;                    // 4.5 standard errors
+      EXPECT_NEAR(std::sqrt(sq[a] / n), 1e-5, 0.07 * 1e-5) << k_base;  // standard error of σ: 1.6 %
+    }
+    EXPECT_LT(std::abs(cross / std::sqrt(sq.x() * sq.y())), 0.1) << k_base;  // x and y independent (standard error 0.022)
+  }
+}
+
+TEST(SerialTruth, NoiseIsDrawnPointFirstThenTiltAndTiltOnlyWhenAsked) {
+  // The blind suite's seeds fix its draws: the stream the generator takes from `rng` is three
+  // standard normals per posture for the point, then two for the inclinometer only when it has
+  // noise, and nothing else.
+  ts::Truth t = ur10_truth();
+  t.base_stiffness_Nm_per_rad = 0.0;  // the reading is its noise alone
+  std::mt19937 pr(23);
+  const auto postures = ts::draw_postures(21, std::vector<std::pair<double, double>>(6, {-3.0, 3.0}), pr);
+  for (const auto& [noise_m, tilt_noise_rad] : {std::pair{1e-3, 0.0}, std::pair{1e-3, 1e-5}, std::pair{0.0, 1e-5}}) {
+    t.noise_m = noise_m;
+    t.tilt_noise_rad = tilt_noise_rad;
+    std::mt19937 a(29), b(29);
+    const auto s = ts::generate(t, postures, a);
+    std::normal_distribution<double> n(0.0, 1.0);
+    for (const auto& smp : s) {
+      const Vec r = smp.p_station_m - t.T_station_base[0] * smp.p_base_m;
+      for (int ax = 0; ax < 3; ++ax) EXPECT_NEAR(r[ax], noise_m > 0 ? noise_m * n(b) : 0.0, 1e-12) << noise_m << " " << tilt_noise_rad;
+      for (int ax = 0; ax < 2; ++ax)
+        EXPECT_NEAR(smp.base_tilt_rad[ax], tilt_noise_rad > 0 ? tilt_noise_rad * n(b) : 0.0, 1e-15) << noise_m << " " << tilt_noise_rad;
+    }
+    const auto next = a();
+    EXPECT_EQ(next, b()) << noise_m << " " << tilt_noise_rad;  // the same number of draws taken
+    // Flags take nothing from the stream: flagged postures get the same noise.
+    std::vector<bool> flags;
+    for (std::size_t k = 0; k < postures.size(); ++k) flags.push_back(k % 2 == 1);
+    std::mt19937 c(29);
+    const auto f = ts::generate(t, postures, flags, c);
+    for (std::size_t k = 0; k < s.size(); ++k) {
+      EXPECT_EQ(f[k].p_station_m, s[k].p_station_m) << k;
+      EXPECT_EQ(f[k].base_tilt_rad, s[k].base_tilt_rad) << k;
+    }
+    EXPECT_EQ(c(), next) << noise_m << " " << tilt_noise_rad;
+  }
+}
+
+TEST(SerialTruth, WithoutFlagsBothOverloadsGiveTheSameSamples) {
+  ts::Truth t = ur10_truth();
+  std::mt19937 rng(37);
+  t.T_station_base = {ts::random_station(rng, 2.0, 2.0), ts::random_station(rng, 2.0, 2.0)};
+  t.joint_offset_rad = 1e-3 * vec({0.5, -1.0, 0.3, 0.0, 1.0, -0.4});
+  t.flag_offset_rad = 1e-3 * vec({0.0, 0.0, 1.5, -2.0, 0.8, 0.0});  // no flagged posture: never applied
+  t.backlash_rad = 5e-4 * Eigen::VectorXd::Ones(6);
+  t.base_stiffness_Nm_per_rad = 4e5;
+  t.noise_m = 5e-5;
+  const auto postures = ts::draw_postures(25, std::vector<std::pair<double, double>>(6, {-3.0, 3.0}), rng);
+  ts::Truth unflagged = t;
+  unflagged.flag_offset_rad = {};
+  std::mt19937 a(43), b(43), c(43), d(43);
+  const auto old = ts::generate(t, postures, a), none = ts::generate(t, postures, {}, b),
+             unset = ts::generate(t, postures, std::vector<bool>(postures.size(), false), c), bare = ts::generate(unflagged, postures, d);
+  ASSERT_EQ(old.size(), postures.size());
+  for (const auto* other : {&none, &unset, &bare}) {
+    ASSERT_EQ(other->size(), old.size());
+    for (std::size_t k = 0; k < old.size(); ++k) {
+      EXPECT_EQ(old[k].p_station_m, (*other)[k].p_station_m) << k;
+      EXPECT_EQ(old[k].p_base_m, (*other)[k].p_base_m) << k;
+      EXPECT_EQ(old[k].q_link, (*other)[k].q_link) << k;
+      EXPECT_EQ(old[k].base_tilt_rad, (*other)[k].base_tilt_rad) << k;
+      EXPECT_FALSE((*other)[k].flag) << k;
+    }
+  }
+  EXPECT_FALSE(old[0].flag);
+  const auto next = a();
+  EXPECT_EQ(next, b());
+  EXPECT_EQ(next, c());
+  EXPECT_EQ(next, d());
+}
+
+TEST(SerialTruth, BadFlagsAndTiltNoiseAreRefusedByName) {
+  std::mt19937 rng(1);
+  const Eigen::VectorXd q = ur10_reach();
+  const auto refused = [&rng](const ts::Truth& t, const std::vector<bool>& flags, const std::string& what) {
+    try {
+      ts::generate(t, {ur10_reach(), ur10_reach()}, flags, rng);
+      ADD_FAILURE() << "accepted; expected a refusal naming " << what;
+    } catch (const std::invalid_argument& e) {
+      EXPECT_THAT(e.what(), HasSubstr(what));
+    }
+  };
+  ts::Truth t = ur10_truth();
+  refused(t, {true}, "flags");
+  refused(t, {true, false, true}, "flags");
+  t.flag_offset_rad = Eigen::VectorXd::Zero(7);
+  refused(t, {true, false}, "flag_offset_rad");
+  t = ur10_truth();
+  t.tilt_noise_rad = -1e-6;
+  refused(t, {}, "tilt_noise_rad");
+  EXPECT_NO_THROW(ts::generate(ur10_truth(), {q, q}, {true, false}, rng));
 }

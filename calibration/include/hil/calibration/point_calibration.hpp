@@ -23,8 +23,8 @@ struct PointObservation {
   Eigen::Vector3d p_station_m;  ///< the measured point in the station's frame
   double payload_kg = 0.0;      ///< carried at payload_com_ee_m (tool frame): adds to the gravity load
   Eigen::Vector3d payload_com_ee_m = Eigen::Vector3d::Zero();
-  double sigma_m = 0.0;  ///< the measurement's standard deviation per coordinate when the lab states it; 0: unknown
-  std::vector<bool> flags;       ///< one per PointFitOptions::flag_names (an elbow or wrist flipped, ...)
+  double sigma_m = 0.0;           ///< the measurement's standard deviation per coordinate when the lab states it; 0: unknown
+  std::vector<bool> flags;        ///< one per PointFitOptions::flag_names (an elbow or wrist flipped, ...)
   std::vector<double> tilts_rad;  ///< one per PointFitOptions::tilts: measured tilts of named links (inclinometers)
 };
 
@@ -181,6 +181,11 @@ struct PointComparison {
   /// compliance, 1/EI or half-play below zero by more than 1.96 σ): "joint_compliance: compliance
   /// elbow_joint = −3.1e-6 ± 0.8e-6 rad/(N·m)".
   std::vector<std::string> not_physical;
+  /// Links left out of link_bending before it was compared because their 1/EI, fitted to every
+  /// posture, came out below zero beyond its 95 % interval (one at a time, the worst first).
+  std::vector<std::string> bending_dropped;
+  /// The links link_bending was compared with, by body (1..dof); empty when it was not.
+  std::vector<int> bending_bodies;
   /// "cause" (a candidate is named), "none" (no candidate passes and the rigid model is within the
   /// stated noise, or no noise is stated) or "unexplained" (no candidate passes, yet the rigid
   /// model's residual is above the stated noise: something outside the library).
