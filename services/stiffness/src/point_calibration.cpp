@@ -24,6 +24,7 @@ Report run(const std::string& run_path, const std::string& rig_path, const Optio
   const auto rig = format::load_rig(rig_path);
   if (!rig.robot) throw error::FormatError({rig_path, 0, 0, "robot"}, "the rig has no robot to calibrate");
   r.robot_name = rig.robot->name;
+  r.robot_links = rig.robot->body_links;
   r.run = format::read_calibration_run(run_path, *rig.robot);
   const hc::SerialRobot robot = models::to_serial_robot(*rig.robot);
   for (const auto& p : r.run.postures) {
@@ -34,17 +35,38 @@ Report run(const std::string& run_path, const std::string& rig_path, const Optio
     o.payload_kg = p.payload_kg;
     o.payload_com_ee_m = p.payload_com_m;
     o.sigma_m = p.sigma_m;
+    o.flags = p.flags;
+    o.tilts_rad = p.tilts_rad;
     r.observations.push_back(o);
   }
   const int stations = static_cast<int>(r.run.stations.size());
   hc::PointFitOptions fo;
   fo.tool_point_start_ee_m = options.tool_point_start_ee_m;
   fo.station_names = r.run.stations;
+  fo.flag_names = r.run.flag_names;
+  // Links by name to the chain's bodies (the run's reader has checked that tilt columns name one).
+  const auto body_of = [&](const std::string& link, const std::string& what) {
+    const auto& links = robot.body_links;
+    const auto at = std::find(links.begin(), links.end(), link);
+    if (at == links.end()) {
+      std::string all;
+      for (const auto& l : links) all += (all.empty() ? "" : ", ") + l;
+      throw std::invalid_argument(what + " '" + link + "' is not a link of the robot's chain" +
+                                  (all.empty() ? std::string(" (the robot has no link names: give it as a URDF)") : " (" + all + ")"));
+    }
+    return static_cast<int>(at - links.begin());
+  };
+  for (const auto& t : r.run.tilts) fo.tilts.push_back({body_of(t.link, "tilt column " + t.column + ": link"), t.axis, t.column});
+  for (const auto& l : options.bending_links) {
+    const int b = body_of(l, "bending link");
+    if (b == 0) throw std::invalid_argument("bending link '" + l + "' is the chain's base: it moves with no joint");
+    fo.bending_bodies.push_back(b);
+  }
   std::vector<hc::PointCandidate> usable;
   for (const auto c : options.candidates) {
     if (c == hc::PointCandidate::rigid) continue;
-    if (hc::needs_inertials(c) && robot.inertials.size() != static_cast<std::size_t>(robot.dof()) + 1) {
-      r.skipped.push_back(std::string(hc::to_string(c)) + ": needs the robot's inertials (a URDF with <inertial> elements)");
+    if (std::string why; !hc::usable(c, robot, r.observations, fo, &why)) {
+      r.skipped.push_back(why);
       continue;
     }
     usable.push_back(c);
@@ -108,6 +130,15 @@ void print(std::ostream& os, const Report& r) {
     os << fmt::format("rigid model against the stated noise: χ² {:.1f} on {:.0f} degrees of freedom (99 % bound {:.1f}): {:.2f} σ, {}\n",
                       n.chi2, n.dof, n.bound_99, n.rms_over_sigma, n.within ? "within the noise" : "above the noise");
   else os << "no measurement noise stated (sigma_m column): the rigid model is not tested against it\n";
+  if (!r.comparison.bending_bodies.empty()) {
+    std::string links;
+    for (const int b : r.comparison.bending_bodies)
+      links += (links.empty() ? "" : ", ") + (static_cast<std::size_t>(b) < r.robot_links.size()
+                                                  ? r.robot_links[static_cast<std::size_t>(b)]
+                                                  : "body " + std::to_string(b));
+    os << "links that may bend (link_bending): " << links << "\n";
+  }
+  for (const auto& d : r.comparison.bending_dropped) os << "  " << d << "\n";
   os << "verdict: " << r.comparison.verdict << "\n";
   if (r.cause) {
     os << fmt::format("parameters of {} ({:.3f} mm RMS, noise estimate {:.3f} mm per coordinate):\n", hc::to_string(r.cause->model),
@@ -197,6 +228,17 @@ nlohmann::json to_json(const Report& r) {
   j["noise"] = noise;
   j["kind"] = r.comparison.kind;
   j["reduced"] = r.comparison.reduced.empty() ? json(nullptr) : json(r.comparison.reduced);
+  j["alternatives"] = json::array();
+  for (const int a : r.comparison.alternatives) j["alternatives"].push_back(name_of(a));
+  j["not_physical"] = r.comparison.not_physical;
+  j["bending_links"] = json::array();
+  for (const int b : r.comparison.bending_bodies)
+    j["bending_links"].push_back(static_cast<std::size_t>(b) < r.robot_links.size() ? r.robot_links[static_cast<std::size_t>(b)]
+                                                                                    : "body " + std::to_string(b));
+  j["bending_dropped"] = r.comparison.bending_dropped;
+  j["flags"] = r.run.flag_names;
+  j["tilts"] = json::array();
+  for (const auto& t : r.run.tilts) j["tilts"].push_back(t.column);
   j["verdict"] = r.comparison.verdict;
   j["cause_fit"] = r.cause ? fit_json(*r.cause) : json(nullptr);
   j["skipped"] = r.skipped;
@@ -228,6 +270,11 @@ void write_report(const Report& r, const std::string& dir) {
     v.facts.push_back({"against the stated noise",
                        fmt::format("χ² {:.1f} on {:.0f} dof (99 % bound {:.1f}): residual {:.2f} σ", cmp.noise.chi2, cmp.noise.dof,
                                    cmp.noise.bound_99, cmp.noise.rms_over_sigma)});
+  if (!cmp.alternatives.empty()) {
+    std::string alt;
+    for (const int a : cmp.alternatives) alt += (alt.empty() ? "" : ", ") + hc::to_string(cmp.rows[static_cast<std::size_t>(a)].model);
+    v.facts.push_back({"not told apart from", alt + " (explains these postures as well by the rules)"});
+  }
   if (r.cause)
     v.facts.push_back({"determined", fmt::format("{} of {} parameters of {} (with the nuisance frames)", r.cause->rank,
                                                  r.cause->parameters_total, hc::to_string(r.cause->model))});

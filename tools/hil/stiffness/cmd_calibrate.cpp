@@ -19,7 +19,7 @@ namespace hil::cli {
 namespace {
 
 struct CalibrateArgs {
-  std::string run, rig, json, candidates, tool, report;
+  std::string run, rig, json, candidates, tool, report, bending_links;
   int folds = 0;
 };
 
@@ -60,6 +60,9 @@ int calibrate(const CalibrateArgs& a) {
   if (!a.candidates.empty()) o.candidates = parse_candidates(a.candidates);
   o.folds = a.folds;
   if (!a.tool.empty()) o.tool_point_start_ee_m = parse_point(a.tool);
+  std::istringstream links(a.bending_links);
+  for (std::string l; std::getline(links, l, ',');)
+    if (!l.empty()) o.bending_links.push_back(l);
   const auto report = services::point_calibration::run(a.run, a.rig, o);
   auto& text = format::human(format::is_stdout(a.json));
   services::point_calibration::print(text, report);
@@ -80,12 +83,16 @@ void add_calibrate(CLI::App& app) {
   static CalibrateArgs args;
   cmd->add_option("RUN", args.run, "calibration run (CSV, docs/formats.md; hil import writes one from a lab's table)")->required();
   cmd->add_option("--rig", args.rig, "rig file with the robot (a URDF for the gravity candidates)")->required();
-  cmd->add_option("--candidates", args.candidates, "comma-separated: joint_offsets, joint_compliance, backlash, geometric (default: all)")
+  cmd->add_option("--candidates", args.candidates,
+                  "comma-separated: joint_offsets, joint_compliance, backlash, geometric, flag_offsets, link_bending, measured_tilt "
+                  "(default: all the run allows)")
       ->check(checked_by(parse_candidates, "NAME[,NAME...]"));
   cmd->add_option("--folds", args.folds, "one station: postures left out in this many folds (default 0: one at a time)")
       ->check(CLI::Range(0, 100000));
   cmd->add_option("--tool-point", args.tool, "where the measured point is believed to be in the tool frame, X,Y,Z m (default 0,0,0)")
       ->check(checked_by(parse_point, "X,Y,Z"));
+  cmd->add_option("--bending-links", args.bending_links,
+                  "URDF links that may bend for link_bending, comma-separated (default: every link spanning 0.2 m or more)");
   cmd->add_option("--json", args.json, "also write the result as JSON (hil.point_calibration) to OUT, or - for stdout (text to stderr)");
   cmd->add_option("--report", args.report, "also write an HTML report (index.html, figures/) to this folder");
   cmd->callback([] { set_action([] { return calibrate(args); }); });

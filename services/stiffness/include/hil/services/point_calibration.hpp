@@ -20,10 +20,13 @@ struct Options {
   std::vector<calibration::PointCandidate> candidates = calibration::point_candidates();
   int folds = 0;  ///< one station: postures left out in this many folds (0: one at a time)
   Eigen::Vector3d tool_point_start_ee_m = Eigen::Vector3d::Zero();
+  /// URDF links that may bend (link_bending); empty: every link spanning 0.2 m or more.
+  std::vector<std::string> bending_links;
 };
 
 struct Report {
   std::string run_path, rig_path, robot_name;
+  std::vector<std::string> robot_links;  ///< the chain's bodies 0..N by URDF link (empty for a DH robot)
   format::CalibrationRun run;
   std::vector<calibration::PointObservation> observations;
   std::vector<calibration::PointFit> determined;  ///< per model (rigid, then each candidate), before estimation
