@@ -147,6 +147,10 @@ def test_calibrate_a_real_calibration_run(tmp_path):
     assert [h["model"] for h in d["held_out"]] == ["rigid", "joint_offsets"]
     with pytest.raises(ValueError, match="unknown candidate 'tilt'"):
         hil.calibrate(run, rig, candidates=["tilt"])
+    d = hil.calibrate(run, rig, candidates=["link_bending"], folds=4, bending_links=["upper_arm_link"])
+    assert d["bending_links"] + [x.split(" ")[1] for x in d["bending_dropped"]] == ["upper_arm_link"]
+    with pytest.raises(ValueError, match="bending link 'forearm' is not a link"):
+        hil.calibrate(run, rig, candidates=["link_bending"], bending_links=["forearm"])
 
 
 def test_run_sources_keep_the_device_identity(tmp_path):
