@@ -160,6 +160,14 @@ class UrdfRobot(unittest.TestCase):
         self.assertIn("offset shoulder_pan_joint", html)
         figures = sorted(os.listdir(os.path.join(report, "figures")))
         self.assertTrue(any("residual-vectors-x-y" in f for f in figures), figures)
+        # Per joint: the residual against each joint's value, before and after, one figure each.
+        for joint in ("shoulder-pan-joint", "elbow-joint", "wrist-3-joint"):
+            csvs = [f for f in figures if f"residual-against-{joint}" in f and f.endswith(".csv")]
+            self.assertEqual(len(csvs), 1, figures)
+            with open(os.path.join(report, "figures", csvs[0])) as f:
+                lines = f.read().strip().splitlines()
+            self.assertEqual(len(lines), 1 + 23)  # a header and one row per posture
+            self.assertIn("geometric", lines[0])
         self.assertTrue(any("per-posture" in f and f.endswith(".csv") for f in figures), figures)
         # The figures for the nominal URDF with a fitted measurement frame and tool point.
         self.assertAlmostEqual(d["rigid"]["rms_m"] * 1e3, 10.9, delta=0.05)

@@ -27,6 +27,7 @@ Report run(const std::string& run_path, const std::string& rig_path, const Optio
   r.robot_links = rig.robot->body_links;
   r.run = format::read_calibration_run(run_path, *rig.robot);
   const hc::SerialRobot robot = models::to_serial_robot(*rig.robot);
+  for (const auto& j : robot.joints) r.joint_units.push_back(j.kind == hc::JointKind::prismatic ? "m" : "rad");
   for (const auto& p : r.run.postures) {
     hc::PointObservation o;
     o.q = p.q;
@@ -360,6 +361,30 @@ void write_report(const Report& r, const std::string& dir) {
   t2.title = "residual vectors, x-z (station frame)";
   t2.ylabel = "z (mm)";
   page.plot(xz, t2);
+
+  // Per joint: the residual against the joint's value. An offset or a frame error of that joint
+  // shows as a pattern in its angle; compliance and bending as one in the gravity-loaded joints.
+  page.heading("Residuals against each joint");
+  page.paragraph("The 3-D residual of each posture against each joint's value, before (rigid) and after (" +
+                 (r.cause ? hc::to_string(r.cause->model) : std::string("no cause named")) +
+                 "): what is left of a pattern in a joint's angle is what the named model does not explain.");
+  for (std::size_t j = 0; j < r.run.joint_names.size(); ++j) {
+    std::vector<rp::Series> joint(per.series.size());
+    for (std::size_t s = 0; s < per.series.size(); ++s) {
+      joint[s].name = per.series[s];
+      joint[s].points = true;
+      joint[s].point_radius = 3.0;
+      for (std::size_t k = 0; k < r.run.postures.size(); ++k) {
+        joint[s].x.push_back(r.run.postures[k].q[static_cast<Eigen::Index>(j)]);
+        joint[s].y.push_back(per.value[s][k]);
+      }
+    }
+    rp::PlotOptions jo;
+    jo.title = "residual against " + r.run.joint_names[j];
+    jo.xlabel = r.run.joint_names[j] + " (" + (j < r.joint_units.size() ? r.joint_units[j] : "rad or m") + ")";
+    jo.ylabel = "|residual| (mm)";
+    page.plot(joint, jo);
+  }
 
   if (r.cause) {
     page.heading("Parameters of " + hc::to_string(r.cause->model));

@@ -27,6 +27,7 @@ struct Options {
 struct Report {
   std::string run_path, rig_path, robot_name;
   std::vector<std::string> robot_links;  ///< the chain's bodies 0..N by URDF link (empty for a DH robot)
+  std::vector<std::string> joint_units;  ///< per joint: rad or m
   format::CalibrationRun run;
   std::vector<calibration::PointObservation> observations;
   std::vector<calibration::PointFit> determined;  ///< per model (rigid, then each candidate), before estimation
