@@ -35,11 +35,13 @@ struct Layout {
   int flags = 0, bending = 0;                          ///< flag columns; bodies that may bend
   std::vector<std::pair<PointCandidate, int>> blocks;  ///< each extension and its first index
   int tool_at = 0, size = 0;
+  int rot_at = -1;  ///< the measured frame's orientation on the tool, when orientations are fitted
 
-  Layout(int stations_, int dof_, bool tool_, const PointModel& model, int flags_ = 0, int bending_ = 0)
+  Layout(int stations_, int dof_, bool tool_, const PointModel& model, int flags_ = 0, int bending_ = 0, bool orientation = false)
       : stations(stations_), dof(dof_), tool(tool_), flags(flags_), bending(bending_) {
     tool_at = 6 * stations;
     int at = tool_at + (tool ? 3 : 0);
+    if (orientation) rot_at = at, at += 3;
     for (const auto c : model) {
       if (c == PointCandidate::rigid) continue;
       blocks.emplace_back(c, at);
@@ -85,6 +87,12 @@ struct Problem {
   std::vector<std::vector<Eigen::Vector3d>> bend_pivot, bend_v;
   /// Per posture, the measured tilt of each body 0..N as a rotation vector in its frame (measured_tilt).
   std::vector<std::vector<Eigen::Vector3d>> tilt;
+  /// Orientation rows: per posture the first of its 3 rotation residuals (−1: none) and its weight
+  /// (m/rad); the measured rotations in order of the postures that have one.
+  std::vector<int> rot_row;
+  std::vector<double> rot_weight;
+  std::vector<Eigen::Matrix3d> R_measured;
+  int residual_rows = 0;
 
   Problem(const SerialRobot& r, const std::vector<PointObservation>& o, int stations, const PointModel& model, const PointFitOptions& opt)
       : robot(r), obs(o), layout(stations, r.dof(), opt.fit_tool_point, model), tool_fixed(opt.tool_point_start_ee_m), g_world(opt.g_world),
@@ -96,7 +104,24 @@ struct Problem {
       if (c != PointCandidate::rigid && !usable(c, robot, obs, opt, &why))
         throw std::invalid_argument("model " + to_string(model) + ": " + why);
     if (uses(PointCandidate::link_bending)) bend = bending_bodies(robot, obs, opt);
-    layout = Layout(stations, r.dof(), opt.fit_tool_point, model, static_cast<int>(flag_names.size()), static_cast<int>(bend.size()));
+    // Rows: 3 per posture for the point, then 3 per posture with an orientation when they are fitted.
+    int rows = 3 * static_cast<int>(obs.size());
+    rot_row.assign(obs.size(), -1);
+    rot_weight.assign(obs.size(), 0.0);
+    if (opt.fit_orientation)
+      for (std::size_t k = 0; k < obs.size(); ++k) {
+        if (!obs[k].r_station_rad) continue;
+        rot_row[k] = rows, rows += 3;
+        rot_weight[k] = obs[k].sigma_m > 0 && obs[k].sigma_rad > 0 ? obs[k].sigma_m / obs[k].sigma_rad
+                                                                   : PointFitOptions::kLengthPerAngle_m_per_rad;
+        R_measured.push_back(so3::exp(*obs[k].r_station_rad));
+      }
+    residual_rows = rows;
+    if (opt.fit_orientation && rows == 3 * static_cast<int>(obs.size()))
+      throw std::invalid_argument("orientations are to be fitted, but no posture has one (rx, ry, rz)");
+    const bool orientation = opt.fit_orientation;
+    layout = Layout(stations, r.dof(), opt.fit_tool_point, model, static_cast<int>(flag_names.size()), static_cast<int>(bend.size()),
+                    orientation);
     bool gravity = false;
     for (const auto c : model) gravity = gravity || needs_inertials(c);
     const int n = robot.dof();
@@ -147,6 +172,13 @@ struct Problem {
     return d * T0[static_cast<std::size_t>(s)];
   }
   Eigen::Vector3d tool(const Eigen::VectorXd& x) const { return layout.tool ? Eigen::Vector3d(x.segment<3>(layout.tool_at)) : tool_fixed; }
+  Eigen::Vector3d tool_rotation(const Eigen::VectorXd& x) const {
+    return layout.rot_at >= 0 ? Eigen::Vector3d(x.segment<3>(layout.rot_at)) : Eigen::Vector3d::Zero();
+  }
+  /// The measured frame's predicted orientation in station s's frame, from the chain's R_base_ee.
+  Eigen::Matrix3d predicted_rotation(const Eigen::VectorXd& x, int s, const Eigen::Matrix3d& R_base_ee) const {
+    return station(x, s).linear() * R_base_ee * so3::exp(tool_rotation(x));
+  }
 
   /// Joint values of posture k as the model moves them (offsets, springs, backlash).
   Eigen::VectorXd effective_q(const Eigen::VectorXd& x, std::size_t k) const {
@@ -239,18 +271,29 @@ struct Problem {
     return p;
   }
 
-  /// r = (predicted − measured) / kResidualScale_m, 3 per posture.
+  /// r = (predicted − measured) / kResidualScale_m, 3 per posture; then the weighted rotation
+  /// residuals w log(R_measured⁻¹ R_predicted) of the postures with an orientation.
   void residual(const Eigen::VectorXd& x, Eigen::VectorXd& r) const {
-    r.resize(3 * static_cast<Eigen::Index>(obs.size()));
-    for (std::size_t k = 0; k < obs.size(); ++k)
-      r.segment<3>(3 * static_cast<Eigen::Index>(k)) = (station(x, obs[k].station) * point_base(x, k) - obs[k].p_station_m) /
-                                                       kResidualScale_m;
+    r.resize(residual_rows);
+    Chain chain;
+    std::size_t m = 0;
+    for (std::size_t k = 0; k < obs.size(); ++k) {
+      const bool rot = rot_row[k] >= 0;
+      const Eigen::Vector3d p = rot ? point_base(x, k, &chain) : point_base(x, k);
+      r.segment<3>(3 * static_cast<Eigen::Index>(k)) = (station(x, obs[k].station) * p - obs[k].p_station_m) / kResidualScale_m;
+      if (rot)
+        r.segment<3>(rot_row[k]) =
+            rot_weight[k] *
+            so3::log(Eigen::Matrix3d(R_measured[m++].transpose() * predicted_rotation(x, obs[k].station, chain.R_base_ee))) /
+            kResidualScale_m;
+    }
   }
 
   Eigen::VectorXd scale() const {
     Eigen::VectorXd s(layout.size);
     for (int i = 0; i < 6 * layout.stations; ++i) s[i] = i % 6 < 3 ? kAngleScale_rad : kLengthScale_m;
     if (layout.tool) s.segment<3>(layout.tool_at).setConstant(kLengthScale_m);
+    if (layout.rot_at >= 0) s.segment<3>(layout.rot_at).setConstant(kAngleScale_rad);
     for (const auto& [c, at] : layout.blocks) {
       const int n = layout.dof;
       if (c == PointCandidate::geometric) {
@@ -284,16 +327,30 @@ struct Problem {
   /// perturbation likewise.
   void jacobian_closed_form(const Eigen::VectorXd& x, Eigen::MatrixXd& J) const {
     const int n = robot.dof();
-    J.setZero(3 * static_cast<Eigen::Index>(obs.size()), x.size());
+    J.setZero(residual_rows, x.size());
     const int off = layout.block(PointCandidate::joint_offsets), comp = layout.block(PointCandidate::joint_compliance),
               back = layout.block(PointCandidate::backlash), geo = layout.block(PointCandidate::geometric),
               flag = layout.block(PointCandidate::flag_offsets), bent = layout.block(PointCandidate::link_bending);
     Chain chain;
+    std::size_t m = 0;
     for (std::size_t k = 0; k < obs.size(); ++k) {
       const Eigen::Index row = 3 * static_cast<Eigen::Index>(k);
       const Eigen::Vector3d p = point_base(x, k, &chain);
       const int s = obs[k].station;
       const Eigen::Matrix3d R_station = station(x, s).linear();
+      // Orientation rows: a rotation δθ of the measured frame, in the station's frame, moves the
+      // residual w log(R_m⁻¹ R) by w Jr(r)⁻¹ Rᵀ δθ.
+      const int rr = rot_row[k];
+      Eigen::Matrix3d D = Eigen::Matrix3d::Zero();
+      if (rr >= 0) {
+        const Eigen::Matrix3d R = predicted_rotation(x, s, chain.R_base_ee);
+        const Eigen::Vector3d r = so3::log(Eigen::Matrix3d(R_measured[m++].transpose() * R));
+        D = rot_weight[k] * so3::right_jacobian_inverse(r) * R.transpose();
+        J.block<3, 3>(rr, 6 * s) = D * so3::left_jacobian(Eigen::Vector3d(x.segment<3>(6 * s)));
+        if (layout.rot_at >= 0)
+          J.block<3, 3>(rr, layout.rot_at) = rot_weight[k] * so3::right_jacobian_inverse(r) * so3::right_jacobian(tool_rotation(x));
+      }
+      const Eigen::Matrix3d D_out = D * R_station * chain.R_bend;  // a turn of the rigid chain, world frame
       J.block<3, 3>(row, 6 * s) = so3::rotate_jacobian(Eigen::Vector3d(x.segment<3>(6 * s)), T0[static_cast<std::size_t>(s)] * p);
       J.block<3, 3>(row, 6 * s + 3).setIdentity();
       if (layout.tool) J.block<3, 3>(row, layout.tool_at) = R_station * chain.R_base_ee;
@@ -304,17 +361,28 @@ struct Problem {
         const int j = bent + static_cast<int>(l);
         J.block<3, 1>(row, j) = R_station * chain.R_before_bend[l] *
                                 so3::rotate_jacobian(Eigen::Vector3d(x[j] * bend_v[k][l]), chain.w[l]) * bend_v[k][l];
+        if (rr >= 0)
+          J.block<3, 1>(rr, j) = D * R_station * chain.R_before_bend[l] * so3::left_jacobian(Eigen::Vector3d(x[j] * bend_v[k][l])) *
+                                 bend_v[k][l];
       }
       for (int i = 0; i < n; ++i) {
         const auto ui = static_cast<std::size_t>(i);
         const Eigen::Vector3d dp_dq = R_out * (robot.joints[ui].kind == JointKind::prismatic
                                                    ? chain.axis[ui]
                                                    : Eigen::Vector3d(chain.axis[ui].cross(p_rigid - chain.on_axis[ui])));
-        if (off >= 0) J.block<3, 1>(row, off + i) = dp_dq;
+        // The same joint motion turns the measured frame about the joint's axis (a prismatic joint
+        // does not turn it).
+        const Eigen::Vector3d dr_dq = robot.joints[ui].kind == JointKind::prismatic ? Eigen::Vector3d::Zero()
+                                                                                    : Eigen::Vector3d(D_out * chain.axis[ui]);
+        const auto joint_column = [&](int col, double gain) {
+          J.block<3, 1>(row, col) = gain * dp_dq;
+          if (rr >= 0) J.block<3, 1>(rr, col) = gain * dr_dq;
+        };
+        if (off >= 0) joint_column(off + i, 1.0);
         for (int f = 0; flag >= 0 && f < layout.flags; ++f)
-          if (obs[k].flags[static_cast<std::size_t>(f)]) J.block<3, 1>(row, flag + f * n + i) = dp_dq;
-        if (comp >= 0) J.block<3, 1>(row, comp + i) = -G[k][i] * dp_dq;
-        if (back >= 0) J.block<3, 1>(row, back + i) = -sign(G[k][i]) * dp_dq;
+          if (obs[k].flags[static_cast<std::size_t>(f)]) joint_column(flag + f * n + i, 1.0);
+        if (comp >= 0) joint_column(comp + i, -G[k][i]);
+        if (back >= 0) joint_column(back + i, -sign(G[k][i]));
         if (geo >= 0) {
           const Eigen::Matrix3d R_before = chain.before_error[ui].linear();
           J.block<3, 3>(row, geo + 6 * i) = R_out * R_before;
@@ -322,6 +390,9 @@ struct Problem {
           // p = before * (t + exp(ω) w).
           const Eigen::Vector3d w = chain.after_error[ui].inverse() * p_rigid;
           J.block<3, 3>(row, geo + 6 * i + 3) = R_out * R_before * so3::rotate_jacobian(Eigen::Vector3d(x.segment<3>(geo + 6 * i + 3)), w);
+          if (rr >= 0)
+            J.block<3, 3>(rr, geo + 6 * i + 3) = D_out * chain.after_error[ui].linear() *
+                                                 so3::right_jacobian(Eigen::Vector3d(x.segment<3>(geo + 6 * i + 3)));
         }
       }
     }
@@ -332,7 +403,7 @@ struct Problem {
   void jacobian_central_differences(const Eigen::VectorXd& x, Eigen::MatrixXd& J, const Eigen::VectorXd& scale) const {
     constexpr double h = 1e-3;
     Eigen::VectorXd rp, rm, xp = x;
-    J.resize(3 * static_cast<Eigen::Index>(obs.size()), x.size());
+    J.resize(residual_rows, x.size());
     for (Eigen::Index j = 0; j < x.size(); ++j) {
       xp[j] = x[j] + h * scale[j];
       residual(xp, rp);
@@ -356,6 +427,12 @@ struct Problem {
       for (int a = 3; a < 6; ++a) {
         n.push_back(std::string("tool ") + axes[a]);
         units.push_back("m");
+        parts.push_back("tool");
+      }
+    if (layout.rot_at >= 0)
+      for (int a = 0; a < 3; ++a) {
+        n.push_back(std::string("tool ") + axes[a]);
+        units.push_back("rad");
         parts.push_back("tool");
       }
     for (const auto& [c, at] : layout.blocks) {
@@ -531,11 +608,45 @@ Eigen::VectorXd start(const Problem& P, const PointFitOptions& opt) {
   return x;
 }
 
+/// The start in closed form: each station's frame (Kabsch on the nominal points) and, when
+/// orientations are fitted, the measured frame on the tool as the rotation closest (chordal
+/// mean, by SVD) to what each posture's measurement implies.
+Eigen::VectorXd initial(Problem& P, const PointFitOptions& opt) {
+  Eigen::VectorXd x = start(P, opt);
+  P.T0 = closed_form_stations(P, x);
+  if (P.layout.rot_at < 0) return x;
+  Eigen::Matrix3d sum = Eigen::Matrix3d::Zero();
+  std::size_t m = 0;
+  for (std::size_t k = 0; k < P.obs.size(); ++k) {
+    if (P.rot_row[k] < 0) continue;
+    Problem::Chain chain;
+    P.point_base(x, k, &chain);
+    sum += (P.station(x, P.obs[k].station).linear() * chain.R_base_ee).transpose() * P.R_measured[m++];
+  }
+  Eigen::JacobiSVD<Eigen::Matrix3d> svd(sum, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  Eigen::Matrix3d D = Eigen::Matrix3d::Identity();
+  D(2, 2) = (svd.matrixU() * svd.matrixV().transpose()).determinant() < 0 ? -1.0 : 1.0;
+  x.segment<3>(P.layout.rot_at) = so3::log(Eigen::Matrix3d(svd.matrixU() * D * svd.matrixV().transpose()));
+  return x;
+}
+
 void finish(const Problem& P, const Solved& s, const PointFitOptions& opt, PointFit& out) {
   analyse(P, s.x, s.r, opt, out);
   out.converged = s.converged;
   out.residual_m = s.r * kResidualScale_m;
-  const Eigen::Index n = out.residual_m.size() / 3;
+  out.tool_rotation_ee_rad = P.tool_rotation(s.x);
+  out.orientations = 0;
+  double ss_rad = 0.0;
+  out.max_rad = 0.0;
+  for (std::size_t k = 0; k < P.obs.size(); ++k) {
+    if (P.rot_row[k] < 0) continue;
+    const double a = out.residual_m.segment<3>(P.rot_row[k]).norm() / P.rot_weight[k];
+    ++out.orientations;
+    ss_rad += a * a;
+    out.max_rad = std::max(out.max_rad, a);
+  }
+  out.rms_rad = out.orientations ? std::sqrt(ss_rad / out.orientations) : 0.0;
+  const auto n = static_cast<Eigen::Index>(P.obs.size());
   double ss = 0.0;
   out.max_m = 0.0;
   for (Eigen::Index k = 0; k < n; ++k) {
@@ -655,8 +766,7 @@ bool contains(PointCandidate big, PointCandidate small) {
 PointFit fit_points(const SerialRobot& robot, const std::vector<PointObservation>& obs, int stations, const PointModel& model,
                     const PointFitOptions& opt) {
   Problem P(robot, obs, stations, model, opt);
-  Eigen::VectorXd x = start(P, opt);
-  P.T0 = closed_form_stations(P, x);
+  Eigen::VectorXd x = initial(P, opt);
   const Solved s = solve(P, x, {});
   PointFit out;
   out.model = model;
@@ -667,8 +777,7 @@ PointFit fit_points(const SerialRobot& robot, const std::vector<PointObservation
 PointFit identifiability(const SerialRobot& robot, const std::vector<PointObservation>& obs, int stations, const PointModel& model,
                          const PointFitOptions& opt) {
   Problem P(robot, obs, stations, model, opt);
-  const Eigen::VectorXd x = start(P, opt);
-  P.T0 = closed_form_stations(P, x);
+  const Eigen::VectorXd x = initial(P, opt);
   Eigen::VectorXd r;
   P.residual(x, r);
   PointFit out;
@@ -714,8 +823,7 @@ void held_out_fold(const SerialRobot& robot, const std::vector<PointObservation>
       }
     }
     Problem Ptr(robot, train, stations - 1, model, opt);
-    Eigen::VectorXd x = start(Ptr, opt);
-    Ptr.T0 = closed_form_stations(Ptr, x);
+    Eigen::VectorXd x = initial(Ptr, opt);
     const Solved fit = solve(Ptr, x, {});
     Problem Pte(robot, test, 1, model, opt);
     Eigen::VectorXd xt(Pte.layout.size);
@@ -733,8 +841,7 @@ void held_out_fold(const SerialRobot& robot, const std::vector<PointObservation>
   for (std::size_t k = 0; k < obs.size(); ++k)
     if (static_cast<int>(k) % scheme.count != f) train.push_back(obs[k]);
   Problem Ptr(robot, train, 1, model, opt);
-  Eigen::VectorXd x = start(Ptr, opt);
-  Ptr.T0 = closed_form_stations(Ptr, x);
+  Eigen::VectorXd x = initial(Ptr, opt);
   const Solved fit = solve(Ptr, x, {});
   Problem Pall(robot, obs, 1, model, opt);
   Pall.T0 = Ptr.T0;
@@ -803,8 +910,7 @@ std::pair<Eigen::MatrixXd, Eigen::MatrixXd> detail::point_jacobians(const Serial
                                                                     int stations, const PointModel& model, const Eigen::VectorXd& dx,
                                                                     const PointFitOptions& opt) {
   Problem P(robot, obs, stations, model, opt);
-  Eigen::VectorXd x = start(P, opt);
-  P.T0 = closed_form_stations(P, x);
+  Eigen::VectorXd x = initial(P, opt);
   if (dx.size() != x.size())
     throw std::invalid_argument("point_jacobians: dx has " + std::to_string(dx.size()) + " entries, the model " + std::to_string(x.size()));
   x += dx;
@@ -841,11 +947,16 @@ double chi_square_quantile_99(double dof) {
   return dof * std::pow(1.0 - a + z99 * std::sqrt(a), 3);
 }
 
-/// Σ|r_k|²/σ_k² of a fit to every posture, with the postures' stated noise.
+/// Σ|r_k|²/σ_k² of a fit to every posture, with the postures' stated noise; the rotation rows
+/// (weighted by σ_m/σ_rad, so over σ_m they are over σ_rad) follow in posture order.
 double chi_square(const PointFit& f, const std::vector<PointObservation>& obs) {
   double chi2 = 0.0;
-  for (std::size_t k = 0; k < obs.size(); ++k)
-    chi2 += f.residual_m.segment<3>(3 * static_cast<Eigen::Index>(k)).squaredNorm() / (obs[k].sigma_m * obs[k].sigma_m);
+  Eigen::Index rot = 3 * static_cast<Eigen::Index>(obs.size());
+  for (std::size_t k = 0; k < obs.size(); ++k) {
+    const double s2 = obs[k].sigma_m * obs[k].sigma_m;
+    chi2 += f.residual_m.segment<3>(3 * static_cast<Eigen::Index>(k)).squaredNorm() / s2;
+    if (f.orientations > 0 && obs[k].r_station_rad) chi2 += f.residual_m.segment<3>(rot).squaredNorm() / s2, rot += 3;
+  }
   return chi2;
 }
 
@@ -928,7 +1039,9 @@ PointComparison compare_point_candidates(const SerialRobot& robot, const std::ve
   const std::size_t single_rows = c.rows.size();
   // The rigid model against the stated noise: with it, `none` is a finding (the residual is the
   // noise) rather than the absence of a better candidate.
-  c.noise.stated = !obs.empty() && std::all_of(obs.begin(), obs.end(), [](const PointObservation& p) { return p.sigma_m > 0.0; });
+  c.noise.stated = !obs.empty() && std::all_of(obs.begin(), obs.end(), [&](const PointObservation& p) {
+    return p.sigma_m > 0.0 && (!opt.fit_orientation || !p.r_station_rad || p.sigma_rad > 0.0);
+  });
   if (c.noise.stated) {
     const PointFit rigid = fit_points(robot, obs, stations, {}, opt);
     c.noise.chi2 = chi_square(rigid, obs);

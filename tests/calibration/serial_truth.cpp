@@ -112,6 +112,7 @@ std::vector<Sample> generate(const Truth& t, const std::vector<Eigen::VectorXd>&
   if (!(t.payload_kg >= 0.0)) throw std::invalid_argument("payload_kg must be >= 0");
   if (!(t.noise_m >= 0.0)) throw std::invalid_argument("noise_m must be >= 0");
   if (!(t.tilt_noise_rad >= 0.0)) throw std::invalid_argument("tilt_noise_rad must be >= 0");
+  if (!(t.noise_rad >= 0.0)) throw std::invalid_argument("noise_rad must be >= 0");
   if (!flags.empty() && flags.size() != postures.size())
     throw std::invalid_argument("flags: " + std::to_string(flags.size()) + " for " + std::to_string(postures.size()) +
                                 " postures (give one per posture, or none)");
@@ -278,6 +279,19 @@ std::vector<Sample> generate(const Truth& t, const std::vector<Eigen::VectorXd>&
     // unchanged.
     if (t.tilt_noise_rad > 0.0)
       for (int a = 0; a < 2; ++a) smp.base_tilt_rad[a] += t.tilt_noise_rad * noise(rng);
+    // The measured frame's orientation (a 6-D tracker's probe on the tip), its noise last and only
+    // when asked: a small rotation about a random direction in the station's frame.
+    Eigen::Matrix3d R_base_tip;
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) R_base_tip(i, j) = f.M(i, j);
+    Eigen::Matrix3d R = t.T_station_base[static_cast<std::size_t>(smp.station)].linear() * R_base_tip * t.measured_frame_tip;
+    if (t.noise_rad > 0.0) {
+      Vec n;
+      for (int a = 0; a < 3; ++a) n[a] = t.noise_rad * noise(rng);
+      if (n.norm() > 0) R = Eigen::AngleAxisd(n.norm(), n.normalized()).toRotationMatrix() * R;
+    }
+    const Eigen::AngleAxisd aa(R);
+    smp.r_station_rad = aa.angle() * aa.axis();
     out.push_back(smp);
   }
   return out;

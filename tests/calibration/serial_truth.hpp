@@ -50,11 +50,13 @@ struct Truth {
   std::vector<Beam> beams;
   double base_stiffness_Nm_per_rad = 0.0;  ///< tilt stiffness about world x and y; 0 = rigid base
   double payload_kg = 0.0;
-  Eigen::Vector3d payload_com_tip_m = Eigen::Vector3d::Zero();  ///< in the tip frame
-  std::vector<Eigen::Isometry3d> T_station_base;                ///< point_station = T * point_base (at least one)
-  Eigen::Vector3d tool_point_m = Eigen::Vector3d::Zero();       ///< in the tip frame
-  double noise_m = 0.0;                                         ///< Gaussian, per coordinate
-  double tilt_noise_rad = 0.0;                                  ///< Gaussian, per base inclinometer reading
+  Eigen::Vector3d payload_com_tip_m = Eigen::Vector3d::Zero();       ///< in the tip frame
+  std::vector<Eigen::Isometry3d> T_station_base;                     ///< point_station = T * point_base (at least one)
+  Eigen::Vector3d tool_point_m = Eigen::Vector3d::Zero();            ///< in the tip frame
+  double noise_m = 0.0;                                              ///< Gaussian, per coordinate
+  double tilt_noise_rad = 0.0;                                       ///< Gaussian, per base inclinometer reading
+  Eigen::Matrix3d measured_frame_tip = Eigen::Matrix3d::Identity();  ///< a 6-D device's measured frame in the tip frame
+  double noise_rad = 0.0;  ///< Gaussian, per component of the measured orientation's small noise rotation (station frame)
 };
 
 struct Sample {
@@ -70,6 +72,9 @@ struct Sample {
   /// to exp([rx, ry, 0]) · p. Gravity being along −z, the tilt's rotation vector has no z component.
   /// Zero (noise only) when the base is rigid.
   Eigen::Vector2d base_tilt_rad = Eigen::Vector2d::Zero();
+  /// The measured frame's orientation in the station's frame (rotation vector): station · deflected
+  /// tip · measured_frame_tip, turned by the noise rotation (drawn last, only when noise_rad > 0).
+  Eigen::Vector3d r_station_rad = Eigen::Vector3d::Zero();
 };
 
 /// Standard gravity, m/s², along −z of the (untilted) base frame.

@@ -199,6 +199,18 @@ class UrdfRobot(unittest.TestCase):
         self.assertEqual(r.returncode, 2)  # the run's joints are not that robot's
         self.assertIn("'a1'", r.stderr)
 
+    def test_the_real_ur10_orientations_are_fitted_when_asked(self):
+        run, _ = self.import_ur10()
+        d = self.json_of("calibrate", run, "--rig", UR10_RIG, "--orientation", "--candidates", "joint_offsets,geometric")
+        self.assertTrue(d["orientation"])
+        self.assertEqual(d["rigid"]["orientations"], 23)
+        self.assertEqual(d["cause"], "geometric")
+        # The named model explains the orientations too, though only the points decide the verdict.
+        self.assertLess(d["cause_fit"]["rms_rad"], 0.8 * d["rigid"]["rms_rad"])
+        # The measured frame is a large turn on the tool (the device's frame, not the flange's).
+        self.assertGreater(sum(x * x for x in d["rigid"]["tool_rotation_ee_rad"]) ** 0.5, 1.0)
+        self.assertFalse(self.json_of("calibrate", run, "--rig", UR10_RIG, "--candidates", "joint_offsets")["orientation"])
+
     def with_sigma(self, run, sigma_m):
         """The run with a stated noise: a sigma_m column on every posture."""
         out = os.path.join(self.dir, f"sigma_{sigma_m}.csv")

@@ -38,6 +38,8 @@ Report run(const std::string& run_path, const std::string& rig_path, const Optio
     o.sigma_m = p.sigma_m;
     o.flags = p.flags;
     o.tilts_rad = p.tilts_rad;
+    o.r_station_rad = p.r_measured_rad;
+    o.sigma_rad = p.sigma_rad;
     r.observations.push_back(o);
   }
   const int stations = static_cast<int>(r.run.stations.size());
@@ -45,6 +47,9 @@ Report run(const std::string& run_path, const std::string& rig_path, const Optio
   fo.tool_point_start_ee_m = options.tool_point_start_ee_m;
   fo.station_names = r.run.stations;
   fo.flag_names = r.run.flag_names;
+  if (options.orientation && !r.run.has_orientation)
+    throw std::invalid_argument("--orientation: the run has no measured orientations (rx, ry, rz columns)");
+  fo.fit_orientation = r.orientation = options.orientation;
   // Links by name to the chain's bodies (the run's reader has checked that tilt columns name one).
   const auto body_of = [&](const std::string& link, const std::string& what) {
     const auto& links = robot.body_links;
@@ -105,7 +110,10 @@ std::size_t usable_count(const Report& r) {
 
 void print(std::ostream& os, const Report& r) {
   os << fmt::format("calibration run {}: {} postures of robot '{}', {} station(s){}\n", r.run_path, r.run.postures.size(), r.robot_name,
-                    r.run.stations.size(), r.run.has_orientation ? " (orientations given, not used: points only)" : "");
+                    r.run.stations.size(),
+                    r.orientation           ? " (points and orientations fitted)"
+                    : r.run.has_orientation ? " (orientations given, not fitted: --orientation fits them too)"
+                                            : "");
   os << "what the postures determine (each model with the nuisance frames: every station's pose, the tool point; at the rigid fit):\n";
   for (const auto& d : r.determined) {
     os << fmt::format("  {:<18} rank {:>3} of {:>3}", hc::to_string(d.model), d.rank, d.parameters_total);
@@ -116,6 +124,10 @@ void print(std::ostream& os, const Report& r) {
   os << fmt::format(
       "rigid model, station frames and tool point fitted: {:.3f} mm RMS, {:.3f} mm max; tool point [{:.4f}, {:.4f}, {:.4f}] m\n",
       r.rigid.rms_m * 1e3, r.rigid.max_m * 1e3, r.rigid.tool_point_ee_m.x(), r.rigid.tool_point_ee_m.y(), r.rigid.tool_point_ee_m.z());
+  if (r.orientation)
+    os << fmt::format("  orientations: {:.3f} mrad RMS, {:.3f} mrad max; measured frame on the tool [{:.4f}, {:.4f}, {:.4f}] rad\n",
+                      r.rigid.rms_rad * 1e3, r.rigid.max_rad * 1e3, r.rigid.tool_rotation_ee_rad.x(), r.rigid.tool_rotation_ee_rad.y(),
+                      r.rigid.tool_rotation_ee_rad.z());
   os << fmt::format("candidates, held-out error ({}):\n", r.comparison.rigid.scheme);
   os << fmt::format("  {:<34} {:>6} {:>5} {:>12} {:>8} {:>7}\n", "model", "params", "rank", "held-out mm", "gain %", "z");
   os << fmt::format("  {:<34} {:>6} {:>5} {:>12.3f} {:>8} {:>7}\n", "rigid", r.determined.front().parameters_total,
@@ -142,8 +154,9 @@ void print(std::ostream& os, const Report& r) {
   for (const auto& d : r.comparison.bending_dropped) os << "  " << d << "\n";
   os << "verdict: " << r.comparison.verdict << "\n";
   if (r.cause) {
-    os << fmt::format("parameters of {} ({:.3f} mm RMS, noise estimate {:.3f} mm per coordinate):\n", hc::to_string(r.cause->model),
-                      r.cause->rms_m * 1e3, r.cause->sigma_m * 1e3);
+    os << fmt::format("parameters of {} ({:.3f} mm RMS{}, noise estimate {:.3f} mm per coordinate):\n", hc::to_string(r.cause->model),
+                      r.cause->rms_m * 1e3, r.orientation ? fmt::format(", {:.3f} mrad RMS", r.cause->rms_rad * 1e3) : std::string(),
+                      r.cause->sigma_m * 1e3);
     for (const auto& p : r.cause->parameters)
       if (p.part != "station") os << fmt::format("  {:<32} {}\n", p.name, value_text(p));
   }
@@ -182,6 +195,10 @@ nlohmann::json to_json(const Report& r) {
                 {"max_m", f.max_m},
                 {"sigma_m", std::isfinite(f.sigma_m) ? json(f.sigma_m) : json(nullptr)},
                 {"tool_point_ee_m", {f.tool_point_ee_m.x(), f.tool_point_ee_m.y(), f.tool_point_ee_m.z()}},
+                {"orientations", f.orientations},
+                {"rms_rad", f.rms_rad},
+                {"max_rad", f.max_rad},
+                {"tool_rotation_ee_rad", {f.tool_rotation_ee_rad.x(), f.tool_rotation_ee_rad.y(), f.tool_rotation_ee_rad.z()}},
                 {"parameters", pars},
                 {"undetermined", und}};
   };
@@ -229,6 +246,7 @@ nlohmann::json to_json(const Report& r) {
   j["noise"] = noise;
   j["kind"] = r.comparison.kind;
   j["reduced"] = r.comparison.reduced.empty() ? json(nullptr) : json(r.comparison.reduced);
+  j["orientation"] = r.orientation;
   j["alternatives"] = json::array();
   for (const int a : r.comparison.alternatives) j["alternatives"].push_back(name_of(a));
   j["not_physical"] = r.comparison.not_physical;

@@ -21,6 +21,7 @@ namespace {
 struct CalibrateArgs {
   std::string run, rig, json, candidates, tool, report, bending_links;
   int folds = 0;
+  bool orientation = false;
 };
 
 Eigen::Vector3d parse_point(const std::string& text) {
@@ -59,6 +60,7 @@ int calibrate(const CalibrateArgs& a) {
   services::point_calibration::Options o;
   if (!a.candidates.empty()) o.candidates = parse_candidates(a.candidates);
   o.folds = a.folds;
+  o.orientation = a.orientation;
   if (!a.tool.empty()) o.tool_point_start_ee_m = parse_point(a.tool);
   std::istringstream links(a.bending_links);
   for (std::string l; std::getline(links, l, ',');)
@@ -93,6 +95,8 @@ void add_calibrate(CLI::App& app) {
       ->check(checked_by(parse_point, "X,Y,Z"));
   cmd->add_option("--bending-links", args.bending_links,
                   "URDF links that may bend for link_bending, comma-separated (default: every link spanning 0.2 m or more)");
+  cmd->add_flag("--orientation", args.orientation,
+                "fit the run's measured orientations too (rx ry rz), weighted by sigma_m/sigma_rad where stated, else 1 mm per mrad");
   cmd->add_option("--json", args.json, "also write the result as JSON (hil.point_calibration) to OUT, or - for stdout (text to stderr)");
   cmd->add_option("--report", args.report, "also write an HTML report (index.html, figures/) to this folder");
   cmd->callback([] { set_action([] { return calibrate(args); }); });

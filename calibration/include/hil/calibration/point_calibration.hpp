@@ -8,6 +8,7 @@
 /// Pure numerics (Eigen, hil::solver).
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -26,6 +27,10 @@ struct PointObservation {
   double sigma_m = 0.0;           ///< the measurement's standard deviation per coordinate when the lab states it; 0: unknown
   std::vector<bool> flags;        ///< one per PointFitOptions::flag_names (an elbow or wrist flipped, ...)
   std::vector<double> tilts_rad;  ///< one per PointFitOptions::tilts: measured tilts of named links (inclinometers)
+  /// The measured frame's orientation in the station's frame (rotation vector), when the device
+  /// measures a full pose; used with PointFitOptions::fit_orientation.
+  std::optional<Eigen::Vector3d> r_station_rad;
+  double sigma_rad = 0.0;  ///< its standard deviation per component when stated; 0: unknown
 };
 
 /// What a rigid model may miss: each a model extension with its own parameters.
@@ -80,9 +85,13 @@ struct PointFit {
   std::vector<PointParameter> parameters;         ///< stations, tool, then the candidate's
   std::vector<Eigen::Isometry3d> T_station_base;  ///< per station: a base point b maps to T b in the station's frame
   Eigen::Vector3d tool_point_ee_m = Eigen::Vector3d::Zero();
-  Eigen::VectorXd residual_m;  ///< predicted − measured, 3 per posture
+  Eigen::VectorXd residual_m;  ///< predicted − measured, 3 per posture; then, when orientations are fitted,
+                               ///< 3 weighted rotation residuals (m) per posture that has one
   double rms_m = 0.0;          ///< of the 3-D distances
   double max_m = 0.0;
+  double rms_rad = 0.0, max_rad = 0.0;                             ///< of the rotation residuals' angles, when orientations are fitted
+  int orientations = 0;                                            ///< postures whose orientation was fitted
+  Eigen::Vector3d tool_rotation_ee_rad = Eigen::Vector3d::Zero();  ///< the measured frame on the tool, when fitted
   double sigma_m = 0.0;  ///< noise per coordinate estimated from the residual, sqrt(SSR / (3N − rank))
   int rank = 0;
   int parameters_total = 0;
@@ -118,6 +127,12 @@ struct PointFitOptions {
   /// to the next joint's, or to the flange) is at least kMinBendingSpan_m in the first posture.
   std::vector<int> bending_bodies;
   static constexpr double kMinBendingSpan_m = 0.2;
+  /// Fit the measured orientations too (postures that have one): three more residuals each,
+  /// log(R_measured⁻¹ R_predicted), and the measured frame's orientation on the tool ("tool rx ry
+  /// rz") as a nuisance. Weighted by sigma_m / sigma_rad where a posture states both, else by
+  /// kLengthPerAngle_m_per_rad (1 mrad counts as 1 mm).
+  bool fit_orientation = false;
+  static constexpr double kLengthPerAngle_m_per_rad = 1.0;
 };
 
 /// Fits the model `candidate` to the postures. \throws std::invalid_argument for too few postures

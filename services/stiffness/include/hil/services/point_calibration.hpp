@@ -22,6 +22,9 @@ struct Options {
   Eigen::Vector3d tool_point_start_ee_m = Eigen::Vector3d::Zero();
   /// URDF links that may bend (link_bending); empty: every link spanning 0.2 m or more.
   std::vector<std::string> bending_links;
+  /// Fit the run's measured orientations too (rx ry rz columns), weighted by sigma_m / sigma_rad
+  /// where the run states both.
+  bool orientation = false;
 };
 
 struct Report {
@@ -35,6 +38,7 @@ struct Report {
   calibration::PointComparison comparison;
   std::optional<calibration::PointFit> cause;  ///< the named cause's fit (with the second cause when there is one)
   std::vector<std::string> skipped;            ///< candidates left out, with why
+  bool orientation = false;                    ///< the measured orientations were fitted
 };
 
 /// \throws error::FormatError for bad files, std::invalid_argument for data that cannot be fitted.
