@@ -183,7 +183,7 @@ py::dict identify_stiffness(const Path& table_path, const Path& rig, double nois
 }
 
 py::dict calibrate(const Path& run, const Path& rig, const std::vector<std::string>& candidates, int folds,
-                   const std::vector<std::string>& bending_links) {
+                   const std::vector<std::string>& bending_links, bool orientation) {
   if (folds < 0) throw py::value_error("folds: expected >= 0 (0: one posture at a time)");
   services::point_calibration::Options o;
   if (!candidates.empty()) {
@@ -198,6 +198,7 @@ py::dict calibrate(const Path& run, const Path& rig, const std::vector<std::stri
   }
   o.folds = folds;
   o.bending_links = bending_links;
+  o.orientation = orientation;
   nlohmann::json j;
   {
     py::gil_scoped_release free;
@@ -293,11 +294,11 @@ void add_numerics(py::module_& m) {
         "Elastostatic calibration of the rig's robot from a stiffness-experiment table, as "
         "`hil stiffness identify --json`: kept parameters with std, ci95 and PNR, reduction, ranks, residuals.");
   m.def("calibrate", &calibrate, py::arg("run"), py::arg("rig"), py::arg("candidates") = std::vector<std::string>{}, py::arg("folds") = 0,
-        py::arg("bending_links") = std::vector<std::string>{},
+        py::arg("bending_links") = std::vector<std::string>{}, py::arg("orientation") = false,
         "A calibration run (static postures, measured points) against the rig's robot, as `hil calibrate --json`: what the "
         "postures determine per model, the rigid fit with its station frames and tool point, every candidate's held-out error, "
         "the named cause and its fit. bending_links: the URDF links link_bending may bend (default: every link spanning 0.2 m "
-        "or more).");
+        "or more); orientation: fit the run's measured orientations too.");
 }
 
 }  // namespace hil::python
