@@ -91,7 +91,17 @@ OnlineEstimate OnlineIdentifier::estimate() const {
   if (reduce_) {
     std::vector<int> cols(n_free_);
     std::iota(cols.begin(), cols.end(), 0);
-    AlgebraicResult a = reduce_algebraic(model_, sys_, params_, cols, options_);
+    AlgebraicResult a;
+    if (reuse_ && have_reduction_ && reverify_algebraic(model_, sys_, params_, cols, options_, reduction_, a)) {
+      ++stats_.verified;
+    } else {
+      a = reduce_algebraic(model_, sys_, params_, cols, options_);
+      ++stats_.full;
+    }
+    if (reuse_) {
+      reduction_ = a;
+      have_reduction_ = true;
+    }
     free_cols = a.free_cols;
     fixed_cols = a.fixed_cols;
     fixed_vals = a.fixed_values;

@@ -1,5 +1,8 @@
 #include <hil/calibration/reduction.hpp>
 
+#include <Eigen/Cholesky>
+#include <Eigen/Jacobi>
+#include <Eigen/LU>
 #include <Eigen/QR>
 #include <Eigen/SVD>
 #include <algorithm>
@@ -115,13 +118,42 @@ struct UnionFind {
   }
   void unite(int a, int b) { parent[static_cast<std::size_t>(find(a))] = find(b); }
 };
+/// Coupled groups from L (rank x |G3|): columns sharing a row with an entry above l_tolerance · max|L|
+/// are coupled; a group's rank is the number of rows it holds. With `margin` > 1, every entry must
+/// lie clearly on one side of the threshold (below it / margin or above it · margin), else no groups
+/// are returned (the caller's verification fails).
+std::vector<CoupledGroup> groups_of(const Eigen::MatrixXd& L, const std::vector<int>& g3, double l_tolerance, double margin) {
+  const Eigen::Index r = L.rows(), n = L.cols();
+  const double lmax = L.cwiseAbs().maxCoeff();
+  const double t = l_tolerance * lmax;
+  UnionFind uf(static_cast<std::size_t>(n));
+  std::vector<int> row_root(static_cast<std::size_t>(r), -1);
+  for (Eigen::Index i = 0; i < r; ++i) {
+    int first = -1;
+    for (Eigen::Index j = 0; j < n; ++j) {
+      const double a = std::abs(L(i, j));
+      if (margin > 0.0 && !(a * margin < t) && !(a > t * margin)) return {};
+      if (a <= t) continue;
+      if (first < 0) first = static_cast<int>(j);
+      else uf.unite(first, static_cast<int>(j));
+    }
+    row_root[static_cast<std::size_t>(i)] = first;
+  }
+  std::map<int, CoupledGroup> groups;
+  for (Eigen::Index j = 0; j < n; ++j) groups[uf.find(static_cast<int>(j))].cols.push_back(g3[static_cast<std::size_t>(j)]);
+  for (Eigen::Index i = 0; i < r; ++i)
+    if (row_root[static_cast<std::size_t>(i)] >= 0) ++groups[uf.find(row_root[static_cast<std::size_t>(i)])].rank;
+  std::vector<CoupledGroup> out;
+  for (auto& [root, g] : groups) out.push_back(g);
+  std::sort(out.begin(), out.end(), [](const CoupledGroup& a, const CoupledGroup& b) { return a.cols.front() < b.cols.front(); });
+  return out;
+}
 }  // namespace
 
 Splitting m5a_split(const CompressedSystem& sys, const std::vector<int>& g3, const AlgebraicOptions& options) {
   Splitting out;
   if (g3.empty()) return out;
   const Eigen::MatrixXd M = scaled_columns(sys, g3);
-  const auto n = static_cast<Eigen::Index>(g3.size());
   Eigen::BDCSVD<Eigen::MatrixXd> svd(M, Eigen::ComputeThinV);
   const Eigen::VectorXd& sv = svd.singularValues();
   int r = 0;
@@ -136,25 +168,7 @@ Splitting m5a_split(const CompressedSystem& sys, const std::vector<int>& g3, con
   Eigen::MatrixXd Vstar(r, r);
   for (int k = 0; k < r; ++k) Vstar.col(k) = VrT.col(qr.colsPermutation().indices()[k]);
   out.L = Vstar.partialPivLu().solve(VrT);
-  const double lmax = out.L.cwiseAbs().maxCoeff();
-  UnionFind uf(static_cast<std::size_t>(n));
-  std::vector<int> row_root(static_cast<std::size_t>(r), -1);
-  for (Eigen::Index i = 0; i < r; ++i) {
-    int first = -1;
-    for (Eigen::Index j = 0; j < n; ++j) {
-      if (std::abs(out.L(i, j)) <= options.l_tolerance * lmax) continue;
-      if (first < 0) first = static_cast<int>(j);
-      else uf.unite(first, static_cast<int>(j));
-    }
-    row_root[static_cast<std::size_t>(i)] = first;
-  }
-  std::map<int, CoupledGroup> groups;
-  for (Eigen::Index j = 0; j < n; ++j) groups[uf.find(static_cast<int>(j))].cols.push_back(g3[static_cast<std::size_t>(j)]);
-  for (Eigen::Index i = 0; i < r; ++i)
-    if (row_root[static_cast<std::size_t>(i)] >= 0) ++groups[uf.find(row_root[static_cast<std::size_t>(i)])].rank;
-  for (auto& [root, g] : groups) out.groups.push_back(g);
-  std::sort(out.groups.begin(), out.groups.end(),
-            [](const CoupledGroup& a, const CoupledGroup& b) { return a.cols.front() < b.cols.front(); });
+  out.groups = groups_of(out.L, g3, options.l_tolerance, 0.0);
   return out;
 }
 
@@ -302,6 +316,15 @@ void fill_outputs(const VjmModel& model, const ParameterSet& base, const Weighte
   out.spd = check_spd(model, out.compliance);
 }
 
+std::vector<double> priorities_of(const VjmModel& model, const ParameterSet& base, const PipelineOptions& options) {
+  std::vector<double> priority(base.size());
+  for (std::size_t i = 0; i < base.size(); ++i) {
+    const auto it = options.priorities.find(base[i].name);
+    priority[i] = it != options.priorities.end() ? it->second : default_priority(model, base[i]);
+  }
+  return priority;
+}
+
 }  // namespace
 
 AlgebraicResult reduce_algebraic(const VjmModel& model, const CompressedSystem& c, const ParameterSet& base,
@@ -331,11 +354,7 @@ AlgebraicResult reduce_algebraic(const VjmModel& model, const CompressedSystem& 
                       "splitting G3 into " + std::to_string(r.splitting.groups.size()) + " coupled groups (keep " +
                           (groups_text.empty() ? std::string("-") : groups_text) + ")",
                       static_cast<int>(after_m4.size()), -1});
-  std::vector<double> priority(base.size());
-  for (std::size_t i = 0; i < base.size(); ++i) {
-    const auto it = options.priorities.find(base[i].name);
-    priority[i] = it != options.priorities.end() ? it->second : default_priority(model, base[i]);
-  }
+  const std::vector<double> priority = priorities_of(model, base, options);
   const Selection sel = m5bc_select(c, r.splitting, priority, options.algebraic);
   std::vector<int>& free_cols = r.free_cols;
   free_cols = r.partition.g1;
@@ -385,6 +404,326 @@ AlgebraicResult reduce_algebraic(const VjmModel& model, const CompressedSystem& 
                       static_cast<int>(free_cols.size()), s.rank});
   r.solution = std::move(s);
   return r;
+}
+
+namespace {
+
+// Re-verification of a cached reduction (reverify_algebraic). A decision of the full reduction
+// compares a computed quantity with a threshold; the verification recomputes the quantity by a
+// cheaper route (or bounds it) and accepts only when it lies clearly on the cached side: by a factor
+// kStructuralMargin for the rank, partition and coupling thresholds (their quantities sit at rounding
+// level or at O(1), many orders from the thresholds), by kPnrMargin (relative) for the M6 comparisons
+// (continuous statistics, computed to about ε·cond). Both routes are backward stable, so inside these
+// margins the full reduction takes the same decisions.
+constexpr double kStructuralMargin = 2.0;
+constexpr double kPnrMargin = 1e-6;
+
+bool clearly_below(double x, double t) { return x * kStructuralMargin < t; }
+bool clearly_above(double x, double t) { return x > t * kStructuralMargin; }
+
+/// Column norms of L⁻¹ B for a lower-triangular factor L.
+Eigen::VectorXd solved_column_norms(const Eigen::MatrixXd& Lfac, const Eigen::MatrixXd& B) {
+  return Lfac.triangularView<Eigen::Lower>().solve(B).colwise().norm().transpose();
+}
+
+/// Orthonormal basis, column by column (classical Gram-Schmidt, twice).
+struct Basis {
+  Eigen::MatrixXd Q;
+  Eigen::Index k = 0;
+  explicit Basis(Eigen::Index rows, Eigen::Index cap) : Q(rows, cap) {}
+  /// v minus its projection; two passes keep a basis being built orthonormal, one suffices for a norm.
+  Eigen::VectorXd residual(const Eigen::VectorXd& v, int passes = 2) const {
+    Eigen::VectorXd r = v;
+    for (int pass = 0; pass < passes; ++pass)
+      if (k > 0) r -= Q.leftCols(k) * (Q.leftCols(k).transpose() * r);
+    return r;
+  }
+  void push(const Eigen::VectorXd& r) { Q.col(k++) = r / r.norm(); }
+};
+
+}  // namespace
+
+bool reverify_algebraic(const VjmModel& model, const CompressedSystem& c, const ParameterSet& base, const std::vector<int>& cols,
+                        const PipelineOptions& options, const AlgebraicResult& previous, AlgebraicResult& out) {
+  const AlgebraicOptions& ao = options.algebraic;
+  const double tol = ao.rank.tolerance;
+  const double vt = ao.v_tolerance;
+  const Partition& part = previous.partition;
+  if (cols.empty() || base.size() != static_cast<std::size_t>(c.R.cols())) return false;
+  // Cached structure: the M5 output B (G1 and the selected G3 columns) = kept + M6 columns.
+  std::vector<int> m6;
+  for (std::size_t i = 0; i < previous.fixed_cols.size(); ++i)
+    if (previous.fixed_steps[i] == "M6") m6.push_back(previous.fixed_cols[i]);
+  std::vector<int> free_alg = previous.free_cols;
+  free_alg.insert(free_alg.end(), m6.begin(), m6.end());
+  std::sort(free_alg.begin(), free_alg.end());
+  const auto r = static_cast<Eigen::Index>(free_alg.size());
+  if (r == 0 || r != part.rank || previous.rank_algebraic != r) return false;
+  std::vector<int> pos(base.size(), -1);  // column of the system -> position in cols
+  for (std::size_t i = 0; i < cols.size(); ++i) pos[static_cast<std::size_t>(cols[i])] = static_cast<int>(i);
+  for (int f : free_alg)
+    if (f < 0 || static_cast<std::size_t>(f) >= base.size() || pos[static_cast<std::size_t>(f)] < 0) return false;
+
+  // M = R restricted to cols, unit columns (zero columns: clearly below kZeroColumn · largest).
+  const auto n = static_cast<Eigen::Index>(cols.size());
+  const Eigen::Index m = c.R.rows();
+  if (m < r) return false;
+  double largest = 0.0;
+  for (int col : cols) largest = std::max(largest, c.R.col(col).norm());
+  for (int col : cols) {
+    const double nrm = c.R.col(col).norm();
+    if (!clearly_below(nrm, kZeroColumn * largest) && !clearly_above(nrm, kZeroColumn * largest)) return false;
+  }
+  const Eigen::MatrixXd M = scaled_columns(c, cols);
+
+  // B = free_alg (independent), N = the rest. QR of M_B; X: coordinates of M_N in M_B; E: remainder.
+  std::vector<char> in_b(static_cast<std::size_t>(n), 0);
+  std::vector<Eigen::Index> bpos, npos;
+  for (int f : free_alg) in_b[static_cast<std::size_t>(pos[static_cast<std::size_t>(f)])] = 1;
+  for (Eigen::Index i = 0; i < n; ++i) (in_b[static_cast<std::size_t>(i)] ? bpos : npos).push_back(i);
+  const auto nn = static_cast<Eigen::Index>(npos.size());
+  Eigen::MatrixXd MB(m, r), MN(m, nn);
+  for (Eigen::Index k = 0; k < r; ++k) MB.col(k) = M.col(bpos[static_cast<std::size_t>(k)]);
+  for (Eigen::Index k = 0; k < nn; ++k) MN.col(k) = M.col(npos[static_cast<std::size_t>(k)]);
+  const Eigen::HouseholderQR<Eigen::MatrixXd> qr(MB);
+  Eigen::MatrixXd QtN = MN;
+  QtN.applyOnTheLeft(qr.householderQ().adjoint());
+  const Eigen::MatrixXd T = qr.matrixQR().topLeftCorner(r, r).triangularView<Eigen::Upper>();
+  const Eigen::MatrixXd Tinv = T.triangularView<Eigen::Upper>().solve(Eigen::MatrixXd::Identity(r, r));
+  const double s_lo = 1.0 / Tinv.norm();  // ≤ σ_min(M_B) ≤ σ_min of any subset of B
+  const Eigen::MatrixXd X = Tinv * QtN.topRows(r);
+  const Eigen::MatrixXd E = QtN.bottomRows(m - r);
+
+  // M4a rank: σ_r(M) ≥ σ_min(M_B) and σ_{r+1}(M) ≤ ‖E‖_F; σ_1(M) ∈ [‖M‖_F / √min(m, n), ‖M‖_F].
+  const double fro = M.norm();
+  if (!clearly_above(s_lo, tol * fro)) return false;
+  if (!clearly_below(E.norm(), tol * fro / std::sqrt(static_cast<double>(std::min(m, n))))) return false;
+
+  // M4a partition from the projectors: null space spanned by [-X; I], row space by [I; Xᵀ] (B, N order);
+  // the squared row norms of V's null and range parts are their diagonals.
+  Eigen::VectorXd null_part = Eigen::VectorXd::Zero(n), range_part = Eigen::VectorXd::Ones(n);
+  if (nn > 0) {
+    const Eigen::LLT<Eigen::MatrixXd> kn(Eigen::MatrixXd::Identity(nn, nn) + X.transpose() * X);
+    const Eigen::LLT<Eigen::MatrixXd> kr(Eigen::MatrixXd::Identity(r, r) + X * X.transpose());
+    if (kn.info() != Eigen::Success || kr.info() != Eigen::Success) return false;
+    const Eigen::MatrixXd Ln = kn.matrixL(), Lr = kr.matrixL();
+    const Eigen::VectorXd nb = solved_column_norms(Ln, X.transpose());
+    const Eigen::VectorXd nnn = solved_column_norms(Ln, Eigen::MatrixXd::Identity(nn, nn));
+    const Eigen::VectorXd rb = solved_column_norms(Lr, Eigen::MatrixXd::Identity(r, r));
+    const Eigen::VectorXd rn = solved_column_norms(Lr, X);
+    for (Eigen::Index k = 0; k < r; ++k) {
+      null_part[bpos[static_cast<std::size_t>(k)]] = nb[k];
+      range_part[bpos[static_cast<std::size_t>(k)]] = rb[k];
+    }
+    for (Eigen::Index k = 0; k < nn; ++k) {
+      null_part[npos[static_cast<std::size_t>(k)]] = nnn[k];
+      range_part[npos[static_cast<std::size_t>(k)]] = rn[k];
+    }
+  }
+  Partition p;
+  p.rank = static_cast<int>(r);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const int col = cols[static_cast<std::size_t>(i)];
+    if (clearly_below(null_part[i], vt)) p.g1.push_back(col);
+    else if (!clearly_above(null_part[i], vt)) return false;
+    else if (clearly_below(range_part[i], vt)) p.g2.push_back(col);
+    else if (!clearly_above(range_part[i], vt)) return false;
+    else p.g3.push_back(col);
+  }
+  if (p.g1 != part.g1 || p.g2 != part.g2 || p.g3 != part.g3) return false;
+
+  // M5a: S = the selected G3 columns span G3. Rank: σ_min(M_S) ≥ s_lo; a G3 column outside S lies
+  // within ‖E_j‖ + ‖M_G1‖_F ‖X_G1,j‖ of span(M_S).
+  std::vector<int> bidx_of(static_cast<std::size_t>(n), -1), nidx_of(static_cast<std::size_t>(n), -1);
+  for (Eigen::Index k = 0; k < r; ++k) bidx_of[static_cast<std::size_t>(bpos[static_cast<std::size_t>(k)])] = static_cast<int>(k);
+  for (Eigen::Index k = 0; k < nn; ++k) nidx_of[static_cast<std::size_t>(npos[static_cast<std::size_t>(k)])] = static_cast<int>(k);
+  const std::set<int> g1set(p.g1.begin(), p.g1.end());
+  std::vector<int> s_rows, g1_rows;  // rows of X
+  for (Eigen::Index k = 0; k < r; ++k)
+    (g1set.count(cols[static_cast<std::size_t>(bpos[static_cast<std::size_t>(k)])]) ? g1_rows : s_rows).push_back(static_cast<int>(k));
+  const auto r3 = static_cast<Eigen::Index>(s_rows.size());
+  const auto n3 = static_cast<Eigen::Index>(p.g3.size());
+  Splitting split;
+  split.rank = static_cast<int>(r3);
+  if (r3 != previous.splitting.rank) return false;
+  if (n3 > 0 && r3 > 0) {
+    double g3_fro_sq = 0.0, off_sq = 0.0;
+    const double g1_fro = std::sqrt(static_cast<double>(g1_rows.size()));
+    Eigen::MatrixXd W(r3, n3);  // [I, X_S] over G3: its row space is that of M_G3
+    for (Eigen::Index j = 0; j < n3; ++j) {
+      const int i = pos[static_cast<std::size_t>(p.g3[static_cast<std::size_t>(j)])];
+      g3_fro_sq += M.col(i).squaredNorm();
+      const int b = bidx_of[static_cast<std::size_t>(i)];
+      if (b >= 0) {
+        W.col(j).setZero();
+        W(std::find(s_rows.begin(), s_rows.end(), b) - s_rows.begin(), j) = 1.0;
+      } else {
+        const int k = nidx_of[static_cast<std::size_t>(i)];
+        for (Eigen::Index q = 0; q < r3; ++q) W(q, j) = X(s_rows[static_cast<std::size_t>(q)], k);
+        double xg1 = 0.0;
+        for (int q : g1_rows) xg1 += X(q, k) * X(q, k);
+        const double d = E.col(k).norm() + g1_fro * std::sqrt(xg1);
+        off_sq += d * d;
+      }
+    }
+    const double g3_fro = std::sqrt(g3_fro_sq);
+    if (!clearly_above(s_lo, tol * g3_fro)) return false;
+    if (!clearly_below(std::sqrt(off_sq), tol * g3_fro / std::sqrt(static_cast<double>(std::min(m, n3))))) return false;
+    // An orthonormal basis of that row space stands in for V_rᵀ: the column-pivoted QR's pivots
+    // depend only on the row space (largest remaining column norm at each step, replayed here) and
+    // L = V_r*⁻¹ V_rᵀ only on the pivots. Near-ties in the pivoting (this robot has G3 columns that
+    // are exact multiples of each other) are broken by rounding here as in the full run, which is
+    // harmless: the coupled groups are the connected components of the column matroid of M_G3, the
+    // same whichever basis L is written in, and every entry of L must be clear of the threshold.
+    const Eigen::HouseholderQR<Eigen::MatrixXd> wq(W.transpose());
+    const Eigen::MatrixXd VrT = (wq.householderQ() * Eigen::MatrixXd::Identity(n3, r3)).transpose();
+    Eigen::MatrixXd rest = VrT;
+    Eigen::VectorXd norms = rest.colwise().squaredNorm().transpose();
+    Eigen::VectorXd workspace(n3);
+    std::vector<char> used(static_cast<std::size_t>(n3), 0);
+    Eigen::MatrixXd Vstar(r3, r3);
+    for (Eigen::Index k = 0; k < r3; ++k) {
+      Eigen::Index best = -1;
+      double b1 = -1.0;
+      for (Eigen::Index j = 0; j < n3; ++j)
+        if (!used[static_cast<std::size_t>(j)] && norms[j] > b1) {
+          b1 = norms[j];
+          best = j;
+        }
+      if (best < 0 || !(b1 > 0.0)) return false;
+      used[static_cast<std::size_t>(best)] = 1;
+      Vstar.col(k) = VrT.col(best);
+      // Householder step on the remaining columns, as in the pivoted QR.
+      const Eigen::Index len = r3 - k;
+      Eigen::VectorXd essential(len > 1 ? len - 1 : 0);
+      double tau = 0.0, beta = 0.0;
+      rest.col(best).tail(len).makeHouseholder(essential, tau, beta);
+      rest.bottomRows(len).applyHouseholderOnTheLeft(essential, tau, workspace.data());
+      norms = rest.bottomRows(len - 1).colwise().squaredNorm().transpose();
+    }
+    split.L = Vstar.partialPivLu().solve(VrT);
+    split.groups = groups_of(split.L, p.g3, ao.l_tolerance, kStructuralMargin);
+    if (split.groups.empty()) return false;
+  } else if (n3 > 0 || r3 > 0) {
+    return false;
+  }
+  if (split.groups.size() != previous.splitting.groups.size()) return false;
+  for (std::size_t g = 0; g < split.groups.size(); ++g)
+    if (split.groups[g].cols != previous.splitting.groups[g].cols || split.groups[g].rank != previous.splitting.groups[g].rank)
+      return false;
+
+  // M5b: the greedy choice per group, replayed. A kept column joins a subset of B: the trial is full
+  // rank (σ_min ≥ s_lo, σ_max ≤ √size); a fixed one lies within its residual of the span of those chosen
+  // before it (σ_min ≤ residual, σ_max ≥ 1).
+  const std::vector<double> priority = priorities_of(model, base, options);
+  const std::set<int> kept(free_alg.begin(), free_alg.end());
+  Selection sel;
+  for (const CoupledGroup& g : split.groups) {
+    std::vector<int> order = g.cols;
+    std::stable_sort(order.begin(), order.end(),
+                     [&](int a, int b) { return priority[static_cast<std::size_t>(a)] > priority[static_cast<std::size_t>(b)]; });
+    Basis chosen(m, g.rank);
+    for (int col : order) {
+      if (chosen.k == g.rank) {
+        sel.fixed.push_back(col);
+        continue;
+      }
+      const Eigen::VectorXd v = M.col(pos[static_cast<std::size_t>(col)]);
+      if (kept.count(col)) {
+        if (!clearly_above(s_lo, tol * std::sqrt(static_cast<double>(chosen.k + 1)))) return false;
+        chosen.push(chosen.residual(v));
+        sel.identifiable.push_back(col);
+      } else {
+        if (!clearly_below(chosen.residual(v, 1).norm(), tol)) return false;
+        sel.fixed.push_back(col);
+      }
+    }
+  }
+  std::sort(sel.identifiable.begin(), sel.identifiable.end());
+  std::sort(sel.fixed.begin(), sel.fixed.end());
+  std::vector<int> free_cols = p.g1;
+  free_cols.insert(free_cols.end(), sel.identifiable.begin(), sel.identifiable.end());
+  std::sort(free_cols.begin(), free_cols.end());
+  if (free_cols != free_alg) return false;
+  std::vector<int> fixed_cols;
+  std::vector<double> fixed_vals;
+  std::vector<std::string> fixed_steps;
+  for (int g2 : p.g2) {
+    fixed_cols.push_back(g2);
+    fixed_vals.push_back(0.0);
+    fixed_steps.push_back("M4b");
+  }
+  for (int f : sel.fixed) {
+    fixed_cols.push_back(f);
+    const auto it = options.fixed_values.find(base[static_cast<std::size_t>(f)].name);
+    fixed_vals.push_back(it != options.fixed_values.end() ? it->second : 0.0);
+    fixed_steps.push_back("M5c");
+  }
+
+  // M6 is not taken from the cache (its order changes with almost every measurement) but run again
+  // on a QR of [M_free | rhs] (pnr is invariant to the column scaling), columns leaving it by Givens
+  // rotations: each lowest pnr must be clearly below the threshold and clearly the lowest, the last
+  // one clearly above. Every subset of B is full rank (see above), as the full loop requires.
+  if (options.neglect_below > 0.0) {
+    Eigen::VectorXd rhs = c.z;
+    for (std::size_t i = 0; i < fixed_cols.size(); ++i) rhs.noalias() -= c.R.col(fixed_cols[i]) * fixed_vals[i];
+    const Eigen::Index k0 = r;
+    Eigen::MatrixXd A(m, k0 + 1);
+    for (Eigen::Index k = 0; k < k0; ++k) A.col(k) = M.col(pos[static_cast<std::size_t>(free_cols[static_cast<std::size_t>(k)])]);
+    A.col(k0) = rhs;
+    const Eigen::HouseholderQR<Eigen::MatrixXd> aq(A);
+    Eigen::MatrixXd Tf = aq.matrixQR().topLeftCorner(k0, k0).triangularView<Eigen::Upper>();
+    Eigen::VectorXd y = aq.matrixQR().col(k0).head(k0);
+    std::vector<int> fr = free_cols;
+    const double thr = options.neglect_below;
+    while (!fr.empty()) {
+      const auto k = static_cast<Eigen::Index>(fr.size());
+      const Eigen::MatrixXd Ti = Tf.topLeftCorner(k, k).triangularView<Eigen::Upper>().solve(Eigen::MatrixXd::Identity(k, k));
+      const Eigen::VectorXd x = Ti * y.head(k);
+      Eigen::Index worst = 0;
+      double lowest = std::numeric_limits<double>::infinity(), second = lowest;
+      for (Eigen::Index i = 0; i < k; ++i) {
+        const double pnr = std::abs(x[i]) / Ti.row(i).norm();
+        if (pnr < lowest) {
+          second = lowest;
+          lowest = pnr;
+          worst = i;
+        } else if (pnr < second) second = pnr;
+      }
+      if (!(std::abs(lowest - thr) > kPnrMargin * thr)) return false;
+      if (!(lowest < thr)) break;
+      if (!(second > lowest * (1.0 + kPnrMargin))) return false;
+      // Drop column `worst`: shift left and restore the triangle with Givens rotations.
+      for (Eigen::Index j = worst; j + 1 < k; ++j) Tf.col(j).head(k) = Tf.col(j + 1).head(k);
+      for (Eigen::Index j = worst; j + 1 < k; ++j) {
+        Eigen::JacobiRotation<double> g;
+        g.makeGivens(Tf(j, j), Tf(j + 1, j));
+        Tf.block(0, j, k, k - 1 - j).applyOnTheLeft(j, j + 1, g.adjoint());
+        y.applyOnTheLeft(j, j + 1, g.adjoint());
+        Tf(j + 1, j) = 0.0;
+      }
+      fixed_cols.push_back(fr[static_cast<std::size_t>(worst)]);
+      fixed_vals.push_back(0.0);
+      fixed_steps.push_back("M6");
+      fr.erase(fr.begin() + worst);
+    }
+    free_cols = fr;
+  } else if (!m6.empty()) {
+    return false;
+  }
+
+  out = AlgebraicResult{};
+  out.partition = std::move(p);
+  out.splitting = std::move(split);
+  out.rank_algebraic = static_cast<int>(r);
+  out.solution = solve(c, free_cols, fixed_cols,
+                       Eigen::Map<const Eigen::VectorXd>(fixed_vals.data(), static_cast<Eigen::Index>(fixed_vals.size())), ao.rank);
+  if (!out.solution.full_rank) return false;
+  out.free_cols = std::move(free_cols);
+  out.fixed_cols = std::move(fixed_cols);
+  out.fixed_values = std::move(fixed_vals);
+  out.fixed_steps = std::move(fixed_steps);
+  return true;
 }
 
 CalibrationResult calibrate(const VjmModel& model, const std::vector<Measurement>& data, const NoiseModel& noise_in,

@@ -156,3 +156,105 @@ TEST(Reduction, M6NeglectsAParameterThatIsZero) {
   EXPECT_EQ(b.free_cols.size(), 6u);
   EXPECT_LT(std::abs(b.solution.value[5]) / b.solution.std_dev[5], 2.0);
 }
+
+namespace {
+
+/// The compressed system of the physical set for the first `configs` configurations of a stream.
+hc::CompressedSystem physical_system(const hc::VjmModel& m, const hc::ParameterSet& physical, const std::vector<hc::Measurement>& data,
+                                     std::size_t configs, const hc::NoiseModel& noise) {
+  const std::vector<hc::Measurement> first(data.begin(), data.begin() + static_cast<std::ptrdiff_t>(configs));
+  const auto sys = hc::build_system(m, physical, first, noise);
+  return hc::compress(sys.A_w, sys.t_w);
+}
+
+void expect_same_reduction(const hc::AlgebraicResult& a, const hc::AlgebraicResult& b) {
+  EXPECT_EQ(a.partition.g1, b.partition.g1);
+  EXPECT_EQ(a.partition.g2, b.partition.g2);
+  EXPECT_EQ(a.partition.g3, b.partition.g3);
+  EXPECT_EQ(a.partition.rank, b.partition.rank);
+  ASSERT_EQ(a.splitting.groups.size(), b.splitting.groups.size());
+  for (std::size_t g = 0; g < a.splitting.groups.size(); ++g) {
+    EXPECT_EQ(a.splitting.groups[g].cols, b.splitting.groups[g].cols);
+    EXPECT_EQ(a.splitting.groups[g].rank, b.splitting.groups[g].rank);
+  }
+  EXPECT_EQ(a.rank_algebraic, b.rank_algebraic);
+  EXPECT_EQ(a.free_cols, b.free_cols);
+  EXPECT_EQ(a.fixed_cols, b.fixed_cols);
+  EXPECT_EQ(a.fixed_steps, b.fixed_steps);
+  EXPECT_EQ(a.fixed_values, b.fixed_values);
+  ASSERT_EQ(a.solution.value.size(), b.solution.value.size());
+  for (Eigen::Index k = 0; k < a.solution.value.size(); ++k) {
+    EXPECT_NEAR(a.solution.value[k], b.solution.value[k], 1e-9 * std::abs(b.solution.value[k]));
+    EXPECT_NEAR(a.solution.std_dev[k], b.solution.std_dev[k], 1e-9 * b.solution.std_dev[k]);
+  }
+}
+
+}  // namespace
+
+// Issue 29: a cached reduction is confirmed on a system with more rows of the same structure (and
+// then gives reduce_algebraic's answer), and refused when the structure changed or was tampered with.
+TEST(Reduction, ReverifyConfirmsAnUnchangedStructureAndRefusesAChangedOne) {
+  const hc::VjmModel m(hc::kr270_like());
+  hc::ExperimentPlan plan;
+  plan.configurations = 40;
+  plan.moment_nm = 300.0;
+  plan.seed = 29;
+  const hc::NoiseModel noise{10e-6, 10e-6};
+  const auto data = hc::simulate(m, hc::example_compliance(m), plan, noise);
+  hc::PipelineOptions opt;
+  std::vector<hc::ReductionLine> lines;
+  const auto physical = hc::physical_reduction(m, opt, lines);
+  const auto cols = cols_of(physical.size());
+
+  const auto c30 = physical_system(m, physical, data, 30, noise);
+  const auto c40 = physical_system(m, physical, data, 40, noise);
+  const auto a30 = hc::reduce_algebraic(m, c30, physical, cols, opt);
+  const auto a40 = hc::reduce_algebraic(m, c40, physical, cols, opt);
+  hc::AlgebraicResult v;
+  // Its own system: confirmed, identical.
+  ASSERT_TRUE(hc::reverify_algebraic(m, c30, physical, cols, opt, a30, v));
+  expect_same_reduction(v, a30);
+  // Ten more configurations, same M4/M5 structure: confirmed, and equal to the full run on them.
+  ASSERT_EQ(a30.partition.g1, a40.partition.g1);
+  ASSERT_TRUE(hc::reverify_algebraic(m, c40, physical, cols, opt, a30, v));
+  expect_same_reduction(v, a40);
+
+  // Two configurations: a lower rank, the cached structure must be refused.
+  const auto c2 = physical_system(m, physical, data, 2, noise);
+  EXPECT_LT(hc::reduce_algebraic(m, c2, physical, cols, opt).partition.rank, a30.partition.rank);
+  EXPECT_FALSE(hc::reverify_algebraic(m, c2, physical, cols, opt, a30, v));
+  // ...and the other way: a structure of few configurations on the full data (more is identifiable).
+  EXPECT_FALSE(hc::reverify_algebraic(m, c40, physical, cols, opt, hc::reduce_algebraic(m, c2, physical, cols, opt), v));
+
+  // Tampered caches. (1) A kept G3 column swapped with an M5c one such that the kept columns still
+  // form a basis: the rank and partition checks pass, only the replayed M5b choice can refuse it.
+  ASSERT_FALSE(a30.splitting.groups.empty());
+  hc::AlgebraicResult t = a30;
+  std::vector<int> free_alg = a30.free_cols;
+  for (std::size_t i = 0; i < a30.fixed_cols.size(); ++i)
+    if (a30.fixed_steps[i] == "M6") free_alg.push_back(a30.fixed_cols[i]);
+  bool swapped = false;
+  for (std::size_t f = 0; f < a30.fixed_cols.size() && !swapped; ++f) {
+    if (a30.fixed_steps[f] != "M5c") continue;
+    for (int k : a30.free_cols) {
+      if (std::find(a30.partition.g1.begin(), a30.partition.g1.end(), k) != a30.partition.g1.end()) continue;
+      std::vector<int> basis = free_alg;
+      std::replace(basis.begin(), basis.end(), k, a30.fixed_cols[f]);
+      if (hc::rank_of(c30, basis, opt.algebraic.rank) != static_cast<int>(basis.size())) continue;
+      std::replace(t.free_cols.begin(), t.free_cols.end(), k, a30.fixed_cols[f]);
+      std::sort(t.free_cols.begin(), t.free_cols.end());
+      t.fixed_cols[f] = k;
+      swapped = true;
+      break;
+    }
+  }
+  ASSERT_TRUE(swapped);
+  EXPECT_FALSE(hc::reverify_algebraic(m, c30, physical, cols, opt, t, v));
+  // (2) A G1 column moved to G3.
+  ASSERT_FALSE(a30.partition.g1.empty());
+  t = a30;
+  t.partition.g3.push_back(t.partition.g1.back());
+  t.partition.g1.pop_back();
+  std::sort(t.partition.g3.begin(), t.partition.g3.end());
+  EXPECT_FALSE(hc::reverify_algebraic(m, c30, physical, cols, opt, t, v));
+}

@@ -32,8 +32,21 @@ class OnlineIdentifier {
   /// system). Workspaces are kept between calls, but small temporaries are still allocated: not
   /// real-time safe.
   void add(const Measurement& m);
-  /// Solves from the compressed system.
+  /// Solves from the compressed system. With `reduce`, the last reduction is re-verified on the
+  /// updated system (reverify_algebraic) and M4-M6 re-run in full only when a decision changed or is
+  /// too close to its threshold to confirm; the estimate is the full reduction's either way.
+  /// Not safe to call concurrently on one identifier: it updates that cache (the stiffness worker
+  /// calls it from its one thread).
   OnlineEstimate estimate() const;
+
+  /// How the reductions of estimate() were obtained.
+  struct ReductionStats {
+    std::size_t full = 0;      ///< reduce_algebraic runs
+    std::size_t verified = 0;  ///< cached structures confirmed by reverify_algebraic
+  };
+  const ReductionStats& reduction_stats() const { return stats_; }
+  /// false: run the full reduction at every estimate (no cache), e.g. to compare timings.
+  void set_reuse_reduction(bool reuse) { reuse_ = reuse; }
 
   std::size_t measurements() const { return measurements_; }
   Eigen::Index equations() const { return rows_; }
@@ -61,6 +74,11 @@ class OnlineIdentifier {
   Eigen::MatrixXd A6_, A_;
   Eigen::RowVectorXd row_;
   std::vector<int> axes_;
+  bool reuse_ = true;
+  // Cache of estimate() (logically const: it only decides how the same answer is computed).
+  mutable bool have_reduction_ = false;
+  mutable AlgebraicResult reduction_;
+  mutable ReductionStats stats_;
 };
 
 }  // namespace hil::calibration

@@ -151,6 +151,18 @@ struct AlgebraicResult {
 AlgebraicResult reduce_algebraic(const VjmModel& model, const CompressedSystem& sys, const ParameterSet& base, const std::vector<int>& cols,
                                  const PipelineOptions& options, std::vector<ReductionLine>* lines = nullptr);
 
+/// Re-verifies a cached reduce_algebraic result on a changed system (e.g. after more rows were
+/// rotated into R): every decision of M4a (rank, G1/G2/G3), M5a (rank of G3, coupled groups and
+/// their ranks), M5b (each kept/fixed choice) and M6 (each neglected parameter, in order, and the
+/// stop) is recomputed from one QR of the kept columns instead of the SVDs, and must agree with
+/// `previous` with a clear margin from its threshold. Returns false when any decision differs or is
+/// too close to call: the caller then runs reduce_algebraic. On true, `out` holds what
+/// reduce_algebraic would return (same columns and steps; the final solve is the same call, so the
+/// same values), except `partition.singular_values` (empty) and `splitting.L` (the same matrix up to
+/// rounding, from an equivalent basis).
+bool reverify_algebraic(const VjmModel& model, const CompressedSystem& sys, const ParameterSet& base, const std::vector<int>& cols,
+                        const PipelineOptions& options, const AlgebraicResult& previous, AlgebraicResult& out);
+
 /// Runs M1-M6 and the final identification. A noise entry ≤ 0 is estimated from the residuals of
 /// a first fit of the physical set. \throws std::invalid_argument on bad input.
 CalibrationResult calibrate(const VjmModel& model, const std::vector<Measurement>& data, const NoiseModel& noise,
