@@ -325,6 +325,23 @@ std::vector<double> priorities_of(const VjmModel& model, const ParameterSet& bas
   return priority;
 }
 
+/// The fixed columns of M4b (G2, at zero) and M5c (at their given values, else zero), in the order
+/// both the full reduction and its re-verification list them.
+void fix_m4b_m5c(const std::vector<int>& g2, const std::vector<int>& m5c, const ParameterSet& base, const PipelineOptions& options,
+                 std::vector<int>& cols, std::vector<double>& values, std::vector<std::string>& steps) {
+  for (int g : g2) {
+    cols.push_back(g);
+    values.push_back(0.0);
+    steps.push_back("M4b");
+  }
+  for (int f : m5c) {
+    cols.push_back(f);
+    const auto it = options.fixed_values.find(base[static_cast<std::size_t>(f)].name);
+    values.push_back(it != options.fixed_values.end() ? it->second : 0.0);
+    steps.push_back("M5c");
+  }
+}
+
 }  // namespace
 
 AlgebraicResult reduce_algebraic(const VjmModel& model, const CompressedSystem& c, const ParameterSet& base,
@@ -363,17 +380,7 @@ AlgebraicResult reduce_algebraic(const VjmModel& model, const CompressedSystem& 
   std::vector<int>& fixed_cols = r.fixed_cols;
   std::vector<double>& fixed_vals = r.fixed_values;
   std::vector<std::string>& fixed_steps = r.fixed_steps;
-  for (int g2 : r.partition.g2) {
-    fixed_cols.push_back(g2);
-    fixed_vals.push_back(0.0);
-    fixed_steps.push_back("M4b");
-  }
-  for (int f : sel.fixed) {
-    fixed_cols.push_back(f);
-    const auto it = options.fixed_values.find(base[static_cast<std::size_t>(f)].name);
-    fixed_vals.push_back(it != options.fixed_values.end() ? it->second : 0.0);
-    fixed_steps.push_back("M5c");
-  }
+  fix_m4b_m5c(r.partition.g2, sel.fixed, base, options, fixed_cols, fixed_vals, fixed_steps);
   r.rank_algebraic = rank_of(c, free_cols, options.algebraic.rank);
   if (lines)
     lines->push_back({"M5b/c", "selection and assigning: " + std::to_string(sel.fixed.size()) + " fixed",
@@ -648,17 +655,7 @@ bool reverify_algebraic(const VjmModel& model, const CompressedSystem& c, const 
   std::vector<int> fixed_cols;
   std::vector<double> fixed_vals;
   std::vector<std::string> fixed_steps;
-  for (int g2 : p.g2) {
-    fixed_cols.push_back(g2);
-    fixed_vals.push_back(0.0);
-    fixed_steps.push_back("M4b");
-  }
-  for (int f : sel.fixed) {
-    fixed_cols.push_back(f);
-    const auto it = options.fixed_values.find(base[static_cast<std::size_t>(f)].name);
-    fixed_vals.push_back(it != options.fixed_values.end() ? it->second : 0.0);
-    fixed_steps.push_back("M5c");
-  }
+  fix_m4b_m5c(p.g2, sel.fixed, base, options, fixed_cols, fixed_vals, fixed_steps);
 
   // M6 is not taken from the cache (its order changes with almost every measurement) but run again
   // on a QR of [M_free | rhs] (pnr is invariant to the column scaling), columns leaving it by Givens

@@ -8,6 +8,8 @@
 #include <hil/calibration/experiment.hpp>
 #include <hil/calibration/online.hpp>
 
+#include "kr270_experiment.hpp"
+
 namespace hc = hil::calibration;
 
 TEST(Online, UpdatesMatchTheBatchSolutionAfterEveryConfiguration) {
@@ -59,16 +61,8 @@ TEST(Online, UpdatesMatchTheBatchSolutionAfterEveryConfiguration) {
 }
 
 TEST(Online, ReducingWorkerReachesTheBatchPipelineModel) {
-  const hc::VjmModel m(hc::kr270_like());
-  hc::ExperimentPlan plan;
-  plan.configurations = 30;
-  plan.moment_nm = 200.0;
-  plan.seed = 13;
-  const hc::NoiseModel noise{10e-6, 10e-6};
-  const auto data = hc::simulate(m, hc::example_compliance(m), plan, noise);
-  hc::PipelineOptions opt;
-  std::vector<hc::ReductionLine> lines;
-  const auto physical = hc::physical_reduction(m, opt, lines);
+  const auto e = hil::test::kr270_experiment(30, 200.0, 13);
+  const auto& [m, noise, opt, data, physical] = e;
   hc::OnlineIdentifier online(m, physical, {}, Eigen::VectorXd(), noise, opt, true);
   for (const auto& d : data) online.add(d);
   const auto est = online.estimate();
@@ -87,16 +81,8 @@ TEST(Online, ReducingWorkerReachesTheBatchPipelineModel) {
 // same compressed system: the same kept and fixed parameters in the same order, the same steps and
 // values. Both paths must have been taken.
 TEST(Online, CachedReductionEqualsAFullReductionAtEveryUpdate) {
-  const hc::VjmModel m(hc::kr270_like());
-  hc::ExperimentPlan plan;
-  plan.configurations = 60;
-  plan.moment_nm = 300.0;
-  plan.seed = 2929;
-  const hc::NoiseModel noise{10e-6, 10e-6};
-  const auto data = hc::simulate(m, hc::example_compliance(m), plan, noise);
-  hc::PipelineOptions opt;
-  std::vector<hc::ReductionLine> lines;
-  const auto physical = hc::physical_reduction(m, opt, lines);
+  const auto e = hil::test::kr270_experiment(60, 300.0, 2929);
+  const auto& [m, noise, opt, data, physical] = e;
   hc::OnlineIdentifier online(m, physical, {}, Eigen::VectorXd(), noise, opt, true);
   std::vector<int> cols(physical.size());
   std::iota(cols.begin(), cols.end(), 0);

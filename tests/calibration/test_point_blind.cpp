@@ -17,6 +17,7 @@
 #include <hil/format/urdf.hpp>
 #include <hil/models/stiffness.hpp>
 
+#include "blind_ur10.hpp"
 #include "serial_truth.hpp"
 
 namespace hc = hil::calibration;
@@ -24,25 +25,9 @@ namespace ts = hil::test::serial;
 
 namespace {
 
-const std::string kUr10 = std::string(HIL_SOURCE_DIR) + "/examples/robots/ur10.urdf";
-constexpr int kDraws = 20;
-constexpr int kMinRight = 18;
-constexpr int kPostures = 72;
-constexpr int kStations = 3;
-constexpr double kNoise_m = 50e-6;
+using namespace hil::test::blind;
 // UR10 joints in chain order.
 constexpr int kShoulderLift = 1, kElbow = 2, kWrist1 = 3;
-
-const hc::SerialRobot& ur10() {
-  static const hc::SerialRobot r = hil::models::to_serial_robot(hil::format::read_urdf_robot(kUr10, "base_link", "wrist_3_link"));
-  return r;
-}
-
-double uniform(std::mt19937& rng, double lo, double hi) { return std::uniform_real_distribution<double>(lo, hi)(rng); }
-double signed_uniform(std::mt19937& rng, double lo, double hi) {
-  const double m = uniform(rng, lo, hi);
-  return std::uniform_int_distribution<int>(0, 1)(rng) ? m : -m;
-}
 
 using Effect = std::function<void(ts::Truth&, std::mt19937&)>;
 

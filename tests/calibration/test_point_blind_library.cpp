@@ -21,6 +21,7 @@
 #include <hil/format/urdf.hpp>
 #include <hil/models/stiffness.hpp>
 
+#include "blind_ur10.hpp"
 #include "serial_truth.hpp"
 
 namespace hc = hil::calibration;
@@ -28,12 +29,7 @@ namespace ts = hil::test::serial;
 
 namespace {
 
-const std::string kUr10 = std::string(HIL_SOURCE_DIR) + "/examples/robots/ur10.urdf";
-constexpr int kDraws = 20;
-constexpr int kMinRight = 18;
-constexpr int kPostures = 72;
-constexpr int kStations = 3;
-constexpr double kNoise_m = 50e-6;
+using namespace hil::test::blind;
 constexpr double kTiltNoise_rad = 10e-6;  // the base inclinometer, per reading
 // UR10 joints in chain order, and the names examples/robots/ur10.urdf gives them (the flagged
 // offsets' parameters are looked up by these, not by hil's reading of the file).
@@ -42,17 +38,6 @@ const std::vector<std::pair<int, std::string>> kFlaggedJoints = {{kElbow, "elbow
                                                                  {kWrist1, "wrist_1_joint"},
                                                                  {kWrist2, "wrist_2_joint"}};
 const std::string kFlagName = "elbow_flipped";
-
-const hc::SerialRobot& ur10() {
-  static const hc::SerialRobot r = hil::models::to_serial_robot(hil::format::read_urdf_robot(kUr10, "base_link", "wrist_3_link"));
-  return r;
-}
-
-double uniform(std::mt19937& rng, double lo, double hi) { return std::uniform_real_distribution<double>(lo, hi)(rng); }
-double signed_uniform(std::mt19937& rng, double lo, double hi) {
-  const double m = uniform(rng, lo, hi);
-  return std::uniform_int_distribution<int>(0, 1)(rng) ? m : -m;
-}
 
 using Effect = std::function<void(ts::Truth&, std::mt19937&)>;
 

@@ -349,6 +349,20 @@ TEST(PointCalibration, StatedNoiseTellsNoneFromUnexplained) {
   EXPECT_NE(short_of.verdict.find("something else remains"), std::string::npos) << short_of.verdict;
 }
 
+namespace {
+/// A random step away from the start per parameter, by its unit: what a calibration's parameters
+/// are worth, larger (5 cm, 0.05 rad; 2e-5 for compliances and 1/EI).
+Eigen::VectorXd step_by_unit(const hc::SerialRobot& robot, const std::vector<hc::PointObservation>& obs, int stations,
+                             const hc::PointModel& m, const hc::PointFitOptions& opt, std::mt19937& rng) {
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  const auto params = hc::identifiability(robot, obs, stations, m, opt).parameters;
+  Eigen::VectorXd dx(static_cast<Eigen::Index>(params.size()));
+  for (std::size_t j = 0; j < params.size(); ++j)
+    dx[static_cast<Eigen::Index>(j)] = (params[j].unit == "rad" || params[j].unit == "m" ? 0.05 : 2e-5) * u(rng);
+  return dx;
+}
+}  // namespace
+
 // The closed form also for the candidates that read flags and tilts and for the links' bending,
 // alone and with every other candidate, away from the start (bending turns of a few mrad, so the
 // turns' own rotation Jacobians and their carrying of the rest are both exercised).
@@ -372,16 +386,8 @@ TEST(PointCalibration, ClosedFormJacobianOfFlagsTiltsAndBending) {
       {hc::PointCandidate::geometric, hc::PointCandidate::link_bending, hc::PointCandidate::measured_tilt},
       {hc::PointCandidate::joint_offsets, hc::PointCandidate::joint_compliance, hc::PointCandidate::backlash, hc::PointCandidate::geometric,
        hc::PointCandidate::flag_offsets, hc::PointCandidate::link_bending, hc::PointCandidate::measured_tilt}};
-  std::uniform_real_distribution<double> u(-1.0, 1.0);
   for (const auto& m : models) {
-    // A step per parameter by its unit: what a calibration's parameters are worth, larger.
-    const auto params = hc::identifiability(robot, obs, stations, m, opt).parameters;
-    Eigen::VectorXd dx(static_cast<Eigen::Index>(params.size()));
-    for (std::size_t j = 0; j < params.size(); ++j) {
-      const auto& unit = params[j].unit;
-      dx[static_cast<Eigen::Index>(j)] = (unit == "rad" ? 0.05 : unit == "m" ? 0.05 : 2e-5) * u(rng);
-    }
-    const auto J = hc::detail::point_jacobians(robot, obs, stations, m, dx, opt);
+    const auto J = hc::detail::point_jacobians(robot, obs, stations, m, step_by_unit(robot, obs, stations, m, opt, rng), opt);
     ASSERT_EQ(J.first.cols(), J.second.cols());
     EXPECT_LT(worst_column_error(J), 1e-6) << "model " << hc::to_string(m);
   }
@@ -462,13 +468,7 @@ TEST(PointCalibration, ClosedFormJacobianWithOrientations) {
                                               {hc::PointCandidate::geometric, hc::PointCandidate::link_bending,
                                                hc::PointCandidate::measured_tilt, hc::PointCandidate::flag_offsets}};
   for (const auto& m : models) {
-    const auto params = hc::identifiability(robot, obs, stations, m, opt).parameters;
-    Eigen::VectorXd dx(static_cast<Eigen::Index>(params.size()));
-    for (std::size_t j = 0; j < params.size(); ++j) {
-      const auto& unit = params[j].unit;
-      dx[static_cast<Eigen::Index>(j)] = (unit == "rad" ? 0.05 : unit == "m" ? 0.05 : 2e-5) * u(rng);
-    }
-    const auto J = hc::detail::point_jacobians(robot, obs, stations, m, dx, opt);
+    const auto J = hc::detail::point_jacobians(robot, obs, stations, m, step_by_unit(robot, obs, stations, m, opt, rng), opt);
     ASSERT_EQ(J.first.rows(), 3 * 15 + 3 * 12);
     EXPECT_LT(worst_column_error(J), 1e-6) << "model " << hc::to_string(m);
   }

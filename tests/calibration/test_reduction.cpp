@@ -9,6 +9,8 @@
 #include <hil/calibration/experiment.hpp>
 #include <hil/calibration/reduction.hpp>
 
+#include "kr270_experiment.hpp"
+
 namespace hc = hil::calibration;
 
 namespace {
@@ -194,16 +196,8 @@ void expect_same_reduction(const hc::AlgebraicResult& a, const hc::AlgebraicResu
 // Issue 29: a cached reduction is confirmed on a system with more rows of the same structure (and
 // then gives reduce_algebraic's answer), and refused when the structure changed or was tampered with.
 TEST(Reduction, ReverifyConfirmsAnUnchangedStructureAndRefusesAChangedOne) {
-  const hc::VjmModel m(hc::kr270_like());
-  hc::ExperimentPlan plan;
-  plan.configurations = 40;
-  plan.moment_nm = 300.0;
-  plan.seed = 29;
-  const hc::NoiseModel noise{10e-6, 10e-6};
-  const auto data = hc::simulate(m, hc::example_compliance(m), plan, noise);
-  hc::PipelineOptions opt;
-  std::vector<hc::ReductionLine> lines;
-  const auto physical = hc::physical_reduction(m, opt, lines);
+  const auto e = hil::test::kr270_experiment(40, 300.0, 29);
+  const auto& [m, noise, opt, data, physical] = e;
   const auto cols = cols_of(physical.size());
 
   const auto c30 = physical_system(m, physical, data, 30, noise);

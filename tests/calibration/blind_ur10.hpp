@@ -1,0 +1,33 @@
+#pragma once
+// What both series of the serial-robot blind suite share (rules in docs/calibration.md, "The blind
+// suite"): the UR10 as hil reads it, the suite's fixed sizes and its uniform draws. The draws'
+// order is each series' own; these helpers consume the random stream exactly as written.
+#include <random>
+#include <string>
+
+#include <hil/calibration/point_calibration.hpp>
+#include <hil/format/urdf.hpp>
+#include <hil/models/stiffness.hpp>
+
+namespace hil::test::blind {
+
+inline const std::string kUr10 = std::string(HIL_SOURCE_DIR) + "/examples/robots/ur10.urdf";
+inline constexpr int kDraws = 20;
+inline constexpr int kMinRight = 18;
+inline constexpr int kPostures = 72;
+inline constexpr int kStations = 3;
+inline constexpr double kNoise_m = 50e-6;
+
+inline const calibration::SerialRobot& ur10() {
+  static const calibration::SerialRobot r = models::to_serial_robot(format::read_urdf_robot(kUr10, "base_link", "wrist_3_link"));
+  return r;
+}
+
+inline double uniform(std::mt19937& rng, double lo, double hi) { return std::uniform_real_distribution<double>(lo, hi)(rng); }
+/// A magnitude uniform in [lo, hi], then a random sign.
+inline double signed_uniform(std::mt19937& rng, double lo, double hi) {
+  const double m = uniform(rng, lo, hi);
+  return std::uniform_int_distribution<int>(0, 1)(rng) ? m : -m;
+}
+
+}  // namespace hil::test::blind
