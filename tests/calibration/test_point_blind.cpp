@@ -40,15 +40,9 @@ struct Draw {
 Draw draw(int c, int i, const Effect& effect) {
   std::mt19937 rng(28'000'000u + 1'000u * static_cast<unsigned>(c) + static_cast<unsigned>(i));
   Draw d;
-  d.truth.urdf = kUr10;
-  d.truth.base = "base_link";
-  d.truth.tip = "wrist_3_link";
-  for (int s = 0; s < kStations; ++s) d.truth.T_station_base.push_back(ts::random_station(rng, 3.0, 3.0));
-  d.truth.tool_point_m = Eigen::Vector3d(uniform(rng, -0.05, 0.05), uniform(rng, -0.05, 0.05), uniform(rng, 0.05, 0.15));
-  d.truth.noise_m = kNoise_m;
+  d.truth = ur10_truth(rng);
   if (effect) effect(d.truth, rng);
-  const std::vector<std::pair<double, double>> range = {{-3.0, 3.0}, {-2.6, -0.5}, {-2.5, 2.5}, {-3.0, 3.0}, {-3.0, 3.0}, {-3.0, 3.0}};
-  const auto postures = ts::draw_postures(kPostures, range, rng);
+  const auto postures = ts::draw_postures(kPostures, kRange, rng);
   for (const auto& s : ts::generate(d.truth, postures, rng)) {
     hc::PointObservation o;
     o.q = s.q;

@@ -62,16 +62,10 @@ Draw draw(int c, int i, const Effect& effect, Columns cols) {
   const unsigned base = c == 8 ? 28'208'000u : 28'100'000u + 1'000u * static_cast<unsigned>(c);
   std::mt19937 rng(base + static_cast<unsigned>(i));
   Draw d;
-  d.truth.urdf = kUr10;
-  d.truth.base = "base_link";
-  d.truth.tip = "wrist_3_link";
-  for (int s = 0; s < kStations; ++s) d.truth.T_station_base.push_back(ts::random_station(rng, 3.0, 3.0));
-  d.truth.tool_point_m = Eigen::Vector3d(uniform(rng, -0.05, 0.05), uniform(rng, -0.05, 0.05), uniform(rng, 0.05, 0.15));
-  d.truth.noise_m = kNoise_m;
+  d.truth = ur10_truth(rng);
   if (cols.tilt) d.truth.tilt_noise_rad = kTiltNoise_rad;
   if (effect) effect(d.truth, rng);
-  const std::vector<std::pair<double, double>> range = {{-3.0, 3.0}, {-2.6, -0.5}, {-2.5, 2.5}, {-3.0, 3.0}, {-3.0, 3.0}, {-3.0, 3.0}};
-  const auto postures = ts::draw_postures(kPostures, range, rng);
+  const auto postures = ts::draw_postures(kPostures, kRange, rng);
   std::vector<bool> flags;
   if (cols.flag)
     for (int k = 0; k < kPostures; ++k) flags.push_back(std::bernoulli_distribution(0.5)(rng));
