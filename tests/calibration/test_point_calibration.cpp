@@ -569,3 +569,41 @@ TEST(PointCalibration, OrientationsAreFittedWithTheirFrameOnTheTool) {
   const Eigen::Vector3d y_fit = R_fit.transpose().col(1), y_true = t.measured_frame_tip.transpose().col(1);
   EXPECT_LT(std::acos(std::min(1.0, y_fit.dot(y_true))), 1e-3);  // the joint's axis seen from the measured frame
 }
+
+// What the new candidates need is checked before anything is fitted, and said by name: a flag
+// set on every posture (its offsets would be the joints' own), tilt columns that do not match the
+// postures, a tilt of a body the chain does not have, a robot without inertials.
+TEST(PointCalibration, CandidatesThatCannotBeFittedSayWhy) {
+  std::mt19937 rng(4410);
+  const hc::SerialRobot robot = ur10();
+  auto obs = random_postures(rng, robot.dof(), 12, 2);
+  hc::PointFitOptions opt;
+  opt.flag_names = {"elbow_flipped"};
+  for (auto& o : obs) o.flags = {true};
+  std::string why;
+  EXPECT_FALSE(hc::usable(hc::PointCandidate::flag_offsets, robot, obs, opt, &why));
+  EXPECT_EQ(why, "flag_offsets: flag elbow_flipped is set on every posture: its offsets are not told from the joints' own");
+  EXPECT_THROW(hc::fit_points(robot, obs, 2, {hc::PointCandidate::flag_offsets}, opt), std::invalid_argument);
+  obs[3].flags = {false};
+  EXPECT_TRUE(hc::usable(hc::PointCandidate::flag_offsets, robot, obs, opt, &why));
+  obs[4].flags = {};
+  EXPECT_FALSE(hc::usable(hc::PointCandidate::flag_offsets, robot, obs, opt, &why));
+  EXPECT_EQ(why, "flag_offsets: posture 5 has 0 flags, the run names 1");
+
+  opt.tilts = {{0, 0, "tilt_base_link_rx"}};
+  EXPECT_FALSE(hc::usable(hc::PointCandidate::measured_tilt, robot, obs, opt, &why));
+  EXPECT_EQ(why, "measured_tilt: posture 1 has 0 tilts, the run names 1");
+  for (auto& o : obs) o.tilts_rad = {1e-4};
+  EXPECT_TRUE(hc::usable(hc::PointCandidate::measured_tilt, robot, obs, opt, &why));
+  opt.tilts = {{7, 0, "tilt_nowhere_rx"}};
+  EXPECT_FALSE(hc::usable(hc::PointCandidate::measured_tilt, robot, obs, opt, &why));
+  EXPECT_NE(why.find("tilt column tilt_nowhere_rx: body 7"), std::string::npos) << why;
+
+  const hc::SerialRobot dh = hc::kr270_like();  // a DH table: no inertials
+  EXPECT_FALSE(hc::usable(hc::PointCandidate::link_bending, dh, random_postures(rng, dh.dof(), 6, 1), {}, &why));
+  EXPECT_NE(why.find("needs the robot's inertials"), std::string::npos) << why;
+  // compare_point_candidates leaves out what cannot be fitted rather than failing.
+  const auto c = hc::compare_point_candidates(robot, obs, 2, {hc::PointCandidate::joint_offsets, hc::PointCandidate::flag_offsets}, 0,
+                                              hc::PointFitOptions{});
+  for (const auto& row : c.rows) EXPECT_NE(row.model.front(), hc::PointCandidate::flag_offsets);
+}
