@@ -904,6 +904,41 @@ std::vector<Evaluated> evaluate(const SerialRobot& robot, const std::vector<Poin
   return out;
 }
 
+/// Fits to every posture, kept by model: the physical-validity checks, the noise tests and the
+/// verdict ask for the same fits, which are computed once, side by side where they can be.
+class FitCache {
+ public:
+  FitCache(const SerialRobot& robot, const std::vector<PointObservation>& obs, int stations, const PointFitOptions& opt)
+      : robot_(robot), obs_(obs), stations_(stations), opt_(opt) {}
+
+  /// Fits the models not yet fitted, one task each, the largest first.
+  void prefit(std::vector<PointModel> models) {
+    std::sort(models.begin(), models.end());
+    models.erase(std::unique(models.begin(), models.end()), models.end());
+    models.erase(std::remove_if(models.begin(), models.end(), [&](const PointModel& m) { return fits_.count(m) > 0; }), models.end());
+    const auto size = [&](const PointModel& m) { return Layout(stations_, robot_.dof(), opt_.fit_tool_point, m).size; };
+    std::stable_sort(models.begin(), models.end(), [&](const PointModel& a, const PointModel& b) { return size(a) > size(b); });
+    std::vector<PointFit> out(models.size());
+    PointFitOptions inner = opt_;
+    inner.threads = 1;
+    parallel::run_tasks(models.size(), parallel::worker_count(models.size(), opt_.threads),
+                        [&](std::size_t t, std::size_t) { out[t] = fit_points(robot_, obs_, stations_, models[t], inner); });
+    for (std::size_t t = 0; t < models.size(); ++t) fits_.emplace(models[t], std::move(out[t]));
+  }
+
+  const PointFit& operator()(const PointModel& m) {
+    if (!fits_.count(m)) prefit({m});
+    return fits_.at(m);
+  }
+
+ private:
+  const SerialRobot& robot_;
+  const std::vector<PointObservation>& obs_;
+  int stations_;
+  PointFitOptions opt_;
+  std::map<PointModel, PointFit> fits_;
+};
+
 }  // namespace
 
 std::pair<Eigen::MatrixXd, Eigen::MatrixXd> detail::point_jacobians(const SerialRobot& robot, const std::vector<PointObservation>& obs,
@@ -1033,6 +1068,7 @@ PointComparison compare_point_candidates(const SerialRobot& robot, const std::ve
     }
     singles.push_back({cand});
   }
+  FitCache fit(robot, obs, stations, opt);
   const auto first = evaluate(robot, obs, stations, singles, folds, opt);
   c.rigid = first[0].held_out;
   for (std::size_t i = 1; i < first.size(); ++i) c.rows.push_back(row(first[i], c.rigid));
@@ -1042,8 +1078,23 @@ PointComparison compare_point_candidates(const SerialRobot& robot, const std::ve
   c.noise.stated = !obs.empty() && std::all_of(obs.begin(), obs.end(), [&](const PointObservation& p) {
     return p.sigma_m > 0.0 && (!opt.fit_orientation || !p.r_station_rad || p.sigma_rad > 0.0);
   });
+  // The fits the checks below need, side by side: the rigid model's (the noise test) and each
+  // model that passes the rules and has a signed part (physical validity).
+  const auto passes = [&](const PointComparison::Row& r) { return r.gain >= kMinGain && r.z >= kMinZ; };
+  const auto signed_model = [](const PointModel& m) {
+    return std::any_of(m.begin(), m.end(), [](PointCandidate k) {
+      return k == PointCandidate::joint_compliance || k == PointCandidate::backlash || k == PointCandidate::link_bending;
+    });
+  };
+  {
+    std::vector<PointModel> need;
+    for (const auto& r : c.rows)
+      if (passes(r) && signed_model(r.model)) need.push_back(r.model);
+    if (c.noise.stated) need.push_back({});
+    fit.prefit(need);
+  }
   if (c.noise.stated) {
-    const PointFit rigid = fit_points(robot, obs, stations, {}, opt);
+    const PointFit& rigid = fit({});
     c.noise.chi2 = chi_square(rigid, obs);
     c.noise.dof = static_cast<double>(rigid.residual_m.size() - rigid.rank);
     c.noise.bound_99 = chi_square_quantile_99(c.noise.dof);
@@ -1053,11 +1104,8 @@ PointComparison compare_point_candidates(const SerialRobot& robot, const std::ve
   // Physical validity of the models that pass the rules, on their fit to every posture: a
   // compliance, 1/EI or half-play below zero by more than its 95 % interval is not a cause.
   const auto physical_model = [&](const PointModel& m) {
-    const bool signed_part = std::any_of(m.begin(), m.end(), [](PointCandidate k) {
-      return k == PointCandidate::joint_compliance || k == PointCandidate::backlash || k == PointCandidate::link_bending;
-    });
-    if (!signed_part) return true;
-    const PointFit f = fit_points(robot, obs, stations, m, opt);
+    if (!signed_model(m)) return true;
+    const PointFit& f = fit(m);
     for (const auto& p : f.parameters) {
       const bool positive = p.part == to_string(PointCandidate::joint_compliance) || p.part == to_string(PointCandidate::backlash) ||
                             p.part == to_string(PointCandidate::link_bending);
@@ -1117,13 +1165,17 @@ PointComparison compare_point_candidates(const SerialRobot& robot, const std::ve
     m.push_back(other);
     pairs.push_back(m);
   }
-  double best2 = -1.0;
-  for (const auto& e : evaluate(robot, obs, stations, pairs, folds, opt)) {
-    c.rows.push_back(row(e, cause.held_out));
-    const auto& r = c.rows.back();
-    if (r.gain >= kMinGain && r.z >= kMinZ && r.gain > best2 && physical_model(r.model))
-      best2 = r.gain, c.second_cause = static_cast<int>(c.rows.size() - 1);
-  }
+  const std::size_t pair_rows = c.rows.size();
+  for (const auto& e : evaluate(robot, obs, stations, pairs, folds, opt)) c.rows.push_back(row(e, cause.held_out));
+  // The second cause is the passing pair with the largest gain that is physical, checked from the
+  // largest gain down. (Fitting the next pairs on the idle core meanwhile was tried: a pair with
+  // geometric took up to five times as long as the one that decided, and was waited for.)
+  std::vector<std::size_t> by_gain;
+  for (std::size_t i = pair_rows; i < c.rows.size(); ++i)
+    if (passes(c.rows[i])) by_gain.push_back(i);
+  std::stable_sort(by_gain.begin(), by_gain.end(), [&](std::size_t a, std::size_t b) { return c.rows[a].gain > c.rows[b].gain; });
+  for (std::size_t k = 0; k < by_gain.size() && c.second_cause < 0; ++k)
+    if (physical_model(c.rows[by_gain[k]].model)) c.second_cause = static_cast<int>(by_gain[k]);
   // Parsimony between nested candidates: a named candidate that contains a smaller one (geometric
   // contains joint_offsets) gives way to it unless it predicts better than the smaller one by the
   // same rules. Otherwise hidden joint offsets would be named "geometric", which explains them as
@@ -1195,7 +1247,7 @@ PointComparison compare_point_candidates(const SerialRobot& robot, const std::ve
   if (c.noise.stated) {
     // Whether what was named explains the run down to the noise, or something else remains.
     const PointModel& m = c.rows[static_cast<std::size_t>(c.second_cause >= 0 ? c.second_cause : c.cause)].model;
-    const PointFit f = fit_points(robot, obs, stations, m, opt);
+    const PointFit& f = fit(m);
     c.noise.after_chi2 = chi_square(f, obs);
     c.noise.after_dof = static_cast<double>(f.residual_m.size() - f.rank);
     c.noise.after_bound_99 = chi_square_quantile_99(c.noise.after_dof);
