@@ -10,6 +10,7 @@
 #include <limits>
 #include <list>
 #include <map>
+#include <mutex>
 #include <optional>
 #include <stdexcept>
 
@@ -697,13 +698,22 @@ Score score(const ModelFamily& m, const Observations& obs, const CvOptions& o, c
   const std::size_t tasks = forms.size() + folds.size();
   const std::size_t workers = parallel::worker_count(tasks, o.threads);
   std::vector<std::optional<DesignCache>> worker_cache(workers);
+  std::mutex told;
+  int done = 0;
+  const auto tell = [&] {
+    if (!o.on_task) return;
+    std::lock_guard<std::mutex> lock(told);
+    o.on_task(done++, static_cast<int>(tasks));
+  };
+  tell();
   parallel::run_tasks(tasks, workers, [&](std::size_t i, std::size_t w) {
     if (i < forms.size()) {
       form_fits[i] = model_form_fit(*forms[i].model, m, s, obs, all, o.fit);
-      return;
+    } else {
+      if (w > 0 && !worker_cache[w]) worker_cache[w].emplace(m, n);
+      run_fold(i - forms.size(), w > 0 ? *worker_cache[w] : cache);
     }
-    if (w > 0 && !worker_cache[w]) worker_cache[w].emplace(m, n);
-    run_fold(i - forms.size(), w > 0 ? *worker_cache[w] : cache);
+    tell();
   });
   std::map<std::string, std::vector<double>> by_name;
   std::size_t folds_unshifted = 0;

@@ -6,6 +6,7 @@
 
 #include <hil/diagnose/contact_family.hpp>
 #include <hil/format/rig.hpp>
+#include <hil/format/run.hpp>
 #include <hil/models/contact.hpp>
 
 namespace hil::diagnose::test {
@@ -58,6 +59,44 @@ inline std::vector<cid::Measurement> measure(const SceneRun& r, const Effects& e
   std::vector<cid::Measurement> m;
   for (std::size_t i = 0; i < sim.size(); ++i) m.push_back({r.t[i] - r.t[0], sim[i].kin, sim[i].w_fp});
   return m;
+}
+
+/// The run folder `hil diagnose` would read for these measurements (in memory): the rig of `rig_path`,
+/// one sample per measurement, no joints.
+inline format::Run as_run(const std::string& name, const std::string& rig_path, const std::vector<cid::Measurement>& m) {
+  format::Run run;
+  run.dir = name;
+  run.rig = format::load_rig(rig_path);
+  for (const auto& x : m) {
+    format::Sample s;
+    s.t_s = x.t_s;
+    s.p_world_ee_m = x.kin.T_world_ee.translation();
+    s.q_world_ee = Eigen::Quaterniond(x.kin.T_world_ee.linear());
+    s.v_world_ee_m_per_s = x.kin.v_world_ee;
+    s.w_world_ee_rad_per_s = x.kin.w_world_ee;
+    s.f_fp_n = x.w_fp.head<3>();
+    s.m_fp_nm = x.w_fp.tail<3>();
+    run.samples.samples.push_back(s);
+  }
+  run.samples.joints_rad.resize(static_cast<Eigen::Index>(run.samples.samples.size()), 0);
+  return run;
+}
+
+/// Issue 29's lab-length run: the ACU 2a trajectory at 1 kHz looped to `samples` (its times
+/// continuing), with a hidden `effect` drawn by `seed` (noise seed too), as a run folder.
+inline format::Run looped_acu_run(std::size_t samples, const std::string& effect, unsigned seed) {
+  auto r = scene_run("acu_2a", 1);
+  const std::size_t leg = r.kin.size();
+  const double period = r.t.back() - r.t.front() + (r.t[1] - r.t[0]);
+  for (std::size_t i = leg; i < samples; ++i) {
+    r.t.push_back(r.t[i % leg] + period * static_cast<double>(i / leg));
+    r.kin.push_back(r.kin[i % leg]);
+  }
+  r.t.resize(samples);
+  r.kin.resize(samples);
+  Effects e;
+  if (!effect.empty()) draw_effect(effect, seed, r.scene, e);
+  return as_run("acu_2a_looped", std::string(HIL_SOURCE_DIR) + "/examples/acu/acu.yaml", measure(r, e, seed));
 }
 
 }  // namespace hil::diagnose::test

@@ -43,6 +43,30 @@ class Diagnose(unittest.TestCase):
         for opt in ("RUN", "--rig", "--json", "--report", "--candidates", "--folds", "--damping-rates", "--threads"):
             self.assertIn(opt, r.stdout)
 
+    def test_a_run_longer_than_max_samples_is_diagnosed_on_one_sample_in_k(self):
+        run = self.simulate("long", "sensor_bias")
+        with open(os.path.join(run, "samples.csv")) as f:
+            n = sum(1 for line in f.readlines()[1:] if line.strip())  # below the header
+        js = os.path.join(self.dir, "d.json")
+        r = hil("diagnose", run, "--json", js, "--max-samples", "100", "--quiet")
+        self.assertEqual(r.returncode, 0, r.stderr)
+        k = -(-n // 100)  # the smallest k that leaves at most 100
+        with open(js) as f:
+            d = json.load(f)
+        self.assertEqual((d["samples_in_run"], d["every"], d["samples"]), (n, k, -(-n // k)))
+        self.assertTrue(any(note.startswith(f"diagnosed on one sample in {k} of the run's {n}") for note in d["notes"]), d["notes"])
+        self.assertIn(f"samples, one in {k} of {n},", r.stdout)
+        # --max-samples 0 (and the default, 10,000, for this short run) diagnose every sample.
+        r = hil("diagnose", run, "--json", js, "--max-samples", "0", "--quiet", "--candidates", "sensor_bias")
+        self.assertEqual(r.returncode, 0, r.stderr)
+        with open(js) as f:
+            d = json.load(f)
+        self.assertEqual((d["samples_in_run"], d["every"], d["samples"]), (n, 1, n))
+        for bad in ("-1", "10"):  # 10: fewer than 20 samples per fold of the 5
+            r = hil("diagnose", run, "--max-samples", bad)
+            self.assertNotEqual(r.returncode, 0, bad)
+            self.assertIn("--max-samples", r.stderr)
+
     def test_hidden_sensor_bias_is_named_with_its_magnitude(self):
         run = self.simulate("bias", "sensor_bias")
         with open(run + ".truth.json") as f:
@@ -54,7 +78,9 @@ class Diagnose(unittest.TestCase):
         r = hil("diagnose", run, "--json", js, "--report", rep)
         self.assertEqual(r.returncode, 0, r.stderr)
         self.assertIn("cause:           sensor_bias", r.stdout)
-        self.assertIn("[diagnose ", r.stderr)  # progress lines
+        self.assertIn("[diagnose ", r.stderr)  # progress lines: the model, its fold, the time so far and left
+        self.assertRegex(r.stderr, r"\[diagnose \d+/\d+\] sensor_bias, fold [1-5] of \d+; \d+ s")
+        self.assertRegex(r.stderr, r"~\d+ s left")
         with open(js) as f:
             d = json.load(f)
         self.assertEqual(d["cause"]["name"], "sensor_bias")

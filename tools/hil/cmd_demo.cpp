@@ -157,10 +157,10 @@ int demo(const DemoOptions& o) {
   std::cout << "[5/6] diagnosis of the recorded run (blind: it does not read the hidden truth)\n";
   diagnose::Options dopt;
   dopt.progress = [](int step, int total, const std::string& what) {
-    std::cout << fmt::format("\r      [{}/{}] {:<60}", step, total, what) << std::flush;
+    std::cout << fmt::format("\r      [{}/{}] {:<80}", step, total, what) << std::flush;
   };
   const auto diag = diagnose::diagnose_run(rec, dopt);
-  std::cout << "\r" << std::string(80, ' ') << "\r";
+  std::cout << "\r" << std::string(100, ' ') << "\r";
   std::ostringstream summary;
   diagnose::print_summary(summary, diag);
   std::istringstream lines(summary.str());

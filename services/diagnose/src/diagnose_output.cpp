@@ -111,7 +111,8 @@ void print_summary(std::ostream& out, const RunDiagnosis& r) {
   const std::string what = r.mode == "contact" ? "wrench" : "deflection";
   if (r.mode == "stiffness") out << fmt::format("Diagnosis of {} ({} loaded configurations, stiffness table)\n", r.run_name, obs.size());
   else
-    out << fmt::format("Diagnosis of {} ({} samples, {:.1f} s, {} model)\n", r.run_name, obs.size(), obs.t_s.back() - obs.t_s.front(),
+    out << fmt::format("Diagnosis of {} ({} samples{}, {:.1f} s, {} model)\n", r.run_name, obs.size(),
+                       r.every > 1 ? fmt::format(", one in {} of {}", r.every, r.samples_in_run) : "", obs.t_s.back() - obs.t_s.front(),
                        r.mode);
   out << fmt::format("  nominal model:   held-out relative {} error {:.2f} %\n", what, 100 * d.nominal.cv_error);
   const auto& nr = d.nominal_residuals;
@@ -175,6 +176,7 @@ nlohmann::json to_json(const RunDiagnosis& r) {
   j["run"] = r.run_name;
   j["mode"] = r.mode;
   j["samples"] = obs.size();
+  if (r.mode != "stiffness") j["samples_in_run"] = r.samples_in_run, j["every"] = r.every;
   j["nominal"] = {{"relative_error", d.nominal.cv_error},
                   {"train_relative_error", d.nominal.train_error},
                   {"parameters", params_json(d.nominal.full, false)}};

@@ -6,7 +6,9 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <optional>
 #include <set>
+#include <stdexcept>
 
 #include <hil/format/output.hpp>
 #include <hil/error/error.hpp>
@@ -139,10 +141,27 @@ RunDiagnosis diagnose_table(const std::string& table_path, const std::string& ri
   return r;
 }
 
-RunDiagnosis diagnose_run(const format::Run& run, const Options& o) {
-  if (!run.rig) throw error::FormatError({run.dir, 0, 0, ""}, "no rig: pass --rig or put rig.yaml in the run folder");
-  const auto& rig = *run.rig;
+RunDiagnosis diagnose_run(const format::Run& full_run, const Options& o) {
+  if (!full_run.rig) throw error::FormatError({full_run.dir, 0, 0, ""}, "no rig: pass --rig or put rig.yaml in the run folder");
+  const auto& rig = *full_run.rig;
   RunDiagnosis r;
+  if (o.max_samples > 0 && o.max_samples < 20 * static_cast<std::size_t>(std::max(1, o.folds)))
+    throw error::FormatError({"command line", 0, 0, "--max-samples"},
+                             fmt::format("{} leaves fewer than 20 samples per fold of the {}: 0 (every sample) or at least {}",
+                                         o.max_samples, o.folds, 20 * o.folds));
+  r.samples_in_run = full_run.samples.size();
+  std::optional<format::Run> thinned;
+  if (o.max_samples > 0 && r.samples_in_run > o.max_samples) {
+    r.every = (r.samples_in_run + o.max_samples - 1) / o.max_samples;
+    thinned = every_nth(full_run, r.every);
+    const auto& s = full_run.samples.samples;
+    const double rate_hz = static_cast<double>(s.size() - 1) / (s.back().t_s - s.front().t_s);
+    r.notes.push_back(fmt::format("diagnosed on one sample in {} of the run's {} ({} samples, {:.3g} Hz of {:.4g} Hz; at most {} "
+                                  "by --max-samples, 0 for all): the intervals are those of the samples diagnosed",
+                                  r.every, r.samples_in_run, thinned->samples.size(), rate_hz / static_cast<double>(r.every), rate_hz,
+                                  o.max_samples));
+  }
+  const format::Run& run = thinned ? *thinned : full_run;
   r.folds = o.folds;
   r.run_name = fs::path(run.dir).filename().string();
   if (r.run_name.empty()) r.run_name = fs::path(run.dir).parent_path().filename().string();
@@ -200,8 +219,9 @@ RunDiagnosis diagnose_run(const format::Run& run, const Options& o) {
 
 namespace {
 
-/// The samples of `run` with t in [t0, t1), the rest of the run as it is.
-format::Run slice(const format::Run& run, double t0, double t1) {
+/// The samples of `run` that `keep(k)` keeps, the rest of the run as it is.
+template <class Keep>
+format::Run subset(const format::Run& run, Keep&& keep) {
   format::Run w;
   w.dir = run.dir;
   w.info = run.info;
@@ -210,8 +230,7 @@ format::Run slice(const format::Run& run, double t0, double t1) {
   w.samples.extra_columns = run.samples.extra_columns;
   std::vector<Eigen::Index> rows;
   for (std::size_t k = 0; k < run.samples.size(); ++k) {
-    const double t = run.samples.samples[k].t_s;
-    if (t < t0 || t >= t1) continue;
+    if (!keep(k)) continue;
     w.samples.samples.push_back(run.samples.samples[k]);
     if (k < run.samples.line.size()) w.samples.line.push_back(run.samples.line[k]);
     rows.push_back(static_cast<Eigen::Index>(k));
@@ -222,7 +241,20 @@ format::Run slice(const format::Run& run, double t0, double t1) {
   return w;
 }
 
+/// The samples of `run` with t in [t0, t1).
+format::Run slice(const format::Run& run, double t0, double t1) {
+  return subset(run, [&](std::size_t k) {
+    const double t = run.samples.samples[k].t_s;
+    return t >= t0 && t < t1;
+  });
+}
+
 }  // namespace
+
+format::Run every_nth(const format::Run& run, std::size_t every) {
+  if (every == 0) throw std::invalid_argument("every_nth: every must be >= 1");
+  return subset(run, [every](std::size_t k) { return k % every == 0; });
+}
 
 std::vector<WindowVerdict> diagnose_windows(const format::Run& run, double window_s, const Options& o) {
   if (!(window_s > 0)) throw std::invalid_argument("diagnose: the window must be > 0 s, not " + std::to_string(window_s));

@@ -211,6 +211,9 @@ struct CvOptions {
   /// Threads the folds run on (0: one per core). The folds are independent fits, each with its
   /// own family data and design cache; the results do not depend on the number of threads.
   int threads = 0;
+  /// Called after the full fit (0 of the tasks done) and after each fold or model-form refit, from
+  /// the thread that ran it, one call at a time: (done, total). For progress lines.
+  std::function<void(int, int)> on_task;
 };
 
 /// The score of one model.

@@ -25,6 +25,12 @@ struct Options {
   /// Threads the cross-validation folds run on (CvOptions::threads; 0: one per core). The result
   /// does not depend on it.
   int threads = 0;
+  /// The most samples a run is diagnosed on (0: all). A longer run is diagnosed on every k-th
+  /// sample, k = ⌈samples / max_samples⌉ (RunDiagnosis::every): the cost grows with the samples
+  /// diagnosed, so a 10-minute run at 1 kHz is diagnosed in about two minutes on two cores rather
+  /// than in an hour and a half (docs/diagnosis.md, "Long runs"). Windows (diagnose_windows) are
+  /// held to it each on its own.
+  std::size_t max_samples = 10000;
   /// Where contact_damping's penetration rates come from (contact runs).
   hil::diagnose::RateSource damping_rates = hil::diagnose::RateSource::automatic;
   hil::diagnose::Progress progress;
@@ -55,12 +61,16 @@ struct RunDiagnosis {
   hil::diagnose::ModelFactory make;
   hil::diagnose::Diagnosis result;
   std::vector<std::string> notes;
+  std::size_t samples_in_run = 0;      ///< the run's samples, before Options::max_samples
+  std::size_t every = 1;               ///< the diagnosis took every `every`-th of them
   std::vector<WindowVerdict> windows;  ///< diagnose_windows' verdicts, when asked for
   const hil::diagnose::Observations& obs() const { return contact ? contact->obs : deflection ? deflection->obs : stiffness->obs; }
 };
 
 /// \throws error::FormatError / std::runtime_error naming the run on bad input.
 RunDiagnosis diagnose_run(const format::Run& run, const Options& o);
+/// Every `every`-th sample of `run` (from the first), the rest of the run as it is.
+format::Run every_nth(const format::Run& run, std::size_t every);
 /// The run cut into consecutive windows of `window_s` (a last window shorter than half of one
 /// joins the one before), each diagnosed on its own with the same options: a cause that appears,
 /// drifts or goes in a long recording shows where. A window that cannot be diagnosed (no contact,
