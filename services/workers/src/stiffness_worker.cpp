@@ -2,6 +2,7 @@
 
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <stdexcept>
@@ -85,21 +86,38 @@ hil_msgs::msg::StiffnessEstimate to_message(const hc::OnlineEstimate& e) {
   return msg;
 }
 
-StiffnessWorker::StiffnessWorker(dds::Participant& participant, std::unique_ptr<hc::OnlineIdentifier> identifier)
+StiffnessWorker::StiffnessWorker(dds::Participant& participant, std::unique_ptr<hc::OnlineIdentifier> identifier,
+                                 std::chrono::microseconds estimate_period)
     : id_(std::move(identifier)), writer_(participant, dds::topics::kStiffnessEstimate, dds::StreamQos{true, 0, 1}),
-      reader_(participant, dds::topics::kStiffnessMeasurement, [this](const hil_msgs::msg::StiffnessMeasurement& m, const auto&) {
-        {
-          std::lock_guard<std::mutex> lock(mutex_);
-          queue_.push_back(m);
-        }
-        cv_.notify_one();
-      }) {}
+      reader_(participant, dds::topics::kStiffnessMeasurement,
+              [this](const hil_msgs::msg::StiffnessMeasurement& m, const auto&) {
+                {
+                  std::lock_guard<std::mutex> lock(mutex_);
+                  queue_.push_back(m);
+                }
+                cv_.notify_one();
+              }),
+      period_(estimate_period) {}
+
+void StiffnessWorker::publish_estimate() {
+  last_ = id_->estimate();
+  last_estimate_ = std::chrono::steady_clock::now();
+  pending_ = false;
+  ++estimates_;
+  if (!writer_.write(to_message(last_))) spdlog::warn("stiffness worker: estimate not published");
+}
 
 std::size_t StiffnessWorker::spin(std::chrono::milliseconds timeout) {
   std::deque<hil_msgs::msg::StiffnessMeasurement> batch;
   {
+    // With an estimate pending, wait no longer than its period has left.
+    auto wait = std::chrono::duration_cast<std::chrono::steady_clock::duration>(timeout);
+    if (pending_)
+      wait = std::min(wait,
+                      std::max(std::chrono::steady_clock::duration::zero(), last_estimate_ + period_ - std::chrono::steady_clock::now()));
     std::unique_lock<std::mutex> lock(mutex_);
-    cv_.wait_for(lock, timeout, [this] { return !queue_.empty(); });
+    cv_.wait_for(lock, wait, [this] { return !queue_.empty(); });
+    max_backlog_ = std::max(max_backlog_, queue_.size());
     batch.swap(queue_);
   }
   std::size_t n = 0;
@@ -111,11 +129,12 @@ std::size_t StiffnessWorker::spin(std::chrono::milliseconds timeout) {
       spdlog::warn("stiffness worker: measurement of configuration {} rejected: {}", msg.config(), e.what());
       continue;
     }
-    last_ = id_->estimate();
-    if (!writer_.write(to_message(last_))) spdlog::warn("stiffness worker: estimate not published");
     ++processed_;
     ++n;
+    pending_ = true;
+    if (period_.count() == 0) publish_estimate();
   }
+  if (pending_ && std::chrono::steady_clock::now() - last_estimate_ >= period_) publish_estimate();
   return n;
 }
 
@@ -141,19 +160,22 @@ std::size_t replay_measurements(dds::Participant& participant, const models::Sti
 }
 
 WorkerRun run_stiffness_worker(dds::Participant& participant, std::unique_ptr<hc::OnlineIdentifier> identifier, std::size_t count,
-                               double timeout_s, const std::atomic<bool>& stop) {
-  StiffnessWorker w(participant, std::move(identifier));
+                               double timeout_s, const std::atomic<bool>& stop, std::chrono::microseconds estimate_period) {
+  StiffnessWorker w(participant, std::move(identifier), estimate_period);
   spdlog::info("stiffness worker: listening on {}, publishing on {}", dds::topics::kStiffnessMeasurement, dds::topics::kStiffnessEstimate);
   const auto start = std::chrono::steady_clock::now();
   while (!stop && (count == 0 || w.processed() < count)) {
     if (timeout_s > 0 && std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() > timeout_s) break;
-    if (w.spin(std::chrono::milliseconds(200)) > 0) {
+    const std::size_t estimates = w.estimates();
+    w.spin(std::chrono::milliseconds(200));
+    if (w.estimates() > estimates) {
       const auto& e = w.last();
       spdlog::info("estimate after {} measurements ({} configurations): rank {}, {} parameters", e.measurements, e.configurations, e.rank,
                    e.kept.size());
     }
   }
   w.spin(std::chrono::milliseconds(0));
+  w.publish_pending();
   return {w.processed(), w.rejected(), w.last().rank};
 }
 

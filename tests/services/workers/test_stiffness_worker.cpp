@@ -1,9 +1,12 @@
 // The online worker on a real DDS bus (in-process, host-only profile): an estimate is published
-// after every measurement and the last one equals the batch identification.
+// after every measurement, or at most once a period when one is set, and the last one equals the
+// batch identification.
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <atomic>
+#include <chrono>
 #include <mutex>
 #include <thread>
 
@@ -86,4 +89,58 @@ TEST(StiffnessWorker, PublishesAnEstimateAfterEachMeasurement) {
     EXPECT_NEAR(prm.std_dev(), batch.kept[k].std_dev, 1e-6 * batch.kept[k].std_dev);
     EXPECT_EQ(prm.identifiability(), hc::to_string(batch.kept[k].cls));
   }
+}
+
+TEST(StiffnessWorker, WithAnEstimatePeriodEstimatesAtMostOnceAPeriodAndAfterTheLastMeasurement) {
+  // Measurements at about 1 kHz, an estimate period of 50 ms: every measurement is added, the
+  // estimates (a re-reduction each) come at most once a period, and the last one covers them all.
+  const hc::VjmModel model(hc::kr270_like());
+  hc::ExperimentPlan plan;
+  plan.configurations = 300;
+  plan.moment_nm = 200.0;
+  plan.seed = 78;
+  const hc::NoiseModel noise{10e-6, 10e-6};
+  const auto data = hc::simulate(model, hc::example_compliance(model), plan, noise);
+  hc::ParameterSet joints;
+  for (int j = 1; j <= 6; ++j) joints.push_back({model.joint_spring(j), 0, 0, false, "J" + std::to_string(j) + ".k"});
+
+  const int domain = 100 + static_cast<int>(getpid() % 50);
+  hil::dds::Participant p({domain, "", "hil_localhost", "test-stiffness-period"});
+  const auto period = std::chrono::milliseconds(50);
+  st::StiffnessWorker worker(p, std::make_unique<hc::OnlineIdentifier>(model, joints, hc::ParameterSet{}, Eigen::VectorXd(), noise),
+                             period);
+  std::atomic<std::size_t> received{0};
+  hil::dds::Reader<hil_msgs::msg::StiffnessEstimate> reader(p, hil::dds::topics::kStiffnessEstimate,
+                                                            [&](const hil_msgs::msg::StiffnessEstimate&, const auto&) { ++received; });
+  hil::dds::Writer<hil_msgs::msg::StiffnessMeasurement> writer(p, hil::dds::topics::kStiffnessMeasurement);
+  ASSERT_TRUE(writer.wait_for_readers(1, std::chrono::seconds(10))) << "the worker's reader did not match (DDS discovery)";
+  ASSERT_TRUE(reader.wait_for_writers(1, std::chrono::seconds(10))) << "the estimate reader did not match (DDS discovery)";
+  const auto start = std::chrono::steady_clock::now();
+  std::thread publisher([&] {
+    auto next = std::chrono::steady_clock::now();
+    for (const auto& d : data) {
+      next += std::chrono::milliseconds(1);
+      std::this_thread::sleep_until(next);
+      writer.write(st::to_message(d));
+    }
+  });
+  const auto deadline = start + std::chrono::seconds(20);
+  while (worker.processed() < data.size() && std::chrono::steady_clock::now() < deadline) worker.spin(std::chrono::milliseconds(100));
+  publisher.join();
+  ASSERT_EQ(worker.processed(), data.size());
+  // The last measurements' estimate comes within a period of the last one, by spin alone.
+  const auto last_in = std::chrono::steady_clock::now();
+  while (worker.last().measurements < data.size() && std::chrono::steady_clock::now() < last_in + 4 * period)
+    worker.spin(std::chrono::milliseconds(100));
+  const double elapsed_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  EXPECT_EQ(worker.last().measurements, data.size());
+  EXPECT_GE(worker.estimates(), 2u);
+  EXPECT_LE(static_cast<double>(worker.estimates()), elapsed_ms / 50.0 + 2.0) << "over " << elapsed_ms << " ms";
+  const auto batch = hc::identify_fixed_set(model, joints, data, noise);
+  ASSERT_EQ(worker.last().kept.size(), 6u);
+  for (std::size_t k = 0; k < 6; ++k) EXPECT_NEAR(worker.last().kept[k].value, batch.kept[k].value, 1e-9 * std::abs(batch.kept[k].value));
+  const auto wait = std::chrono::steady_clock::now() + std::chrono::seconds(5);
+  while (received < worker.estimates() && std::chrono::steady_clock::now() < wait)
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  EXPECT_EQ(received.load(), worker.estimates());
 }

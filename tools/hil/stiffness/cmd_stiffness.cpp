@@ -205,7 +205,10 @@ int replay(const std::string& data_path, int dof_from_rig, double rate_hz, doubl
   return 0;
 }
 
-int worker(const std::string& rig, const std::string& model_path, const ReductionArgs& a, std::size_t count, double timeout_s) {
+int worker(const std::string& rig, const std::string& model_path, const ReductionArgs& a, std::size_t count, double timeout_s,
+           double estimate_period_ms) {
+  if (!(estimate_period_ms >= 0.0) || estimate_period_ms > 3.6e6)
+    throw FormatError({"command line", 0, 0, "--estimate-period-ms"}, "must be between 0 and 3,600,000 ms");
   const hc::VjmModel model(load_robot(rig));
   if (!(a.noise_pos_m > 0.0) || !(a.noise_rot_rad > 0.0))
     throw FormatError({"command line", 0, 0, "--noise-pos-m"}, "the worker needs the noise: --noise-pos-m and --noise-rot-rad (> 0)");
@@ -213,7 +216,8 @@ int worker(const std::string& rig, const std::string& model_path, const Reductio
   dds::Participant p(participant_options("hil-stiffness-worker"));
   std::signal(SIGINT, on_signal);
   std::signal(SIGTERM, on_signal);
-  const WorkerRun run = run_stiffness_worker(p, std::move(id), count, timeout_s, g_stop);
+  const WorkerRun run = run_stiffness_worker(p, std::move(id), count, timeout_s, g_stop,
+                                             std::chrono::microseconds(static_cast<long>(estimate_period_ms * 1e3)));
   std::cout << fmt::format("worker: {} measurements processed, {} rejected; last rank {}\n", run.processed, run.rejected, run.last_rank);
   return count > 0 && run.processed < count ? 1 : 0;
 }
@@ -297,13 +301,17 @@ void add_stiffness(CLI::App& app) {
     static std::string rig, model;
     static ReductionArgs a;
     static std::size_t count = 0;
-    static double timeout = 0.0;
+    static double timeout = 0.0, period_ms = 0.0;
     cmd->add_option("--rig", rig, "rig file with the robot (DH table or URDF)")->required();
     cmd->add_option("--model", model, "keep the reduced model of an identify --json output (default: reduce online)");
     add_reduction_options(cmd, a);
     cmd->add_option("--count", count, "stop after this many measurements (0: run until interrupted)")->capture_default_str();
     cmd->add_option("--timeout-s", timeout, "stop after this long (0: never)")->capture_default_str();
-    cmd->callback([] { set_action([] { return worker(rig, model, a, count, timeout); }); });
+    cmd->add_option("--estimate-period-ms", period_ms,
+                    "estimate at most once a period (and one period after the last measurement); 0: after every measurement. "
+                    "50 keeps up with a 1 kHz bus")
+        ->capture_default_str();
+    cmd->callback([] { set_action([] { return worker(rig, model, a, count, timeout, period_ms); }); });
   }
 }
 

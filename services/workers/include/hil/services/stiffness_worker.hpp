@@ -23,9 +23,22 @@ hil_msgs::msg::StiffnessEstimate to_message(const calibration::OnlineEstimate& e
 class StiffnessWorker {
  public:
   /// `identifier` is taken; the participant is borrowed and must outlive the worker.
-  StiffnessWorker(dds::Participant& participant, std::unique_ptr<calibration::OnlineIdentifier> identifier);
-  /// Processes queued measurements, waiting up to `timeout` for the first. Returns how many.
+  /// `estimate_period` 0: an estimate after every measurement. Positive: every measurement is added
+  /// as it comes, but an estimate (a re-reduction, ~1 ms) is computed and published at most once a
+  /// period, and one period after the last measurement at the latest: how the worker keeps up
+  /// with a 1 kHz bus (docs/calibration.md, "Online worker").
+  StiffnessWorker(dds::Participant& participant, std::unique_ptr<calibration::OnlineIdentifier> identifier,
+                  std::chrono::microseconds estimate_period = std::chrono::microseconds(0));
+  /// Processes queued measurements, waiting up to `timeout` for the first (or for a pending
+  /// estimate's period to end). Returns how many measurements it processed.
   std::size_t spin(std::chrono::milliseconds timeout);
+  /// Publishes the estimate of measurements added since the last one, if any (at the end of a run).
+  void publish_pending() {
+    if (pending_) publish_estimate();
+  }
+  std::size_t estimates() const { return estimates_; }
+  /// The most measurements that waited in the queue at once.
+  std::size_t max_backlog() const { return max_backlog_; }
   std::size_t processed() const { return processed_; }
   std::size_t rejected() const { return rejected_; }
   const calibration::OnlineEstimate& last() const { return last_; }
@@ -40,6 +53,12 @@ class StiffnessWorker {
   dds::Reader<hil_msgs::msg::StiffnessMeasurement> reader_;
   std::size_t processed_ = 0;
   std::size_t rejected_ = 0;
+  std::size_t estimates_ = 0;
+  std::size_t max_backlog_ = 0;
+  std::chrono::microseconds period_;
+  bool pending_ = false;  ///< measurements added since the last estimate
+  std::chrono::steady_clock::time_point last_estimate_{};
+  void publish_estimate();
   calibration::OnlineEstimate last_;
 };
 
@@ -55,8 +74,10 @@ struct WorkerRun {
   int last_rank = 0;
 };
 /// `hil stiffness worker`: runs `identifier` on the bus until `count` measurements are processed
-/// (0: no limit), `timeout_s` passes (0: never) or `stop` is set, logging each estimate.
+/// (0: no limit), `timeout_s` passes (0: never) or `stop` is set, logging each estimate;
+/// `estimate_period` as for StiffnessWorker.
 WorkerRun run_stiffness_worker(dds::Participant& participant, std::unique_ptr<calibration::OnlineIdentifier> identifier, std::size_t count,
-                               double timeout_s, const std::atomic<bool>& stop);
+                               double timeout_s, const std::atomic<bool>& stop,
+                               std::chrono::microseconds estimate_period = std::chrono::microseconds(0));
 
 }  // namespace hil::services::stiffness

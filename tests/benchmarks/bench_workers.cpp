@@ -1,0 +1,217 @@
+// Issue 29, item 2: do the online workers keep up with a 1 kHz bus on one core, in bounded memory,
+// for an hour? Two parts (figures in docs/performance.md):
+//
+// numerics (--hour-s, default 3600): an hour of 1 kHz samples through the workers' numerics on
+// this one thread, as fast as they go: the contact estimator (contact_id::OnlineEstimator) on the
+// re-created ACU test 2a at 1 kHz (32 s), looped with its times continuing; the stiffness identifier (calibration::OnlineIdentifier, the
+// physical set reduced online) on 1,000 simulated KR-270 configurations over and over, an estimate every 50 samples (the worker's
+// --estimate-period-ms 50 at 1 kHz). Prints each part's CPU per sample (at 1 kHz a core has 1,000 us per sample) and the process's resident
+// memory after every simulated 10 minutes: bounded means it stops growing once the buffers have reached their size.
+//
+// bus (--bus-s, default 20): the real workers on a Fast DDS participant (SHM + UDP on 127.0.0.1), a
+// publisher thread writing a PoseWrenchSample and a StiffnessMeasurement every millisecond: counts
+// published, processed and estimates received, the worst backlog of the stiffness worker, the
+// process's CPU share and resident memory at the start and the end.
+//
+// Usage: bench_workers [--hour-s S] [--bus-s S]   (0 leaves a part out)
+#include <sys/resource.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <chrono>
+#include <cstdio>
+#include <cstring>
+#include <ctime>
+#include <fstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <spdlog/spdlog.h>
+
+#include <hil/calibration/experiment.hpp>
+#include <hil/calibration/online.hpp>
+#include <hil/contact_id/online.hpp>
+#include <hil/dds/topics.hpp>
+#include <hil/format/rig.hpp>
+#include <hil/messages/sample_msg.hpp>
+#include <hil/services/contact_worker.hpp>
+#include <hil/services/stiffness_worker.hpp>
+#include <hil/test/acu.hpp>
+
+namespace hc = hil::calibration;
+namespace cid = hil::contact_id;
+
+namespace {
+
+/// Resident memory of this process, KiB (/proc/self/status VmRSS).
+long rss_kib() {
+  std::ifstream in("/proc/self/status");
+  std::string line;
+  while (std::getline(in, line))
+    if (line.rfind("VmRSS:", 0) == 0) return std::stol(line.substr(6));
+  return -1;
+}
+
+double thread_cpu_s() {
+  timespec ts{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
+}
+
+double process_cpu_s() {
+  rusage u{};
+  getrusage(RUSAGE_SELF, &u);
+  return static_cast<double>(u.ru_utime.tv_sec + u.ru_stime.tv_sec) + 1e-6 * static_cast<double>(u.ru_utime.tv_usec + u.ru_stime.tv_usec);
+}
+
+/// A physical-set identifier reduced online, as `hil stiffness worker` without --model builds it.
+std::unique_ptr<hc::OnlineIdentifier> stiffness_identifier(const hc::VjmModel& model, const hc::NoiseModel& noise) {
+  hc::PipelineOptions opt;
+  std::vector<hc::ReductionLine> lines;
+  return std::make_unique<hc::OnlineIdentifier>(model, hc::physical_reduction(model, opt, lines), hc::ParameterSet{}, Eigen::VectorXd(),
+                                                noise, opt, true);
+}
+
+struct Stiffness {
+  hc::VjmModel model{hc::kr270_like()};
+  hc::NoiseModel noise{10e-6, 10e-6};
+  std::vector<hc::Measurement> data;
+  Stiffness() {
+    hc::ExperimentPlan plan;
+    plan.configurations = 1000;
+    plan.moment_nm = 300.0;
+    plan.seed = 2911;
+    data = hc::simulate(model, hc::example_compliance(model), plan, noise);
+  }
+};
+
+void numerics(double seconds, const cid::test::AcuRun& acu, const Stiffness& st) {
+  const std::vector<cid::Measurement>& loop = acu.data;
+  const auto n = static_cast<std::size_t>(seconds * 1000.0);
+  const std::size_t block = 600'000;  // 10 minutes at 1 kHz
+  cid::OnlineEstimator contact(acu.scene, acu.options.v_tm, acu.options.force_scale_n, acu.options.moment_scale_nm);
+  auto stiffness = stiffness_identifier(st.model, st.noise);
+  const double period = loop.back().t_s - loop.front().t_s + (loop[1].t_s - loop[0].t_s);
+  std::printf("numerics: %zu samples (%.0f s at 1 kHz), one thread; RSS at start %ld KiB\n", n, seconds, rss_kib());
+  std::printf("%10s %14s %14s %16s %10s %12s\n", "minutes", "contact us/s.", "stiff. us/s.", "stiff. estimates", "RSS KiB", "K (N/m)");
+  double c_cpu = 0, s_cpu = 0, c_block = 0, s_block = 0;
+  std::size_t estimates = 0;
+  cid::OnlineEstimate last;
+  for (std::size_t i = 0; i < n; ++i) {
+    cid::Measurement m = loop[i % loop.size()];
+    m.t_s += period * static_cast<double>(i / loop.size());
+    double t0 = thread_cpu_s();
+    last = contact.update(m);
+    double t1 = thread_cpu_s();
+    c_block += t1 - t0;
+    stiffness->add(st.data[i % st.data.size()]);
+    if (i % 50 == 49) {
+      const auto e = stiffness->estimate();
+      if (e.kept.empty()) std::fprintf(stderr, "numerics: an estimate with no parameter at sample %zu\n", i);
+      ++estimates;
+    }
+    s_block += thread_cpu_s() - t1;
+    if ((i + 1) % block == 0 || i + 1 == n) {
+      const double k = static_cast<double>((i % block) + 1);
+      std::printf("%10.1f %14.2f %14.2f %16zu %10ld %12.4g\n", static_cast<double>(i + 1) / 60000.0, 1e6 * c_block / k, 1e6 * s_block / k,
+                  estimates, rss_kib(), last.global.K);
+      std::fflush(stdout);
+      c_cpu += c_block, s_cpu += s_block, c_block = s_block = 0;
+    }
+  }
+  std::printf("numerics: contact %.2f us/sample, stiffness %.2f us/sample (add + an estimate every 50): %.1f %% of one core at 1 kHz\n",
+              1e6 * c_cpu / static_cast<double>(n), 1e6 * s_cpu / static_cast<double>(n),
+              100.0 * (c_cpu + s_cpu) / (static_cast<double>(n) * 1e-3));
+}
+
+int bus(double seconds, const std::vector<cid::Measurement>& loop, const Stiffness& st) {
+  namespace sv = hil::services;
+  const auto rig = hil::format::load_rig(std::string(HIL_SOURCE_DIR) + "/examples/acu/acu.yaml");
+  const int domain = 120 + static_cast<int>(getpid() % 60);
+  hil::dds::Participant p({domain, "", "hil_localhost", "bench-workers"});
+  sv::ContactWorker contact(p, rig);
+  sv::stiffness::StiffnessWorker stiffness(p, stiffness_identifier(st.model, st.noise), std::chrono::milliseconds(50));
+  std::atomic<long> contact_estimates{0}, stiffness_estimates{0};
+  hil::dds::Reader<hil_msgs::msg::ContactEstimate> ce(p, hil::dds::topics::kContactEstimate,
+                                                      [&](const hil_msgs::msg::ContactEstimate&, const auto&) { ++contact_estimates; });
+  hil::dds::Reader<hil_msgs::msg::StiffnessEstimate> se(p, hil::dds::topics::kStiffnessEstimate,
+                                                        [&](const hil_msgs::msg::StiffnessEstimate&, const auto&) {
+                                                          ++stiffness_estimates;
+                                                        });
+  hil::dds::Writer<hil_msgs::msg::PoseWrenchSample> sw(p, hil::dds::topics::kPoseWrenchSample);
+  hil::dds::Writer<hil_msgs::msg::StiffnessMeasurement> mw(p, hil::dds::topics::kStiffnessMeasurement);
+  if (!sw.wait_for_readers(1, std::chrono::seconds(10)) || !mw.wait_for_readers(1, std::chrono::seconds(10))) {
+    std::fprintf(stderr, "bus: the workers' readers did not match\n");
+    return 3;
+  }
+  const long rss0 = rss_kib();
+  const double cpu0 = process_cpu_s();
+  const auto n = static_cast<std::size_t>(seconds * 1000.0);
+  std::atomic<bool> done{false};
+  std::size_t published = 0;
+  std::thread publisher([&] {
+    auto next = std::chrono::steady_clock::now();
+    const double period = loop.back().t_s - loop.front().t_s + (loop[1].t_s - loop[0].t_s);
+    for (std::size_t i = 0; i < n; ++i) {
+      next += std::chrono::milliseconds(1);
+      std::this_thread::sleep_until(next);
+      const cid::Measurement& m = loop[i % loop.size()];
+      hil::format::Sample s;
+      s.t_s = m.t_s + period * static_cast<double>(i / loop.size());
+      s.p_world_ee_m = m.kin.T_world_ee.translation();
+      s.q_world_ee = Eigen::Quaterniond(m.kin.T_world_ee.linear());
+      s.v_world_ee_m_per_s = m.kin.v_world_ee;
+      s.w_world_ee_rad_per_s = m.kin.w_world_ee;
+      s.f_fp_n = m.w_fp.head<3>();
+      s.m_fp_nm = m.w_fp.tail<3>();
+      sw.write(hil::messages::to_message(s, i, Eigen::RowVectorXd()));
+      mw.write(sv::stiffness::to_message(st.data[i % st.data.size()]));
+      ++published;
+    }
+    done = true;
+  });
+  const auto start = std::chrono::steady_clock::now();
+  while (!done || stiffness.processed() < n) {
+    stiffness.spin(std::chrono::milliseconds(100));
+    if (std::chrono::steady_clock::now() - start > std::chrono::duration<double>(seconds + 30.0)) break;
+  }
+  publisher.join();
+  stiffness.publish_pending();
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const double cpu = process_cpu_s() - cpu0;
+  const auto wait_until = std::chrono::steady_clock::now() + std::chrono::seconds(5);
+  while ((contact.processed() < static_cast<long>(n)) && std::chrono::steady_clock::now() < wait_until)
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  contact.flush();
+  std::this_thread::sleep_for(std::chrono::milliseconds(200));
+  std::printf("bus: %zu samples and %zu stiffness measurements published at 1 kHz over %.1f s\n", published, published, wall);
+  std::printf("bus: contact worker processed %ld, estimates received %ld\n", contact.processed(), contact_estimates.load());
+  std::printf("bus: stiffness worker processed %zu, rejected %zu, estimates %zu (received %ld), worst backlog %zu measurements\n",
+              stiffness.processed(), stiffness.rejected(), stiffness.estimates(), stiffness_estimates.load(), stiffness.max_backlog());
+  std::printf("bus: process CPU %.1f s = %.1f %% of one core (publisher, DDS, both workers); RSS %ld -> %ld KiB\n", cpu, 100.0 * cpu / wall,
+              rss0, rss_kib());
+  const bool kept_up = contact.processed() == static_cast<long>(n) && stiffness.processed() == n;
+  std::printf("bus: %s\n", kept_up ? "every sample and measurement processed" : "SAMPLES MISSING");
+  return kept_up ? 0 : 4;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  double hour_s = 3600.0, bus_s = 20.0;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    if ((a == "--hour-s" || a == "--bus-s") && i + 1 < argc) (a == "--hour-s" ? hour_s : bus_s) = std::stod(argv[++i]);
+    else {
+      std::fprintf(stderr, "usage: bench_workers [--hour-s S] [--bus-s S]\n");
+      return 2;
+    }
+  }
+  spdlog::set_level(spdlog::level::warn);
+  const auto acu = cid::test::acu_run("2a", 1);
+  const auto& loop = acu.data;
+  const Stiffness st;
+  if (hour_s > 0) numerics(hour_s, acu, st);
+  return bus_s > 0 ? bus(bus_s, loop, st) : 0;
+}
