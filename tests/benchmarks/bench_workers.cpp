@@ -35,6 +35,7 @@
 #include <hil/dds/topics.hpp>
 #include <hil/format/rig.hpp>
 #include <hil/messages/sample_msg.hpp>
+#include <hil/models/contact.hpp>
 #include <hil/services/contact_worker.hpp>
 #include <hil/services/stiffness_worker.hpp>
 #include <hil/test/acu.hpp>
@@ -94,7 +95,9 @@ void numerics(double seconds, const cid::test::AcuRun& acu, const Stiffness& st)
   auto stiffness = stiffness_identifier(st.model, st.noise);
   const double period = loop.back().t_s - loop.front().t_s + (loop[1].t_s - loop[0].t_s);
   std::printf("numerics: %zu samples (%.0f s at 1 kHz), one thread; RSS at start %ld KiB\n", n, seconds, rss_kib());
-  std::printf("%10s %14s %14s %16s %10s %12s\n", "minutes", "contact us/s.", "stiff. us/s.", "stiff. estimates", "RSS KiB", "K (N/m)");
+  std::printf("%10s %14s %14s %16s %18s %10s %12s\n", "minutes", "contact us/s.", "stiff. us/s.", "stiff. estimates", "full / re-verified",
+              "RSS KiB", "K (N/m)");
+  hc::OnlineIdentifier::ReductionStats before;
   double c_cpu = 0, s_cpu = 0, c_block = 0, s_block = 0;
   std::size_t estimates = 0;
   cid::OnlineEstimate last;
@@ -114,8 +117,11 @@ void numerics(double seconds, const cid::test::AcuRun& acu, const Stiffness& st)
     s_block += thread_cpu_s() - t1;
     if ((i + 1) % block == 0 || i + 1 == n) {
       const double k = static_cast<double>((i % block) + 1);
-      std::printf("%10.1f %14.2f %14.2f %16zu %10ld %12.4g\n", static_cast<double>(i + 1) / 60000.0, 1e6 * c_block / k, 1e6 * s_block / k,
-                  estimates, rss_kib(), last.global.K);
+      // The reductions of this block's estimates: M4-M6 re-run in full, or the cached one re-verified.
+      const auto& now = stiffness->reduction_stats();
+      std::printf("%10.1f %14.2f %14.2f %16zu %8zu / %7zu %10ld %12.4g\n", static_cast<double>(i + 1) / 60000.0, 1e6 * c_block / k,
+                  1e6 * s_block / k, estimates, now.full - before.full, now.verified - before.verified, rss_kib(), last.global.K);
+      before = now;
       std::fflush(stdout);
       c_cpu += c_block, s_cpu += s_block, c_block = s_block = 0;
     }
@@ -123,6 +129,7 @@ void numerics(double seconds, const cid::test::AcuRun& acu, const Stiffness& st)
   std::printf("numerics: contact %.2f us/sample, stiffness %.2f us/sample (add + an estimate every 50): %.1f %% of one core at 1 kHz\n",
               1e6 * c_cpu / static_cast<double>(n), 1e6 * s_cpu / static_cast<double>(n),
               100.0 * (c_cpu + s_cpu) / (static_cast<double>(n) * 1e-3));
+  std::fflush(stdout);
 }
 
 int bus(double seconds, const std::vector<cid::Measurement>& loop, const Stiffness& st) {
@@ -156,15 +163,8 @@ int bus(double seconds, const std::vector<cid::Measurement>& loop, const Stiffne
     for (std::size_t i = 0; i < n; ++i) {
       next += std::chrono::milliseconds(1);
       std::this_thread::sleep_until(next);
-      const cid::Measurement& m = loop[i % loop.size()];
-      hil::format::Sample s;
-      s.t_s = m.t_s + period * static_cast<double>(i / loop.size());
-      s.p_world_ee_m = m.kin.T_world_ee.translation();
-      s.q_world_ee = Eigen::Quaterniond(m.kin.T_world_ee.linear());
-      s.v_world_ee_m_per_s = m.kin.v_world_ee;
-      s.w_world_ee_rad_per_s = m.kin.w_world_ee;
-      s.f_fp_n = m.w_fp.head<3>();
-      s.m_fp_nm = m.w_fp.tail<3>();
+      hil::format::Sample s = hil::models::sample(loop[i % loop.size()]);
+      s.t_s += period * static_cast<double>(i / loop.size());
       sw.write(hil::messages::to_message(s, i, Eigen::RowVectorXd()));
       mw.write(sv::stiffness::to_message(st.data[i % st.data.size()]));
       ++published;
@@ -172,8 +172,16 @@ int bus(double seconds, const std::vector<cid::Measurement>& loop, const Stiffne
     done = true;
   });
   const auto start = std::chrono::steady_clock::now();
+  auto next_rss = start + std::chrono::seconds(60);
   while (!done || stiffness.processed() < n) {
     stiffness.spin(std::chrono::milliseconds(100));
+    if (std::chrono::steady_clock::now() >= next_rss) {
+      std::printf("bus: after %.0f s, RSS %ld KiB, contact worker %ld, stiffness worker %zu processed\n",
+                  std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), rss_kib(), contact.processed(),
+                  stiffness.processed());
+      std::fflush(stdout);
+      next_rss += std::chrono::seconds(60);
+    }
     if (std::chrono::steady_clock::now() - start > std::chrono::duration<double>(seconds + 30.0)) break;
   }
   publisher.join();

@@ -67,17 +67,7 @@ inline format::Run as_run(const std::string& name, const std::string& rig_path, 
   format::Run run;
   run.dir = name;
   run.rig = format::load_rig(rig_path);
-  for (const auto& x : m) {
-    format::Sample s;
-    s.t_s = x.t_s;
-    s.p_world_ee_m = x.kin.T_world_ee.translation();
-    s.q_world_ee = Eigen::Quaterniond(x.kin.T_world_ee.linear());
-    s.v_world_ee_m_per_s = x.kin.v_world_ee;
-    s.w_world_ee_rad_per_s = x.kin.w_world_ee;
-    s.f_fp_n = x.w_fp.head<3>();
-    s.m_fp_nm = x.w_fp.tail<3>();
-    run.samples.samples.push_back(s);
-  }
+  for (const auto& x : m) run.samples.samples.push_back(models::sample(x));
   run.samples.joints_rad.resize(static_cast<Eigen::Index>(run.samples.samples.size()), 0);
   return run;
 }

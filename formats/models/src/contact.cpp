@@ -118,6 +118,18 @@ cid::Measurement measurement(const format::Sample& s) {
   return m;
 }
 
+format::Sample sample(const cid::Measurement& m) {
+  format::Sample s;
+  s.t_s = m.t_s;
+  s.p_world_ee_m = m.kin.T_world_ee.translation();
+  s.q_world_ee = Eigen::Quaterniond(m.kin.T_world_ee.linear());
+  s.v_world_ee_m_per_s = m.kin.v_world_ee;
+  s.w_world_ee_rad_per_s = m.kin.w_world_ee;
+  s.f_fp_n = m.w_fp.head<3>();
+  s.m_fp_nm = m.w_fp.tail<3>();
+  return s;
+}
+
 std::vector<cid::Measurement> measurements(const format::SampleTable& t) {
   std::vector<cid::Measurement> out;
   out.reserve(t.size());

@@ -154,15 +154,7 @@ int simulate_run(const SimulateArgs& a) {
   format::SampleTable table;
   std::size_t in_contact = 0;
   for (std::size_t i = 0; i < sim.size(); i += static_cast<std::size_t>(a.decimate)) {
-    format::Sample smp;
-    smp.t_s = traj.t[i] - traj.t[0];
-    smp.p_world_ee_m = sim[i].kin.T_world_ee.translation();
-    smp.q_world_ee = Eigen::Quaterniond(sim[i].kin.T_world_ee.linear());
-    smp.v_world_ee_m_per_s = sim[i].kin.v_world_ee;
-    smp.w_world_ee_rad_per_s = sim[i].kin.w_world_ee;
-    smp.f_fp_n = sim[i].w_fp.head<3>();
-    smp.m_fp_nm = sim[i].w_fp.tail<3>();
-    table.samples.push_back(smp);
+    table.samples.push_back(models::sample({traj.t[i] - traj.t[0], sim[i].kin, sim[i].w_fp}));
     if (sim[i].contacts > 0) ++in_contact;
   }
   format::write_samples((fs::path(a.out) / "samples.csv").string(), table);

@@ -9,6 +9,7 @@
 #include <chrono>
 #include <mutex>
 #include <thread>
+#include <tuple>
 
 #include <hil/calibration/experiment.hpp>
 #include <hil/dds/topics.hpp>
@@ -39,20 +40,36 @@ TEST(StiffnessMessages, RoundTripAndRefusals) {
                                               ::testing::HasSubstr("marker measurements have no StiffnessMeasurement form")));
 }
 
-TEST(StiffnessWorker, PublishesAnEstimateAfterEachMeasurement) {
-  const hc::VjmModel model(hc::kr270_like());
-  hc::ExperimentPlan plan;
-  plan.configurations = 20;
-  plan.moment_nm = 200.0;
-  plan.seed = 77;
-  const hc::NoiseModel noise{10e-6, 10e-6};
-  const auto data = hc::simulate(model, hc::example_compliance(model), plan, noise);
+namespace {
+
+/// A simulated KR-270 stiffness experiment and its six joint springs (the identified set).
+struct JointSprings {
+  hc::VjmModel model{hc::kr270_like()};
+  hc::NoiseModel noise{10e-6, 10e-6};
+  std::vector<hc::Measurement> data;
   hc::ParameterSet joints;
-  for (int j = 1; j <= 6; ++j) joints.push_back({model.joint_spring(j), 0, 0, false, "J" + std::to_string(j) + ".k"});
+  JointSprings(int configurations, std::uint64_t seed) {
+    hc::ExperimentPlan plan;
+    plan.configurations = configurations;
+    plan.moment_nm = 200.0;
+    plan.seed = seed;
+    data = hc::simulate(model, hc::example_compliance(model), plan, noise);
+    for (int j = 1; j <= 6; ++j) joints.push_back({model.joint_spring(j), 0, 0, false, "J" + std::to_string(j) + ".k"});
+  }
+  std::unique_ptr<hc::OnlineIdentifier> identifier() const {
+    return std::make_unique<hc::OnlineIdentifier>(model, joints, hc::ParameterSet{}, Eigen::VectorXd(), noise);
+  }
+};
+
+}  // namespace
+
+TEST(StiffnessWorker, PublishesAnEstimateAfterEachMeasurement) {
+  const JointSprings springs(20, 77);
+  const auto& [model, noise, data, joints] = std::tie(springs.model, springs.noise, springs.data, springs.joints);
 
   const int domain = 150 + static_cast<int>(getpid() % 50);
   hil::dds::Participant p({domain, "", "hil_localhost", "test-stiffness"});
-  st::StiffnessWorker worker(p, std::make_unique<hc::OnlineIdentifier>(model, joints, hc::ParameterSet{}, Eigen::VectorXd(), noise));
+  st::StiffnessWorker worker(p, springs.identifier());
   std::mutex mu;
   std::vector<hil_msgs::msg::StiffnessEstimate> got;
   hil::dds::Reader<hil_msgs::msg::StiffnessEstimate> reader(p, hil::dds::topics::kStiffnessEstimate,
@@ -94,21 +111,13 @@ TEST(StiffnessWorker, PublishesAnEstimateAfterEachMeasurement) {
 TEST(StiffnessWorker, WithAnEstimatePeriodEstimatesAtMostOnceAPeriodAndAfterTheLastMeasurement) {
   // Measurements at about 1 kHz, an estimate period of 50 ms: every measurement is added, the
   // estimates (a re-reduction each) come at most once a period, and the last one covers them all.
-  const hc::VjmModel model(hc::kr270_like());
-  hc::ExperimentPlan plan;
-  plan.configurations = 300;
-  plan.moment_nm = 200.0;
-  plan.seed = 78;
-  const hc::NoiseModel noise{10e-6, 10e-6};
-  const auto data = hc::simulate(model, hc::example_compliance(model), plan, noise);
-  hc::ParameterSet joints;
-  for (int j = 1; j <= 6; ++j) joints.push_back({model.joint_spring(j), 0, 0, false, "J" + std::to_string(j) + ".k"});
+  const JointSprings springs(300, 78);
+  const auto& [model, noise, data, joints] = std::tie(springs.model, springs.noise, springs.data, springs.joints);
 
   const int domain = 100 + static_cast<int>(getpid() % 50);
   hil::dds::Participant p({domain, "", "hil_localhost", "test-stiffness-period"});
   const auto period = std::chrono::milliseconds(50);
-  st::StiffnessWorker worker(p, std::make_unique<hc::OnlineIdentifier>(model, joints, hc::ParameterSet{}, Eigen::VectorXd(), noise),
-                             period);
+  st::StiffnessWorker worker(p, springs.identifier(), period);
   std::atomic<std::size_t> received{0};
   hil::dds::Reader<hil_msgs::msg::StiffnessEstimate> reader(p, hil::dds::topics::kStiffnessEstimate,
                                                             [&](const hil_msgs::msg::StiffnessEstimate&, const auto&) { ++received; });

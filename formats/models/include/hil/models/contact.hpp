@@ -21,6 +21,8 @@ contact_id::ContactModel model_from_rig(const format::RigSpec& rig);
 
 /// A sample -> a measurement (pose, twist, plate wrench).
 contact_id::Measurement measurement(const format::Sample& s);
+/// A measurement -> a sample (the inverse of measurement()).
+format::Sample sample(const contact_id::Measurement& m);
 /// Samples -> measurements.
 std::vector<contact_id::Measurement> measurements(const format::SampleTable& t);
 
