@@ -292,10 +292,11 @@ Diagnosis diagnose(const ModelFactory& make, const std::vector<std::string>& can
   auto tell = [&](const std::string& what) {
     current = what;
     ++step;
-    if (progress) line(0, 0);
+    if (progress && o.progress_detail) line(0, 0);
+    else if (progress) progress(step, total, what);
   };
   CvOptions cv = o.cv;
-  if (progress) cv.on_task = [&](int done, int tasks) { line(done, tasks); };
+  if (progress && o.progress_detail) cv.on_task = [&](int done, int tasks) { line(done, tasks); };
   tell("nominal");
   d.nominal = score(*make({}), obs, cv);
   d.nominal_residuals = analyse_residuals(obs, d.nominal.cv_prediction, ctx);

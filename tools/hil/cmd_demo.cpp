@@ -156,6 +156,7 @@ int demo(const DemoOptions& o) {
 
   std::cout << "[5/6] diagnosis of the recorded run (blind: it does not read the hidden truth)\n";
   diagnose::Options dopt;
+  dopt.progress_detail = true;
   dopt.progress = [](int step, int total, const std::string& what) {
     std::cout << fmt::format("\r      [{}/{}] {:<80}", step, total, what) << std::flush;
   };

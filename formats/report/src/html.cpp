@@ -294,7 +294,8 @@ std::string svg_plot(const std::vector<Series>& series, const PlotOptions& o) {
 
 std::string svg_forest(const std::vector<Interval>& rows, const std::string& title, const std::string& reference_label) {
   // Label column, interval column (each row on its own scale), value column.
-  const double W = 720, ml = 190, mr = 200, mt = 30, row_h = 36, mb = 34;
+  // The value column holds "value  [lower, upper]": up to 40 characters of 7 px.
+  const double W = 820, ml = 190, mr = 300, mt = 30, row_h = 36, mb = 34;
   const double H = mt + row_h * static_cast<double>(std::max<std::size_t>(rows.size(), 1)) + mb;
   const double x0 = ml, x1 = W - mr;
   std::string s = svg_open(W, H);

@@ -115,6 +115,7 @@ RunDiagnosis diagnose_table(const std::string& table_path, const std::string& ri
   dg::DiagnoseOptions dopt;
   dopt.cv.folds = o.folds;
   dopt.cv.threads = o.threads;
+  dopt.progress_detail = o.progress_detail;
   dopt.cv.offsets = cv_offsets(o, candidates);
   try {
     r.stiffness = std::make_unique<dg::StiffnessData>(dg::make_stiffness_data(model, table.rows));
@@ -168,6 +169,7 @@ RunDiagnosis diagnose_run(const format::Run& full_run, const Options& o) {
   dg::DiagnoseOptions dopt;
   dopt.cv.folds = o.folds;
   dopt.cv.threads = o.threads;
+  dopt.progress_detail = o.progress_detail;
   dg::ModelFactory make;
   const auto candidates = checked_candidates(o, rig.model.contact ? dg::contact_extensions() : dg::deflection_extensions());
   dopt.cv.offsets = cv_offsets(o, candidates);

@@ -46,6 +46,7 @@ int diagnose_cmd(const DiagnoseArgs& a) {
   o.threads = a.threads;
   o.damping_rates = a.damping_rates;
   o.max_samples = a.max_samples;
+  o.progress_detail = true;
   const bool tty = isatty(STDERR_FILENO) != 0;
   if (!a.quiet)
     o.progress = [tty](int step, int total, const std::string& what) {

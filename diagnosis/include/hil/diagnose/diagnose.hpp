@@ -69,6 +69,10 @@ struct DiagnoseOptions {
   /// only the part of its size the first cannot mimic as a held-out reduction.
   double min_noise_fraction = 0.25;
   int second_candidates = 8;  ///< greedy second step: the best single candidates tried with the cause
+  /// Progress at fold granularity: `what` then reads "model, fold N of M; T s, ~L s left" and the
+  /// calls also come after each fold, from the thread that ran it (one at a time). Off: one call
+  /// per step, on the caller's thread, `what` the model's name (the Python binding's contract).
+  bool progress_detail = false;
 };
 
 struct CandidateResult {

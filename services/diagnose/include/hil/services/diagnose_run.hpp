@@ -34,6 +34,7 @@ struct Options {
   /// Where contact_damping's penetration rates come from (contact runs).
   hil::diagnose::RateSource damping_rates = hil::diagnose::RateSource::automatic;
   hil::diagnose::Progress progress;
+  bool progress_detail = false;  ///< DiagnoseOptions::progress_detail (the CLI's fold-level lines)
 };
 
 /// The verdict of one time window of a run (diagnose_windows): when a cause appears or drifts.
