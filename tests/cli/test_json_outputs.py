@@ -237,6 +237,11 @@ class JsonOutputs(unittest.TestCase):
         self.assertEqual(r.returncode, 2, r.stderr)
         self.assertIn("bare.json", r.stderr)
         self.assertIn("format", r.stderr)
+        # A negative estimate period is refused, naming the option.
+        r = hil("stiffness", "worker", "--rig", KR_RIG, "--noise-pos-m", "1e-5", "--noise-rot-rad", "1e-5",
+                "--estimate-period-ms", "-5", "--timeout-s", "1")
+        self.assertEqual(r.returncode, 2, r.stderr)
+        self.assertIn("--estimate-period-ms", r.stderr)
         # A newer format_version than this hil reads.
         d["format_version"] = 2
         with open(model, "w") as f:
