@@ -136,6 +136,13 @@ py::dict robot_dict(const fmt_::RobotSpec& r) {
     if (r.convention == fmt_::DhConvention::urdf) {
       x["T_parent_joint"] = pose_dict(j.T_parent_joint);
       x["axis"] = std::vector<double>{j.axis.x(), j.axis.y(), j.axis.z()};
+      if (!j.mimic_of.empty()) {
+        py::dict m;
+        m["joint"] = j.mimic_of;
+        m["multiplier"] = j.mimic_multiplier;
+        m["offset"] = j.mimic_offset;
+        x["mimic"] = m;
+      }
     }
     joints.append(x);
   }

@@ -4,6 +4,17 @@
 #include <stdexcept>
 
 namespace hil::calibration {
+namespace {
+
+bool within_limits(const SerialRobot& robot, const Eigen::VectorXd& q) {
+  for (std::size_t j = 0; j < robot.joints.size(); ++j) {
+    const auto v = q[static_cast<Eigen::Index>(j)];
+    if (v < robot.joints[j].lower || v > robot.joints[j].upper) return false;
+  }
+  return true;
+}
+
+}  // namespace
 
 std::vector<Measurement> simulate(const VjmModel& model, const ComplianceSet& truth, const ExperimentPlan& plan, const NoiseModel& noise) {
   check_shapes(model, truth);
@@ -26,9 +37,18 @@ std::vector<Measurement> simulate(const VjmModel& model, const ComplianceSet& tr
   const int n = model.dof();
   for (int c = 0; c < plan.configurations; ++c) {
     Eigen::VectorXd q(n);
-    for (int j = 0; j < n; ++j) {
-      const auto& row = model.robot().joints[static_cast<std::size_t>(j)];
-      q[j] = row.lower + (row.upper - row.lower) * unit(rng);
+    // A mimic joint's value follows its master and may leave its own limits: such a posture is
+    // drawn again (a robot with coupled joints cannot reach it).
+    for (int attempt = 0;; ++attempt) {
+      for (int j = 0; j < n; ++j) {
+        const auto& row = model.robot().joints[static_cast<std::size_t>(j)];
+        q[j] = row.lower + (row.upper - row.lower) * unit(rng);
+      }
+      fill_mimic_joints(model.robot(), q);
+      if (within_limits(model.robot(), q)) break;
+      if (attempt == 1000)
+        throw std::invalid_argument(
+            "simulate: no posture within every joint's limits in 1000 draws; do the mimic joints' limits fit their masters'?");
     }
     model.jacobians(q, ws);
     for (int l = 0; l < plan.loads_per_config; ++l) {

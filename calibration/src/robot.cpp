@@ -77,6 +77,14 @@ ChainPoses forward(const SerialRobot& robot, const Eigen::Ref<const Eigen::Vecto
 
 Eigen::Isometry3d tool_pose(const SerialRobot& robot, const Eigen::Ref<const Eigen::VectorXd>& q) { return forward(robot, q).T_world_ee; }
 
+void fill_mimic_joints(const SerialRobot& robot, Eigen::Ref<Eigen::VectorXd> q) {
+  for (std::size_t i = 0; i < robot.joints.size(); ++i) {
+    const auto& row = robot.joints[i];
+    // Masters are independent joints (the URDF reader resolves chains of mimics), so one pass does.
+    if (row.mimic_master >= 0) q[static_cast<Eigen::Index>(i)] = row.mimic_multiplier * q[row.mimic_master] + row.mimic_offset;
+  }
+}
+
 Eigen::Isometry3d tool_in_base(const SerialRobot& robot, const double* q) noexcept {
   Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
   for (std::size_t i = 0; i < robot.joints.size(); ++i) T = T * dh_transform(robot.convention, robot.joints[i], q[i]);

@@ -210,6 +210,17 @@ class JsonOutputs(unittest.TestCase):
         d = self.check("stiffness_model", self.stdout_json(r))
         self.assertEqual(d["rank"], len(d["parameters"]))
         self.assertIn("M4a", r.stderr)  # the text report went to stderr
+        # A URDF robot's model, with its joint origins, axes and a mimic joint, fits the schema too.
+        r = hil("stiffness", "identify", TABLE, "--rig", os.path.join(EX, "stiffness", "kr270_like_urdf.yaml"), "--json", "-")
+        self.assertEqual(self.check("stiffness_model", self.stdout_json(r))["robot"]["convention"], "urdf")
+        pal = os.path.join(EX, "robots", "palletizer_mimic.yaml")
+        table = os.path.join(self.dir, "pal.csv")
+        truth = os.path.join(self.dir, "truth.json")
+        with open(truth, "w") as f:
+            json.dump({"format": "hil-stiffness-model", "version": 1, "springs": {"J%d" % i: 1e-6 * i for i in range(1, 6)}}, f)
+        self.assertEqual(hil("stiffness", "simulate", "--rig", pal, "--truth", truth, "--configs", "30", "--out", table).returncode, 0)
+        r = hil("stiffness", "identify", table, "--rig", pal, "--json", "-")
+        self.assertEqual(self.check("stiffness_model", self.stdout_json(r))["robot"]["joints"][3]["mimic"]["joint"], "elbow")
         model = os.path.join(self.dir, "model.json")
         with open(model, "w") as f:
             json.dump(d, f)

@@ -113,6 +113,53 @@ class UrdfRobot(unittest.TestCase):
         self.assertIn("cannot open", r.stderr)
 
 
+    def test_a_mimic_joint_is_simulated_and_identified_as_a_physical_joint(self):
+        # The palletizer's wrist pitch follows its elbow (multiplier -1): planned postures obey the
+        # coupling, and the passive joint's own spring (J4) is identified beside the others.
+        rig = os.path.join(SRC, "examples", "robots", "palletizer_mimic.yaml")
+        r = hil("validate", rig)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        self.assertIn("mimic joint wrist_pitch = -1 × elbow +0", r.stdout)
+        truth = os.path.join(self.dir, "truth.json")
+        springs = {"J1": 0.5e-6, "J2": 0.8e-6, "J3": 1.2e-6, "J4": 2.0e-6, "J5": 3.0e-6}
+        with open(truth, "w") as f:
+            json.dump({"format": "hil-stiffness-model", "version": 1, "springs": springs}, f)
+        table = os.path.join(self.dir, "table.csv")
+        r = hil("stiffness", "simulate", "--rig", rig, "--truth", truth, "--configs", "40", "--moment-nm", "300", "--seed", "5",
+                "--out", table)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        rows = [line.strip().split(",") for line in open(table) if not line.startswith("#")]
+        head = rows[0]
+        for row in rows[1:]:
+            self.assertEqual(float(row[head.index("j4")]), -float(row[head.index("j3")]))
+        ident = self.json_of("stiffness", "identify", table, "--rig", rig, "--noise-pos-m", "1e-5", "--noise-rot-rad", "1e-5")
+        self.assertEqual(ident["robot"]["joints"][3]["mimic"], {"joint": "elbow", "multiplier": -1.0, "offset": 0.0})
+        # Each joint spring is aggregated into the link before it (M3): J4's into L3, about its axis.
+        got = {p["name"]: (p["value"], p["std"]) for p in ident["parameters"]}
+        self.assertIn("L3.k66", got)
+        value, std = got["L3.k66"]
+        self.assertLess(abs(value - springs["J4"]), 4 * std)
+        # A lab's log has the driven joints only: the import leaves the passive one out, the run's
+        # reader derives it, and a derived value beyond the passive joint's limits is refused.
+        src, cfg, run = (os.path.join(self.dir, n) for n in ("lab.csv", "map.yaml", "run.csv"))
+        with open(src, "w") as f:
+            f.write("x;y;z;base_yaw;shoulder;elbow;flange_yaw\n1000;200;1200;10;20;-30;45\n1010;210;1190;11;21;-20;44\n")
+        with open(cfg, "w") as f:
+            f.write("format_version: 1\nkind: calibration_run\ncsv: {delimiter: ';'}\npoint: {columns: [x, y, z], unit: mm}\n"
+                    "joints: {unit: deg}\n")
+        r = hil("import", src, "--config", cfg, "--rig", rig, "--out", run)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        header = [line for line in open(run) if not line.startswith("#")][0].strip().split(",")
+        self.assertNotIn("wrist_pitch", header)
+        r = hil("validate", run, "--rig", rig)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        with open(src, "w") as f:
+            f.write("x;y;z;base_yaw;shoulder;elbow;flange_yaw\n1000;200;1200;10;20;50;45\n")
+        r = hil("import", src, "--config", cfg, "--rig", rig, "--out", run + ".2")
+        self.assertNotEqual(r.returncode, 0)
+        self.assertIn("joint 'wrist_pitch' mimics 'elbow'", r.stderr)
+        self.assertIn("outside its limits", r.stderr)
+
     def test_the_real_ur10_table_imports_into_a_calibration_run(self):
         out, r = self.import_ur10()
         rig = UR10_RIG

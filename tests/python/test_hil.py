@@ -129,6 +129,10 @@ def test_a_urdf_robot_reads_and_identifies_as_its_dh_table():
     assert va.keys() == vb.keys()
     for k in va:
         assert vb[k] == pytest.approx(va[k], rel=1e-6), k
+    # A mimic joint says whom it follows; independent joints have no "mimic" entry.
+    pal = hil.read_rig(os.path.join(SRC, "examples", "robots", "palletizer_mimic.yaml"))["robot"]
+    assert pal["joints"][3]["mimic"] == {"joint": "elbow", "multiplier": -1.0, "offset": 0.0}
+    assert all("mimic" not in j for i, j in enumerate(pal["joints"]) if i != 3)
 
 
 @needs_cli

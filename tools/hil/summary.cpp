@@ -31,6 +31,10 @@ void print_rig_summary(std::ostream& os, const format::RigSpec& rig) {
                : fmt::format(", robot '{}' ({} joints, {} DH)", rig.robot->name, rig.robot->joints.size(),
                              format::convention_name(rig.robot->convention)));
   os << '\n';
+  if (rig.robot)
+    for (const auto& j : rig.robot->joints)
+      if (!j.mimic_of.empty())
+        os << fmt::format("    mimic joint {} = {:g} × {} {:+g}\n", j.name, j.mimic_multiplier, j.mimic_of, j.mimic_offset);
   os << fmt::format("  objects: {}, features: {}, polyhedra: {}\n", rig.objects.size(), format::total_features(rig),
                     format::total_polyhedra(rig));
   for (const auto& o : rig.objects)

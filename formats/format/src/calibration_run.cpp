@@ -37,6 +37,12 @@ std::size_t column_index(const CsvTable& t, const std::string& name) {
   return it == t.header.end() ? 0 : static_cast<std::size_t>(it - t.header.begin()) + 1;
 }
 
+/// A mimic joint without its own column: the URDF's coupling applied to its master's value (the
+/// URDF reader resolves mimics of mimics, so the master is independent and has its column).
+double mimic_value(const DhJointSpec& spec, const CsvTable& t, std::size_t row) {
+  return spec.mimic_multiplier * t.numeric(spec.mimic_of)[row] + spec.mimic_offset;
+}
+
 }  // namespace
 
 bool looks_like_calibration_run(const std::vector<std::string>& header) {
@@ -52,7 +58,9 @@ CalibrationRun parse_calibration_run(const std::string& text, const std::string&
   CsvOptions opt;
   opt.display_name = display_name;
   opt.required = {"px", "py", "pz"};
-  for (const auto& j : robot.joints) opt.required.push_back(j.name);
+  // A mimic joint's column may be left out: its value follows from its master's (below).
+  for (const auto& j : robot.joints)
+    if (j.mimic_of.empty()) opt.required.push_back(j.name);
   opt.numeric_if_present = [](const std::string& c) { return c != "posture" && c != "station"; };
   const CsvTable t = parse_csv(text, opt);
 
@@ -127,13 +135,21 @@ CalibrationRun parse_calibration_run(const std::string& text, const std::string&
     p.q.resize(static_cast<Eigen::Index>(nj));
     for (std::size_t j = 0; j < nj; ++j) {
       const auto& spec = robot.joints[j];
-      const double v = t.numeric(spec.name)[r];
+      const bool derived = !spec.mimic_of.empty() && !t.has(spec.name);
+      const double v = derived ? mimic_value(spec, t, r) : t.numeric(spec.name)[r];
       // A small tolerance: a posture commanded at the limit reads back a hair beyond it.
       constexpr double kSlack = 1e-6;
       if (v < spec.lower - kSlack || v > spec.upper + kSlack) {
         std::ostringstream m;
         m << v << " is outside the joint's limits [" << spec.lower << ", " << spec.upper << "]"
           << (spec.type == JointType::revolute ? " rad (degrees?)" : " m (millimetres?)");
+        if (derived) {
+          m.str("");
+          m << "joint '" << spec.name << "' mimics '" << spec.mimic_of << "': " << spec.mimic_multiplier << " × "
+            << t.numeric(spec.mimic_of)[r] << " + " << spec.mimic_offset << " = " << v << " is outside its limits [" << spec.lower << ", "
+            << spec.upper << "]";
+          throw FormatError(where(r, spec.mimic_of), m.str());
+        }
         throw FormatError(where(r, spec.name), m.str());
       }
       p.q[static_cast<Eigen::Index>(j)] = v;

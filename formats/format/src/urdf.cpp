@@ -77,6 +77,43 @@ std::string link_list(const urdf::ModelInterface& m) {
   return s;
 }
 
+/// A mimic joint's value must be computable from the chain's own joints: its master must be a
+/// moving joint between the base and the tip. A mimic of a mimic is resolved to the independent
+/// joint at the end (q_a = m_a (m_b q_c + o_b) + o_a), so that hil's kinematics need one pass.
+void resolve_mimic_joints(const urdf::ModelInterface& model, const std::string& display_name, const std::string& base_link,
+                          const std::string& tip_link, RobotSpec& r) {
+  auto index_of = [&](const std::string& name) {
+    for (std::size_t i = 0; i < r.joints.size(); ++i)
+      if (r.joints[i].name == name) return static_cast<int>(i);
+    return -1;
+  };
+  for (auto& j : r.joints) {
+    if (j.mimic_of.empty()) continue;
+    const error::Location where{display_name, 0, 0, "joint " + j.name};
+    double multiplier = j.mimic_multiplier, offset = j.mimic_offset;
+    std::string master = j.mimic_of;
+    for (std::size_t hops = 0;; ++hops) {
+      const int m = index_of(master);
+      if (m < 0) {
+        const bool exists = static_cast<bool>(model.getJoint(master));
+        throw FormatError(where, "joint '" + j.name + "' mimics '" + master + "', " +
+                                     (exists ? "which is not a moving joint between '" + base_link + "' and '" + tip_link +
+                                                   "': its value, and so this joint's, is unknown to the chain"
+                                             : "which the robot does not have"));
+      }
+      if (hops > r.joints.size()) throw FormatError(where, "joint '" + j.name + "': its <mimic> joints mimic each other in a cycle");
+      const auto& mj = r.joints[static_cast<std::size_t>(m)];
+      if (mj.mimic_of.empty()) break;
+      offset = multiplier * mj.mimic_offset + offset;
+      multiplier *= mj.mimic_multiplier;
+      master = mj.mimic_of;
+    }
+    j.mimic_of = master;
+    j.mimic_multiplier = multiplier;
+    j.mimic_offset = offset;
+  }
+}
+
 }  // namespace
 
 RobotSpec parse_urdf_robot(const std::string& xml, const std::string& display_name, const std::string& base_link,
@@ -120,15 +157,17 @@ RobotSpec parse_urdf_robot(const std::string& xml, const std::string& display_na
     const KDL::Joint& jt = seg.getJoint();
     const KDL::Frame T_parent_child = seg.pose(0.0);
     if (!is_revolute(jt.getType()) && !is_prismatic(jt.getType())) {
+      // kdl_parser turns floating and planar joints into fixed ones (with a warning): in the
+      // chain that would silently freeze a joint the robot has.
+      if (const auto fj = model->getJoint(jt.getName()); fj && (fj->type == urdf::Joint::FLOATING || fj->type == urdf::Joint::PLANAR))
+        throw FormatError({display_name, 0, 0, "joint " + fj->name},
+                          "joint '" + fj->name + "' is " + (fj->type == urdf::Joint::FLOATING ? "floating" : "planar") +
+                              ": a chain for calibration has revolute, continuous, prismatic and fixed joints only");
       T_body_fixed = T_body_fixed * T_parent_child;
       body_inertia = body_inertia + T_body_fixed * seg.getInertia();
       continue;
     }
     const auto uj = model->getJoint(jt.getName());
-    if (uj && uj->mimic)
-      throw FormatError({display_name, 0, 0, "joint " + jt.getName()},
-                        "joint '" + jt.getName() + "' mimics '" + uj->mimic->joint_name +
-                            "': a mimic joint between the base and the tip is not supported (docs/formats.md, URDF robots)");
     r.inertials.push_back(to_inertial(body_inertia));
     DhJointSpec s;
     s.name = jt.getName();
@@ -147,6 +186,14 @@ RobotSpec parse_urdf_robot(const std::string& xml, const std::string& display_na
     }
     if (!(s.lower < s.upper))
       throw FormatError({display_name, 0, 0, "joint " + s.name}, "joint '" + s.name + "': its lower limit is not below its upper limit");
+    if (uj && uj->mimic) {
+      s.mimic_of = uj->mimic->joint_name;
+      s.mimic_multiplier = uj->mimic->multiplier;
+      s.mimic_offset = uj->mimic->offset;
+      if (!std::isfinite(s.mimic_multiplier) || !std::isfinite(s.mimic_offset))
+        throw FormatError({display_name, 0, 0, "joint " + s.name},
+                          "joint '" + s.name + "': its <mimic> multiplier or offset is not a number");
+    }
     r.joints.push_back(s);
     r.body_links.push_back(seg.getName());
     T_body_fixed = KDL::Frame::Identity();
@@ -156,6 +203,7 @@ RobotSpec parse_urdf_robot(const std::string& xml, const std::string& display_na
   if (r.joints.empty())
     throw FormatError({display_name, 0, 0, "tip_link"}, "the chain from '" + base_link + "' to '" + tip_link + "' has no moving joint");
   r.T_flange_ee = Pose::from_isometry(to_isometry(T_body_fixed));
+  resolve_mimic_joints(*model, display_name, base_link, tip_link, r);
   return r;
 }
 

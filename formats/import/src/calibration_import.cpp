@@ -123,9 +123,14 @@ std::string import_calibration_table(const format::CsvTable& t, const Calibratio
     if (!known) throw FormatError({cfg.file, 0, 0, "joints.columns." + joint}, "the robot has no joint '" + joint + "'");
   }
   std::vector<Col> q;
+  std::vector<std::string> q_names;
   for (const auto& j : robot.joints) {
     const auto it = cfg.joint_columns.find(j.name);
-    q.push_back(column(it == cfg.joint_columns.end() ? j.name : it->second, "joint " + j.name));
+    const std::string source = it == cfg.joint_columns.end() ? j.name : it->second;
+    // A mimic joint the source does not log is left out: the run's reader derives it from its master.
+    if (!j.mimic_of.empty() && it == cfg.joint_columns.end() && !t.has(source)) continue;
+    q.push_back(column(source, "joint " + j.name));
+    q_names.push_back(j.name);
   }
   std::array<Col, 3> p{}, r{};
   for (std::size_t k = 0; k < 3; ++k) p[k] = column(cfg.point_columns[k], "the measured point");
@@ -149,7 +154,7 @@ std::string import_calibration_table(const format::CsvTable& t, const Calibratio
   std::ostringstream out;
   out << "# hil calibration run, imported from " << t.file << " with " << cfg.file << "\n";
   out << "posture,station";
-  for (const auto& j : robot.joints) out << ',' << j.name;
+  for (const auto& name : q_names) out << ',' << name;
   out << ",px,py,pz";
   if (cfg.orientation_columns) out << ",rx,ry,rz";
   if (cfg.sigma_m > 0) out << ",sigma_m";

@@ -32,7 +32,17 @@ hc::SerialRobot to_serial_robot(const format::RobotSpec& spec) {
     row.upper = j.upper;
     row.T_parent_joint = j.T_parent_joint.isometry();
     row.axis = j.axis;
+    row.mimic_multiplier = j.mimic_multiplier;
+    row.mimic_offset = j.mimic_offset;
     r.joints.push_back(row);
+  }
+  for (std::size_t i = 0; i < spec.joints.size(); ++i) {
+    if (spec.joints[i].mimic_of.empty()) continue;
+    for (std::size_t m = 0; m < spec.joints.size(); ++m)
+      if (spec.joints[m].name == spec.joints[i].mimic_of) r.joints[i].mimic_master = static_cast<int>(m);
+    if (r.joints[i].mimic_master < 0)
+      throw FormatError({spec.urdf_file, 0, 0, "joint " + spec.joints[i].name},
+                        "joint '" + spec.joints[i].name + "' mimics '" + spec.joints[i].mimic_of + "', which the chain does not have");
   }
   for (const auto& in : spec.inertials) r.inertials.push_back({in.mass_kg, in.com_m, in.inertia_kgm2});
   r.body_links = spec.body_links;

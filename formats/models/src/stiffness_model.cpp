@@ -145,6 +145,10 @@ nlohmann::json robot_to_json(const hc::SerialRobot& robot) {
     if (robot.convention == hc::DhConvention::urdf) {
       row["T_parent_joint"] = pose_to_json(r.T_parent_joint);
       row["axis"] = {r.axis.x(), r.axis.y(), r.axis.z()};
+      if (r.mimic_master >= 0)
+        row["mimic"] = {{"joint", robot.joints[static_cast<std::size_t>(r.mimic_master)].name},
+                        {"multiplier", r.mimic_multiplier},
+                        {"offset", r.mimic_offset}};
     }
     j["joints"].push_back(row);
   }
@@ -182,6 +186,23 @@ hc::SerialRobot robot_from_json(const nlohmann::json& j, const std::string& file
           throw FormatError({file, 0, 0, "robot.joints." + row.name + ".axis"}, "the axis is not a unit vector");
       }
       r.joints.push_back(row);
+    }
+    // Mimic records name their master, which may come later in the file: resolved once all are read.
+    for (std::size_t i = 0; i < r.joints.size(); ++i) {
+      const auto& jr = j.at("joints").at(i);
+      if (r.convention != hc::DhConvention::urdf || !jr.contains("mimic")) continue;
+      const auto& m = jr.at("mimic");
+      const auto master = m.at("joint").get<std::string>();
+      const std::string where = "robot.joints." + r.joints[i].name + ".mimic";
+      for (std::size_t k = 0; k < r.joints.size(); ++k)
+        if (r.joints[k].name == master) r.joints[i].mimic_master = static_cast<int>(k);
+      if (r.joints[i].mimic_master < 0 || r.joints[static_cast<std::size_t>(r.joints[i].mimic_master)].mimic_master >= 0 ||
+          r.joints[i].mimic_master == static_cast<int>(i))
+        throw FormatError({file, 0, 0, where}, "'" + master + "' is not an independent joint of the chain");
+      r.joints[i].mimic_multiplier = m.at("multiplier").get<double>();
+      r.joints[i].mimic_offset = m.at("offset").get<double>();
+      if (!std::isfinite(r.joints[i].mimic_multiplier) || !std::isfinite(r.joints[i].mimic_offset))
+        throw FormatError({file, 0, 0, where}, "the multiplier and offset must be numbers");
     }
     auto pose = [&](const char* key) { return pose_from_json(j.at(key)); };
     r.T_world_base = pose("T_world_base");

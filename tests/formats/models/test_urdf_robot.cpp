@@ -11,15 +11,19 @@
 #include <kdl_parser/kdl_parser.hpp>
 
 #include <cmath>
+#include <filesystem>
 #include <functional>
 #include <random>
 
 #include <hil/calibration/gravity.hpp>
 #include <hil/calibration/vjm.hpp>
+#include <hil/calibration/experiment.hpp>
 #include <hil/error/error.hpp>
+#include <hil/format/calibration_run.hpp>
 #include <hil/format/rig.hpp>
 #include <hil/format/urdf.hpp>
 #include <hil/models/stiffness.hpp>
+#include <hil/models/stiffness_model.hpp>
 
 namespace hc = hil::calibration;
 namespace hf = hil::format;
@@ -28,6 +32,13 @@ namespace {
 
 const std::string kExamples = std::string(HIL_SOURCE_DIR) + "/examples/stiffness/";
 const std::string kUr10 = std::string(HIL_SHARED_DIR) + "/data/ur10-calibration/ur10.urdf";
+const std::string kPalletizer = std::string(HIL_SOURCE_DIR) + "/examples/robots/palletizer_mimic.urdf";
+
+/// The real UR10 description lives in ../shared beside the clone, not in the repository.
+#define SKIP_WITHOUT_UR10()                                \
+  if (!std::filesystem::exists(kUr10))                     \
+  GTEST_SKIP() << kUr10 << " is absent (../shared/data); " \
+               << "the real UR10's description is not in the repository"
 
 Eigen::VectorXd random_q(const hc::SerialRobot& r, std::mt19937& rng) {
   Eigen::VectorXd q(r.dof());
@@ -98,6 +109,7 @@ TEST(UrdfRobot, Kr270UrdfAndDhGiveTheSamePosesJacobiansAndDeflections) {
 }
 
 TEST(UrdfRobot, ChainAgreesWithKdlSolversOnTheRealUr10) {
+  SKIP_WITHOUT_UR10();
   const hf::RobotSpec spec = hf::read_urdf_robot(kUr10, "base_link", "tool0");
   ASSERT_EQ(spec.joints.size(), 6u);
   EXPECT_EQ(spec.joints[0].name, "shoulder_pan_joint");
@@ -137,6 +149,7 @@ TEST(UrdfRobot, ChainAgreesWithKdlSolversOnTheRealUr10) {
 }
 
 TEST(UrdfRobot, GravityTorquesAgreeWithKdlOnTheRealUr10) {
+  SKIP_WITHOUT_UR10();
   const hc::SerialRobot robot = hil::models::to_serial_robot(hf::read_urdf_robot(kUr10, "base_link", "tool0"));
   EXPECT_NEAR(hc::moving_mass_kg(robot), 7.778 + 12.93 + 3.87 + 1.96 + 1.96 + 0.202, 1e-12);
   KDL::Tree tree;
@@ -222,7 +235,9 @@ TEST(UrdfRobot, BadDescriptionsFailByName) {
                             "<limit lower='-1' upper='1' effort='1' velocity='1'/></joint>"
                             "<joint name='j2' type='revolute'><parent link='b'/><child link='c'/><axis xyz='0 0 1'/>"
                             "<limit lower='-1' upper='1' effort='1' velocity='1'/><mimic joint='j1' multiplier='2'/></joint></robot>";
-  EXPECT_NE(message([&] { hf::parse_urdf_robot(mimic, "mimic.urdf", "a", "c"); }).find("joint 'j2' mimics 'j1'"), std::string::npos);
+  // A mimic joint whose master is outside the chain: its value could not be known.
+  const auto outside = message([&] { hf::parse_urdf_robot(mimic, "mimic.urdf", "b", "c"); });
+  EXPECT_NE(outside.find("joint 'j2' mimics 'j1', which is not a moving joint between 'b' and 'c'"), std::string::npos) << outside;
   // A mimic joint outside the chain (a gripper's finger) is no concern of the arm's.
   EXPECT_EQ(hf::parse_urdf_robot(mimic, "mimic.urdf", "a", "b").joints.size(), 1u);
   // Found by fuzz_urdf: an <axis> without xyz reaches KDL as (0, 0, 0).
@@ -238,6 +253,14 @@ TEST(UrdfRobot, BadDescriptionsFailByName) {
         "fixed.urdf", "a", "b");
   });
   EXPECT_NE(fixed_only.find("no moving joint"), std::string::npos) << fixed_only;
+  // kdl_parser makes a floating joint fixed: hil refuses it by name instead.
+  const auto floating = message([&] {
+    hf::parse_urdf_robot("<robot name='f'><link name='a'/><link name='b'/><link name='c'/>"
+                         "<joint name='free' type='floating'><parent link='a'/><child link='b'/></joint>"
+                         "<joint name='j' type='continuous'><parent link='b'/><child link='c'/><axis xyz='0 0 1'/></joint></robot>",
+                         "floating.urdf", "a", "c");
+  });
+  EXPECT_NE(floating.find("joint 'free' is floating"), std::string::npos) << floating;
   // In a rig: the rig's line and the URDF's complaint together; a missing file by its path.
   const auto rig = message([] {
     hf::parse_rig("format_version: 1\nname: r\nrobot:\n  urdf: nowhere.urdf\n  base_link: a\n  tip_link: b\n", "/tmp/rigs/r.yaml");
@@ -248,4 +271,145 @@ TEST(UrdfRobot, BadDescriptionsFailByName) {
     hf::parse_rig("format_version: 1\nname: r\nrobot:\n  urdf: x.urdf\n  base_link: a\n  tip_link: b\n  joints: []\n", "r.yaml");
   });
   EXPECT_NE(mixed.find("joints"), std::string::npos) << mixed;
+}
+
+// Mimic joints (the palletizer's wrist pitch follows its elbow with multiplier −1). The check is
+// against KDL's chain from the file, which knows nothing of mimics: the test itself sets the
+// passive joint from the coupling the URDF states, so hil's reading of <mimic> is what is tested.
+TEST(UrdfRobot, MimicJointsFollowTheirMasterAsTheUrdfStates) {
+  const hf::RobotSpec spec = hf::read_urdf_robot(kPalletizer, "base_link", "tool0");
+  ASSERT_EQ(spec.joints.size(), 5u);
+  EXPECT_EQ(spec.joints[3].name, "wrist_pitch");
+  EXPECT_EQ(spec.joints[3].mimic_of, "elbow");
+  EXPECT_EQ(spec.joints[3].mimic_multiplier, -1.0);
+  EXPECT_EQ(spec.joints[3].mimic_offset, 0.0);
+  for (std::size_t i : {0u, 1u, 2u, 4u}) EXPECT_TRUE(spec.joints[i].mimic_of.empty()) << spec.joints[i].name;
+  ASSERT_EQ(spec.body_links.size(), 6u);
+  EXPECT_EQ(spec.body_links[4], "wrist");  // the passive joint keeps its own body
+  EXPECT_DOUBLE_EQ(spec.inertials[4].mass_kg, 25.0);
+
+  const hc::SerialRobot robot = hil::models::to_serial_robot(spec);
+  ASSERT_EQ(robot.joints[3].mimic_master, 2);
+  KDL::Tree tree;
+  ASSERT_TRUE(kdl_parser::treeFromFile(kPalletizer, tree));
+  KDL::Chain chain;
+  ASSERT_TRUE(tree.getChain("base_link", "tool0", chain));
+  ASSERT_EQ(chain.getNrOfJoints(), 5u);
+  KDL::ChainFkSolverPos_recursive fk(chain);
+  auto kdl_tool = [&](const Eigen::VectorXd& q_independent) {
+    KDL::JntArray qk(5);
+    for (unsigned i = 0; i < 5; ++i) qk(i) = q_independent[i];
+    qk(3) = -1.0 * q_independent[2];  // <mimic joint="elbow" multiplier="-1" offset="0"/>
+    KDL::Frame F;
+    EXPECT_GE(fk.JntToCart(qk, F), 0);
+    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+    for (unsigned r = 0; r < 3; ++r) {
+      T.translation()[r] = F.p(r);
+      for (unsigned c = 0; c < 3; ++c) T.linear()(r, c) = F.M(r, c);
+    }
+    return T;
+  };
+  std::mt19937 rng(52817);
+  for (int trial = 0; trial < 50; ++trial) {
+    Eigen::VectorXd q = random_q(robot, rng);
+    q[3] = 99.0;  // whatever was there: the master decides
+    hc::fill_mimic_joints(robot, q);
+    EXPECT_DOUBLE_EQ(q[3], -q[2]);
+    const Eigen::Isometry3d T = hc::tool_pose(robot, q);
+    const Eigen::Isometry3d Tk = kdl_tool(q);
+    EXPECT_LT((T.matrix() - Tk.matrix()).cwiseAbs().maxCoeff(), 1e-12);
+    // The parallelogram keeps the wrist at the upper arm's pitch: the flange's axis leans from the
+    // vertical by the shoulder's angle, whatever the elbow does.
+    EXPECT_NEAR(std::abs(T.linear()(2, 2)), std::cos(q[1]), 1e-12);
+    // Moving the elbow moves the passive joint too: the tool's rate per elbow radian is the elbow's
+    // column plus multiplier × the passive joint's, as KDL's finite differences say.
+    const Eigen::MatrixXd J = hc::tool_jacobian(robot, q);
+    const Eigen::Matrix<double, 6, 1> d_elbow = J.col(2) - J.col(3);
+    constexpr double h = 1e-6;
+    Eigen::VectorXd qp = q, qm = q;
+    qp[2] += h, qm[2] -= h;
+    const Eigen::Isometry3d Tp = kdl_tool(qp), Tm = kdl_tool(qm);
+    const Eigen::Vector3d v = (Tp.translation() - Tm.translation()) / (2 * h);
+    const Eigen::AngleAxisd w(Tp.linear() * Tm.linear().transpose());
+    EXPECT_LT((d_elbow.head<3>() - v).norm(), 1e-7);
+    EXPECT_LT((d_elbow.tail<3>() - w.angle() * w.axis() / (2 * h)).norm(), 1e-7);
+  }
+
+  // The postures hil plans for a stiffness experiment obey the coupling.
+  const hc::VjmModel model(robot);
+  hc::ExperimentPlan plan;
+  plan.configurations = 20;
+  plan.seed = 3;
+  for (const auto& m : hc::simulate(model, model.zero_compliance(), plan, hc::NoiseModel{})) EXPECT_DOUBLE_EQ(m.q_rad[3], -m.q_rad[2]);
+
+  // Model files keep the coupling.
+  const hc::SerialRobot back = hil::models::robot_from_json(hil::models::robot_to_json(robot), "model.json");
+  EXPECT_EQ(back.joints[3].mimic_master, 2);
+  EXPECT_EQ(back.joints[3].mimic_multiplier, -1.0);
+  EXPECT_EQ(back.joints[1].mimic_master, -1);
+}
+
+TEST(UrdfRobot, MimicsOfMimicsResolveToTheIndependentJoint) {
+  auto joint = [](const std::string& name, const std::string& parent, const std::string& child, const std::string& mimic) {
+    return "<joint name='" + name + "' type='revolute'><parent link='" + parent + "'/><child link='" + child +
+           "'/><origin xyz='0.5 0 0'/><axis xyz='0 0 1'/><limit lower='-3' upper='3' effort='1' velocity='1'/>" + mimic + "</joint>";
+  };
+  const std::string links = "<link name='a'/><link name='b'/><link name='c'/><link name='d'/>";
+  const std::string urdf = "<robot name='m'>" + links + joint("j1", "a", "b", "") +
+                           joint("j2", "b", "c", "<mimic joint='j1' multiplier='2' offset='0.1'/>") +
+                           joint("j3", "c", "d", "<mimic joint='j2' multiplier='-0.5' offset='0.2'/>") + "</robot>";
+  const hf::RobotSpec spec = hf::parse_urdf_robot(urdf, "chain.urdf", "a", "d");
+  ASSERT_EQ(spec.joints.size(), 3u);
+  EXPECT_EQ(spec.joints[2].mimic_of, "j1");
+  EXPECT_DOUBLE_EQ(spec.joints[2].mimic_multiplier, -1.0);          // −0.5 × 2
+  EXPECT_DOUBLE_EQ(spec.joints[2].mimic_offset, -0.5 * 0.1 + 0.2);  // −0.5 × 0.1 + 0.2
+  const hc::SerialRobot robot = hil::models::to_serial_robot(spec);
+  Eigen::VectorXd q(3);
+  q << 0.3, 0.0, 0.0;
+  hc::fill_mimic_joints(robot, q);
+  EXPECT_DOUBLE_EQ(q[1], 2 * 0.3 + 0.1);
+  EXPECT_DOUBLE_EQ(q[2], -0.5 * q[1] + 0.2);
+
+  auto message = [](const std::function<void()>& f) {
+    try {
+      f();
+    } catch (const hil::error::FormatError& e) {
+      return std::string(e.what());
+    }
+    return std::string("(no error)");
+  };
+  const std::string cycle = "<robot name='m'>" + links + joint("j1", "a", "b", "<mimic joint='j2'/>") +
+                            joint("j2", "b", "c", "<mimic joint='j1'/>") + joint("j3", "c", "d", "") + "</robot>";
+  const auto cyc = message([&] { hf::parse_urdf_robot(cycle, "cycle.urdf", "a", "d"); });
+  EXPECT_NE(cyc.find("cycle"), std::string::npos) << cyc;
+  const std::string ghost = "<robot name='m'>" + links + joint("j1", "a", "b", "") + joint("j2", "b", "c", "<mimic joint='jx'/>") +
+                            joint("j3", "c", "d", "") + "</robot>";
+  const auto gh = message([&] { hf::parse_urdf_robot(ghost, "ghost.urdf", "a", "d"); });
+  EXPECT_NE(gh.find("mimics 'jx'"), std::string::npos) << gh;
+}
+
+TEST(UrdfRobot, CalibrationRunsDeriveAMimicJointTheyDoNotLog) {
+  const hf::RobotSpec spec = hf::read_urdf_robot(kPalletizer, "base_link", "tool0");
+  const std::string header = "posture,base_yaw,shoulder,elbow,flange_yaw,px,py,pz\n";
+  const auto run = hf::parse_calibration_run(header + "p1,0.1,0.2,-0.4,0.5,1,2,3\np2,0.2,0.3,0.6,0.1,1,2,3\n", "run.csv", spec);
+  ASSERT_EQ(run.postures.size(), 2u);
+  EXPECT_DOUBLE_EQ(run.postures[0].q[3], 0.4);
+  EXPECT_DOUBLE_EQ(run.postures[1].q[3], -0.6);
+  EXPECT_EQ(run.joint_names[3], "wrist_pitch");
+  // Logged anyway (a /joint_states dump has it): the logged value is used as it is.
+  const auto logged =
+      hf::parse_calibration_run("posture,base_yaw,shoulder,elbow,wrist_pitch,flange_yaw,px,py,pz\np1,0.1,0.2,-0.4,0.41,0.5,1,2,3\n",
+                                "logged.csv", spec);
+  EXPECT_DOUBLE_EQ(logged.postures[0].q[3], 0.41);
+  // The master inside its limits (−1.2 .. 0.9) but the passive joint beyond its own (−0.8 .. 1.3):
+  // the error points at the master's cell and says why.
+  try {
+    hf::parse_calibration_run(header + "p1,0.1,0.2,0.85,0.5,1,2,3\n", "run.csv", spec);
+    ADD_FAILURE() << "a derived value outside the passive joint's limits was accepted";
+  } catch (const hil::error::FormatError& e) {
+    const std::string m = e.what();
+    EXPECT_NE(m.find("run.csv:2"), std::string::npos) << m;
+    EXPECT_NE(m.find("elbow"), std::string::npos) << m;
+    EXPECT_NE(m.find("joint 'wrist_pitch' mimics 'elbow'"), std::string::npos) << m;
+  }
 }

@@ -40,6 +40,12 @@ struct DhRow {
   double upper = 3.141592653589793;
   Eigen::Isometry3d T_parent_joint = Eigen::Isometry3d::Identity();  ///< URDF form: the joint frame in the previous body
   Eigen::Vector3d axis = Eigen::Vector3d::UnitZ();                   ///< URDF form: unit axis in the joint frame
+  /// A URDF mimic joint: a physical joint (own axis, body, spring, offset) whose value is
+  /// mimic_multiplier · q[mimic_master] + mimic_offset where hil makes joint values itself
+  /// (fill_mimic_joints); -1 for an independent joint.
+  int mimic_master = -1;
+  double mimic_multiplier = 1.0;
+  double mimic_offset = 0.0;
 };
 
 /// Mass properties of one body of the chain (URDF inertials, fixed links lumped in), in the body's
@@ -72,6 +78,10 @@ struct ChainPoses {
   std::vector<Eigen::Vector3d> p_world_joint_m;   ///< a point on joint i's axis (its DH origin), index i-1
   Eigen::Isometry3d T_world_ee = Eigen::Isometry3d::Identity();
 };
+
+/// Sets every mimic joint's entry of q from its master's (q holds one value per joint, dof() of
+/// them; independent entries are left as they are).
+void fill_mimic_joints(const SerialRobot& robot, Eigen::Ref<Eigen::VectorXd> q);
 
 /// The DH transform of one row at joint value q (rad or m).
 Eigen::Isometry3d dh_transform(DhConvention convention, const DhRow& row, double q);

@@ -46,6 +46,11 @@ struct DhJointSpec {
   double upper = 3.141592653589793;                 ///< rad or m
   Pose T_parent_joint;                              ///< URDF: the joint frame in the previous body's frame
   Eigen::Vector3d axis = Eigen::Vector3d::UnitZ();  ///< URDF: unit axis in the joint frame
+  /// URDF `<mimic>`: this joint's value is mimic_multiplier · q(mimic_of) + mimic_offset, where
+  /// mimic_of names an independent joint of the same chain; empty for an independent joint.
+  std::string mimic_of;
+  double mimic_multiplier = 1.0;
+  double mimic_offset = 0.0;  ///< rad or m, in this joint's unit
 };
 
 /// A body's mass properties in its frame (URDF inertials, fixed links lumped in).
