@@ -104,6 +104,8 @@ std::vector<Sample> generate(const Truth& t, const std::vector<Eigen::VectorXd>&
   check_size(t.flag_offset_rad, dof, "flag_offset_rad");
   check_size(t.joint_stiffness_Nm_per_rad, dof, "joint_stiffness_Nm_per_rad");
   check_size(t.backlash_rad, dof, "backlash_rad");
+  check_size(t.encoder_error_rad, dof, "encoder_error_rad");
+  check_size(t.encoder_phase_rad, dof, "encoder_phase_rad");
   check_size(t.backlash_friction_Nm, dof, "backlash_friction_Nm");
   check_not_negative(t.joint_stiffness_Nm_per_rad, "joint_stiffness_Nm_per_rad");
   check_not_negative(t.backlash_rad, "backlash_rad");
@@ -174,6 +176,8 @@ std::vector<Sample> generate(const Truth& t, const std::vector<Eigen::VectorXd>&
     // The posture's offsets: the flag's come on top of the joints' own, on the link side alike.
     std::vector<double> offset(dof);
     for (unsigned i = 0; i < dof; ++i) offset[i] = at(t.joint_offset_rad, i, 0.0) + (smp.flag ? at(t.flag_offset_rad, i, 0.0) : 0.0);
+    // The encoder reads q where the link stands at q + A sin(q + φ): on the link side like an offset.
+    for (unsigned i = 0; i < dof; ++i) offset[i] += at(t.encoder_error_rad, i, 0.0) * std::sin(smp.q[i] + at(t.encoder_phase_rad, i, 0.0));
 
     // --- 1. Joints. The side of the play a joint under small torque sits on follows its last move:
     // the motor pushed the link, which lags behind it (−b after a positive move, +b after a negative).

@@ -8,7 +8,7 @@
 //
 // Order of the physics in one posture (each effect is small, so each is computed on the
 // configuration the previous ones leave, and second-order couplings are neglected):
-//   1. joints: link side = commanded q + offset + backlash side − holding torque / stiffness,
+//   1. joints: link side = commanded q + encoder error + offset + backlash side − holding torque / stiffness,
 //      solved by fixed-point iteration with KDL's gravity torques at the link side;
 //   2. beams: cantilever deflections of the named links under the loads of that configuration;
 //   3. base: the whole chain tilted by the weight's moment over the base springs (every chain
@@ -46,7 +46,11 @@ struct Truth {
   Eigen::VectorXd flag_offset_rad;             ///< added to joint_offset_rad in the flagged postures only
   Eigen::VectorXd joint_stiffness_Nm_per_rad;  ///< joint springs; 0 = rigid joint
   Eigen::VectorXd backlash_rad;                ///< half of the play; 0 = none
-  Eigen::VectorXd backlash_friction_Nm;        ///< |τ| above which gravity decides the side; empty = 2 N·m
+  /// A once-per-turn error of each joint's link-side encoder (an eccentric disc): the link stands
+  /// at q + A sin(q + φ) + offset where the encoder reads q. Empty or 0 = none.
+  Eigen::VectorXd encoder_error_rad;     ///< A
+  Eigen::VectorXd encoder_phase_rad;     ///< φ
+  Eigen::VectorXd backlash_friction_Nm;  ///< |τ| above which gravity decides the side; empty = 2 N·m
   std::vector<Beam> beams;
   double base_stiffness_Nm_per_rad = 0.0;  ///< tilt stiffness about world x and y; 0 = rigid base
   double payload_kg = 0.0;

@@ -96,6 +96,15 @@ void flagged_offsets(ts::Truth& t, std::mt19937& rng) {
   for (const auto& [j, name] : kFlaggedJoints) t.flag_offset_rad[j] = signed_uniform(rng, 0.5e-3, 2e-3);
 }
 
+void encoder_errors(ts::Truth& t, std::mt19937& rng) {
+  t.encoder_error_rad = Eigen::VectorXd::Zero(6);
+  t.encoder_phase_rad = Eigen::VectorXd::Zero(6);
+  for (int j : {1, 2, kWrist1}) {  // shoulder lift, elbow, wrist 1
+    t.encoder_error_rad[j] = uniform(rng, 0.3e-3, 1e-3);
+    t.encoder_phase_rad[j] = uniform(rng, 0.0, 2 * M_PI);
+  }
+}
+
 std::string named(const hc::PointComparison& c, int row) {
   return row < 0 ? "" : hc::to_string(c.rows[static_cast<std::size_t>(row)].model);
 }
@@ -157,6 +166,13 @@ TEST(PointBlindLibrary, OffsetsOfFlaggedPosturesAreFlagOffsets) {
                      [](const hc::PointComparison& c) {
                        return named(c, c.cause) == "flag_offsets" && c.second_cause < 0 && c.noise.after_within;
                      }),
+            kMinRight);
+}
+
+TEST(PointBlindLibrary, AnEncoderErrorOutsideTheLibraryIsNotClaimed) {
+  // Case 12 (the third series): no candidate has a term periodic in q.
+  EXPECT_GE(run_case(12, "encoder once-per-turn error (outside the library)", encoder_errors, {},
+                     [](const hc::PointComparison& c) { return c.kind == "unexplained" || (c.kind == "cause" && !c.noise.after_within); }),
             kMinRight);
 }
 

@@ -242,6 +242,25 @@ TEST(SerialTruth, JointOffsetsShiftTheLinkSide) {
   EXPECT_GT((s.p_base_m - fk(chain, q, t.tool_point_m)).norm(), 1e-3);
 }
 
+TEST(SerialTruth, AnEncoderErrorTurnsWithTheJoint) {
+  ts::Truth t = ur10_truth();
+  t.joint_offset_rad = vec({0.0, 0.001, 0.0, 0.0, 0.0, 0.0});
+  t.encoder_error_rad = vec({0.0, 0.002, 0.004, 0.0, 0.0, 0.0});
+  t.encoder_phase_rad = vec({0.0, 0.3, -1.0, 0.0, 0.0, 0.0});
+  std::mt19937 rng(1);
+  const KDL::Chain chain = chain_of(kUr10, "base_link", "wrist_3_link");
+  for (double elbow : {-2.0, 0.0, 1.5}) {
+    Eigen::VectorXd q = ur10_reach();
+    q[2] = elbow;
+    const auto s = ts::generate(t, {q}, rng).at(0);
+    Eigen::VectorXd expect = q + t.joint_offset_rad;
+    expect[1] += 0.002 * std::sin(q[1] + 0.3);
+    expect[2] += 0.004 * std::sin(elbow - 1.0);
+    EXPECT_LT((s.q_link - expect).cwiseAbs().maxCoeff(), 1e-15);
+    EXPECT_LT((s.p_base_m - fk(chain, expect, t.tool_point_m)).norm(), 1e-12);
+  }
+}
+
 TEST(SerialTruth, NoiseHasTheGivenSpreadPerCoordinate) {
   std::mt19937 rng(11);
   ts::Truth t = ur10_truth();
