@@ -313,6 +313,23 @@ class Cli(unittest.TestCase):
         self.assertAlmostEqual(float(m.group(2)) / 1.8e5, 1.0, delta=0.05)
         self.assertAlmostEqual(float(m.group(3)), 0.2, delta=0.03)
 
+    def test_echo_with_nothing_before_its_timeout_fails(self):
+        # Nobody publishes contact estimates on this private domain: a script must see that.
+        r = hil("echo", "contact_estimate", "--timeout", "1", "--dds-domain", "187")
+        self.assertEqual(r.returncode, 1, r.stderr)
+        self.assertIn("0 messages", r.stderr)
+
+    def test_every_subcommand_lists_and_takes_the_global_options(self):
+        for cmd in (["echo"], ["diagnose"], ["stiffness", "worker"], ["replay"], ["rig", "run"]):
+            r = hil(*cmd, "--help")
+            self.assertEqual(r.returncode, 0, cmd)
+            for opt in ("--dds-domain", "--log-level", "--dds-profile"):
+                self.assertIn(opt, r.stdout, cmd)
+        # After the subcommand as before it, and checked the same way.
+        r = hil("echo", "pose_wrench", "--dds-domain", "999", "--timeout", "1")
+        self.assertEqual(r.returncode, 2, r.stderr)
+        self.assertIn("--dds-domain", r.stderr)
+
     def test_echo_unknown_topic(self):
         r = hil("echo", "nonsense", "--timeout", "1")
         self.assertEqual(r.returncode, 2, r.stderr)

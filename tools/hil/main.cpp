@@ -4,6 +4,7 @@
 #include <spdlog/spdlog.h>
 
 #include <exception>
+#include <functional>
 #include <iostream>
 
 #include <hil/cli/commands.hpp>
@@ -19,15 +20,20 @@ int main(int argc, char** argv) {
   app.set_version_flag("--version", std::string("hil ") + HIL_VERSION);
   app.require_subcommand(1);
   auto& g = globals();
-  app.add_option("--log-level", g.log_level, "trace, debug, info, warn, error, critical or off")
-      ->check(CLI::IsMember({"trace", "debug", "info", "warn", "error", "critical", "off"}))
-      ->capture_default_str();
-  app.add_option("--dds-profile", g.dds_profile, "Fast DDS XML profile file (default: hil's host-only profile)");
-  app.add_option("--dds-profile-name", g.dds_profile_name, "participant profile in that file")->capture_default_str();
-  app.add_option("--dds-domain", g.dds_domain, "DDS domain id (default: $HIL_DDS_DOMAIN, else $ROS_DOMAIN_ID, else 0)")
-      ->check(CLI::Range(0, 232));
-  app.add_option("--secure", g.secure, "DDS Security: keystore directory[:participant] (hil keystore; docs/security.md)");
-  app.add_option("--secure-name", g.secure_name, "keystore participant for --secure (default: the command's role, e.g. replay)");
+  // The global options, on `hil` itself and (below) on every subcommand at every depth, bound to
+  // the same variables: they may come before or after the subcommand and each --help lists them.
+  auto add_globals = [&g](CLI::App& a) {
+    a.add_option("--log-level", g.log_level, "trace, debug, info, warn, error, critical or off")
+        ->check(CLI::IsMember({"trace", "debug", "info", "warn", "error", "critical", "off"}))
+        ->capture_default_str();
+    a.add_option("--dds-profile", g.dds_profile, "Fast DDS XML profile file (default: hil's host-only profile)");
+    a.add_option("--dds-profile-name", g.dds_profile_name, "participant profile in that file")->capture_default_str();
+    a.add_option("--dds-domain", g.dds_domain, "DDS domain id (default: $HIL_DDS_DOMAIN, else $ROS_DOMAIN_ID, else 0)")
+        ->check(CLI::Range(0, 232));
+    a.add_option("--secure", g.secure, "DDS Security: keystore directory[:participant] (hil keystore; docs/security.md)");
+    a.add_option("--secure-name", g.secure_name, "keystore participant for --secure (default: the command's role, e.g. replay)");
+  };
+  add_globals(app);
 
   add_validate(app);
   add_demo(app);
@@ -42,6 +48,15 @@ int main(int argc, char** argv) {
   add_diagnose(app);
   add_export(app);
   add_keystore(app);
+  std::function<void(CLI::App&)> globals_everywhere = [&](CLI::App& a) {
+    // Option groups are subcommands to CLI11 too: only the commands get the globals.
+    const auto commands = a.get_subcommands([](CLI::App* s) { return dynamic_cast<CLI::Option_group*>(s) == nullptr; });
+    for (CLI::App* sub : commands) {
+      add_globals(*sub->add_option_group("Global options", "also accepted before the subcommand"));
+      globals_everywhere(*sub);
+    }
+  };
+  globals_everywhere(app);
 
   try {
     app.parse(argc, argv);

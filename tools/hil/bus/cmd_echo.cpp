@@ -100,7 +100,9 @@ int echo(dds::Participant& p, const std::string& topic, std::string (*show)(cons
   while (!g_stop && (o.count == 0 || n < o.count)) {
     if (o.timeout_s > 0 && std::chrono::steady_clock::now() - start > std::chrono::duration<double>(o.timeout_s)) {
       spdlog::warn("echo: {} messages on {} before the timeout", n.load(), topic);
-      return o.count == 0 ? 0 : 1;
+      // A script waiting for a topic must be able to tell "nothing came" from success: without
+      // --count the timeout ends a successful run only if something arrived.
+      return o.count == 0 && n > 0 ? 0 : 1;
     }
     std::this_thread::sleep_for(std::chrono::milliseconds(5));
   }
@@ -127,7 +129,8 @@ void add_echo(CLI::App& app) {
   static EchoOptions o;
   cmd->add_option("TOPIC", o.topic, "topic")->required();
   cmd->add_option("-n,--count", o.count, "stop after this many messages (0: until Ctrl-C)");
-  cmd->add_option("--timeout", o.timeout_s, "give up after this many seconds (0: never)");
+  cmd->add_option("--timeout", o.timeout_s,
+                  "give up after this many seconds (0: never); exit 1 if fewer than --count messages (without --count: none) arrived");
   cmd->callback([] {
     set_action([] {
       std::signal(SIGINT, on_echo_signal);
