@@ -6,6 +6,7 @@
 #include <pybind11/stl/filesystem.h>  // paths as str or os.PathLike
 
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <map>
 #include <stdexcept>
@@ -13,6 +14,7 @@
 #include "bindings.hpp"
 #include "convert.hpp"
 #include <hil/calibration/reduction.hpp>
+#include <hil/error/error.hpp>
 #include <hil/format/run.hpp>
 #include <hil/services/contact_identify.hpp>
 #include <hil/models/contact.hpp>
@@ -85,6 +87,16 @@ py::dict instant_dict(const std::vector<cid::InstantEstimate>& v) {
 
 py::dict identify_contact(const Path& run_path, const Path& rig, bool geometric, const std::string& lambda, const std::string& solver,
                           const std::string& jacobian, int window, int lcurve_points, bool include_weak) {
+  // Checked here, with the keyword's name, whether or not geometric= makes them used.
+  if (solver != "lm" && solver != "nm") throw py::value_error("solver: expected 'lm' or 'nm', got '" + solver + "'");
+  if (jacobian != "golub-pereyra" && jacobian != "kaufman")
+    throw py::value_error("jacobian: expected 'golub-pereyra' or 'kaufman', got '" + jacobian + "'");
+  if (lambda != "auto") {
+    char* end = nullptr;
+    const double x = std::strtod(lambda.c_str(), &end);
+    if (end == lambda.c_str() || *end != '\0' || !std::isfinite(x) || x < 0)
+      throw py::value_error("lambda_: expected a number >= 0 (as text) or 'auto', got '" + lambda + "'");
+  }
   if (window < 1) throw py::value_error("window: expected >= 1 used samples, got " + std::to_string(window));
   if (lcurve_points < 3) throw py::value_error("lcurve_points: expected >= 3, got " + std::to_string(lcurve_points));
   nlohmann::json j;
@@ -161,6 +173,10 @@ py::dict diagnose(const Path& path, const Path& rig, const std::vector<std::stri
     j = services::diagnose::to_json(r);
   } catch (const StopForPython&) {
     std::rethrow_exception(python_error);  // the GIL is held again: raise the Python exception
+  } catch (const error::FormatError& e) {
+    // The services name the CLI's flag; a Python caller gave the keyword.
+    if (e.where().field == "--candidates") throw py::value_error("candidates: " + e.message());
+    throw;
   }
   return to_python(j);
 }
@@ -228,7 +244,12 @@ py::dict simulate_contact(const Path& rig_path, const Path& trajectory, const py
     } catch (const std::invalid_argument& e) {
       throw py::value_error(std::string("K, mu: ") + e.what());
     }
-    const Eigen::VectorXd x_true = models::uncertainty_vector(scene, geometric, "geometric");
+    Eigen::VectorXd x_true;
+    try {
+      x_true = models::uncertainty_vector(scene, geometric, "geometric");
+    } catch (const std::runtime_error& e) {
+      throw py::value_error(e.what());  // "geometric: unknown geometric uncertainty ..."
+    }
     auto traj = models::read_trajectory(trajectory.string());
     sim = cid::simulate(scene, model, x_true, traj.kin, sensor);
     t = std::move(traj.t);

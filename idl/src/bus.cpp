@@ -181,6 +181,10 @@ DataWriterQos writer_qos(const Participant& p, const StreamQos& q) {
       qos.history().kind = KEEP_LAST_HISTORY_QOS;
       qos.history().depth = q.durable_depth;
     }
+  } else {
+    // Fast DDS's default writer is transient-local: a late transient-local reader (a bag recorder
+    // adapting to the publisher) would get up to the history depth of old samples as new.
+    qos.durability().kind = VOLATILE_DURABILITY_QOS;
   }
   // Keep-all writers block rather than drop when readers lag; bound the wait.
   qos.reliability().max_blocking_time = eprosima::fastrtps::Duration_t(1.0);
@@ -196,7 +200,7 @@ DataReaderQos reader_qos(const Participant& p, const StreamQos& q) {
     qos.history().kind = KEEP_LAST_HISTORY_QOS;
     qos.history().depth = q.history_depth;
   }
-  if (q.durable_depth > 0) qos.durability().kind = TRANSIENT_LOCAL_DURABILITY_QOS;
+  qos.durability().kind = q.durable_depth > 0 ? TRANSIENT_LOCAL_DURABILITY_QOS : VOLATILE_DURABILITY_QOS;
   return qos;
 }
 

@@ -17,12 +17,14 @@ EXAMPLE_RIG = os.path.join(SRC, "examples", "rigs", "press_bench.yaml")
 TIME_SCALE = float(os.environ.get("HIL_TEST_TIME_SCALE", "1"))
 
 
-def hil(*args, env=None):
+def hil(*args, env=None, text=True):
+    """`hil ARGS` on this test process's own DDS domain. text=False keeps stdout and stderr as bytes
+    (Python's universal newlines would turn a carriage return into a newline)."""
     e = dict(os.environ)
     e["HIL_DDS_DOMAIN"] = str(150 + os.getpid() % 50)
     if env:
         e.update(env)
-    return subprocess.run([HIL, *args], capture_output=True, text=True, timeout=120 * TIME_SCALE, env=e)
+    return subprocess.run([HIL, *args], capture_output=True, text=text, timeout=120 * TIME_SCALE, env=e)
 
 
 class Cli(unittest.TestCase):
@@ -151,13 +153,18 @@ class Cli(unittest.TestCase):
     def test_demo_runs_the_chain(self):
         out = tempfile.mkdtemp()
         try:
-            r = hil("demo", "--out", os.path.join(out, "run"), "--seed", "6")
+            raw = hil("demo", "--out", os.path.join(out, "run"), "--seed", "6", text=False)
+            r = subprocess.CompletedProcess(raw.args, raw.returncode, raw.stdout.decode(), raw.stderr.decode())
             self.assertEqual(r.returncode, 0, r.stdout + r.stderr)
             self.assertRegex(r.stdout, r"\d+ ContactEstimate messages received")
             self.assertNotIn(" 0 ContactEstimate", r.stdout)
             self.assertIn("cause:           sensor_bias", r.stdout)
             self.assertIn("[6/6] the hidden effect was sensor_bias", r.stdout)
             self.assertIn("named by the diagnosis", r.stdout)
+            # stdout is a pipe here, as in a log file: plain progress lines, no carriage returns.
+            self.assertNotIn(b"\r", raw.stdout)
+            self.assertRegex(r.stdout, r"\n      \[1/\d+\] ")
+            self.assertLess(max(len(line) for line in r.stdout.splitlines()), 300)
             self.assertTrue(os.path.exists(os.path.join(out, "run-diagnosis", "index.html")))
             self.assertEqual(hil("validate", os.path.join(out, "run")).returncode, 0)
             # The demo's run.mcap through the independent MCAP reader (tests/formats/mcap), when node is there.

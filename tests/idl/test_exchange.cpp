@@ -15,6 +15,7 @@
 #include <hil/messages/sample_msg.hpp>
 #include <hil/dds/bus.hpp>
 #include <hil/dds/topics.hpp>
+#include <hil/messages/ros_msgs.hpp>
 
 namespace {
 
@@ -120,4 +121,66 @@ TEST(DdsExchange, BadProfileIsAClearError) {
   } catch (const std::runtime_error& e) {
     EXPECT_NE(std::string(e.what()).find("/nonexistent/profile.xml"), std::string::npos);
   }
+}
+
+// QoS by intent (docs/ros.md): a sensor stream is volatile, so a reader that joins late gets no
+// old samples as new, even a transient-local one (a recorder adapting to the publisher); the
+// latched /tf_static gives a late reader its last message.
+TEST(DdsExchange, ALateReaderGetsNoStaleSensorSamplesButTheLatchedFrames) {
+  const int domain = 100 + static_cast<int>((getpid() + 37) % 100);
+  hil::dds::Participant pub({domain, "", "hil_localhost", "test-late-publisher"});
+  const hil::dds::StreamQos sensor{true, 5000, 0};  // the acquirer's pose_wrench
+  EXPECT_EQ(hil::dds::detail::writer_qos(pub, sensor).durability().kind, eprosima::fastdds::dds::VOLATILE_DURABILITY_QOS);
+  hil::dds::Writer<hil_msgs::msg::PoseWrenchSample> w(pub, hil::dds::topics::kPoseWrenchSample, sensor);
+  hil::dds::Writer<tf2_msgs::msg::TFMessage> tf(pub, hil::dds::topics::kTfStatic, hil::dds::StreamQos{true, 1, 1});
+  Eigen::RowVectorXd q(2);
+  q << 0.0, 0.0;
+  for (int i = 0; i < 50; ++i) ASSERT_TRUE(w.write(hil::messages::to_message(make_sample(i), static_cast<std::uint64_t>(i), q)));
+  tf2_msgs::msg::TFMessage frames;
+  frames.transforms().resize(1);
+  frames.transforms()[0].child_frame_id("force_plate");
+  ASSERT_TRUE(tf.write(frames));
+
+  std::mutex m;
+  std::vector<std::uint64_t> latched_reader, volatile_reader;
+  int tf_got = 0;
+  {
+    hil::dds::Participant sub({domain, "", "hil_localhost", "test-late-subscriber"});
+    hil::dds::Reader<hil_msgs::msg::PoseWrenchSample> durable(
+        sub, hil::dds::topics::kPoseWrenchSample,
+        [&](const auto& msg, const auto&) {
+          std::lock_guard<std::mutex> lock(m);
+          latched_reader.push_back(msg.sample_index());
+        },
+        hil::dds::StreamQos{true, 1000, 1000});
+    hil::dds::Reader<hil_msgs::msg::PoseWrenchSample> plain(sub, hil::dds::topics::kPoseWrenchSample, [&](const auto& msg, const auto&) {
+      std::lock_guard<std::mutex> lock(m);
+      volatile_reader.push_back(msg.sample_index());
+    });
+    hil::dds::Reader<tf2_msgs::msg::TFMessage> tf_reader(
+        sub, hil::dds::topics::kTfStatic,
+        [&](const auto& msg, const auto&) {
+          std::lock_guard<std::mutex> lock(m);
+          tf_got += msg.transforms().size() == 1 && msg.transforms()[0].child_frame_id() == "force_plate" ? 1 : 0;
+        },
+        hil::dds::StreamQos{true, 1, 1});
+    ASSERT_TRUE(w.wait_for_readers(1, std::chrono::seconds(20)));
+    std::this_thread::sleep_for(std::chrono::milliseconds(500));
+    for (int i = 50; i < 60; ++i) ASSERT_TRUE(w.write(hil::messages::to_message(make_sample(i), static_cast<std::uint64_t>(i), q)));
+    ASSERT_TRUE(w.wait_for_acknowledgments(std::chrono::seconds(10)));
+    for (int k = 0; k < 100; ++k) {
+      {
+        std::lock_guard<std::mutex> lock(m);
+        if (volatile_reader.size() >= 10 && tf_got >= 1) break;
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+  }
+  std::lock_guard<std::mutex> lock(m);
+  // The live samples reach the volatile reader; nothing written before it joined does.
+  ASSERT_EQ(volatile_reader.size(), 10u);
+  EXPECT_EQ(volatile_reader.front(), 50u);
+  // A transient-local reader does not match a volatile writer: no burst of history.
+  for (const auto i : latched_reader) EXPECT_GE(i, 50u) << "a stale sample reached the transient-local reader";
+  EXPECT_EQ(tf_got, 1);
 }

@@ -15,6 +15,8 @@
 #include <mutex>
 #include <sstream>
 
+#include <unistd.h>
+
 #include <hil/rig_service/acquire.hpp>
 #include <hil/services/contact_identify.hpp>
 #include <hil/services/contact_simulate.hpp>
@@ -115,19 +117,27 @@ int demo(const DemoOptions& o) {
   std::atomic<std::uint64_t> n{0};
   const double total_s = played.samples.samples.back().t_s / o.speed;
   const auto t0 = std::chrono::steady_clock::now();
+  // On a terminal one line redrawn in place; in a log file a plain line every 5 s, not one
+  // 1,000-character line of carriage returns.
+  const bool tty = isatty(STDOUT_FILENO) != 0;
+  double next_line_s = 5.0;
   const auto result = run_acquisition(ao, [&](const acquisition::SyncedSample&) {
     const auto i = ++n;
-    if (i % 25 == 0) {
-      const double el = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-      std::cout << fmt::format("\r      {:5.1f} / {:.1f} s, {} samples, {} seen on the bus, {} contact estimates", el, total_s, i,
-                               bus_samples.load(), bus_estimates.load())
-                << std::flush;
+    if (i % 25 != 0) return;
+    const double el = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    const auto line = fmt::format("      {:5.1f} / {:.1f} s, {} samples, {} seen on the bus, {} contact estimates", el, total_s, i,
+                                  bus_samples.load(), bus_estimates.load());
+    if (tty) {
+      std::cout << '\r' << line << std::flush;
+    } else if (el >= next_line_s) {
+      std::cout << line << '\n' << std::flush;
+      next_line_s += 5.0;
     }
   });
   std::this_thread::sleep_for(std::chrono::milliseconds(300));
   worker.flush();
   const auto online = worker.global();
-  std::cout << "\n"
+  std::cout << (tty ? "\n" : "")
             << fmt::format("      {}\n      bus: {} PoseWrenchSample, {} DeviceStatus, {} ContactEstimate messages received\n"
                            "      online worker: {} samples, running K = {:.4g} N/m, mu = {:.3f}\n",
                            result.summary, bus_samples.load(), bus_status.load(), bus_estimates.load(), worker.processed(), online.K,
@@ -156,12 +166,14 @@ int demo(const DemoOptions& o) {
 
   std::cout << "[5/6] diagnosis of the recorded run (blind: it does not read the hidden truth)\n";
   diagnose::Options dopt;
-  dopt.progress_detail = true;
-  dopt.progress = [](int step, int total, const std::string& what) {
-    std::cout << fmt::format("\r      [{}/{}] {:<80}", step, total, what) << std::flush;
+  // Fold by fold on a terminal; one line per step in a log file.
+  dopt.progress_detail = tty;
+  dopt.progress = [tty](int step, int total, const std::string& what) {
+    if (tty) std::cout << fmt::format("\r      [{}/{}] {:<80}", step, total, what) << std::flush;
+    else std::cout << fmt::format("      [{}/{}] {}\n", step, total, what) << std::flush;
   };
   const auto diag = diagnose::diagnose_run(rec, dopt);
-  std::cout << "\r" << std::string(100, ' ') << "\r";
+  if (tty) std::cout << "\r" << std::string(100, ' ') << "\r";
   std::ostringstream summary;
   diagnose::print_summary(summary, diag);
   std::istringstream lines(summary.str());
