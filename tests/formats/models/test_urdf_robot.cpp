@@ -66,6 +66,16 @@ hc::ComplianceSet random_compliance(const hc::VjmModel& m, std::mt19937& rng) {
   return k;
 }
 
+/// The FormatError `f` throws, as text; "(no error)" when it throws none.
+std::string message(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const hil::error::FormatError& e) {
+    return std::string(e.what());
+  }
+  return std::string("(no error)");
+}
+
 }  // namespace
 
 TEST(UrdfRobot, Kr270UrdfAndDhGiveTheSamePosesJacobiansAndDeflections) {
@@ -209,14 +219,6 @@ TEST(UrdfRobot, PrismaticJointsMoveAlongTheirAxis) {
 }
 
 TEST(UrdfRobot, BadDescriptionsFailByName) {
-  auto message = [](const std::function<void()>& f) {
-    try {
-      f();
-    } catch (const hil::error::FormatError& e) {
-      return std::string(e.what());
-    }
-    return std::string("(no error)");
-  };
   EXPECT_NE(message([] { hf::parse_urdf_robot("<robot name='x'><link", "broken.urdf", "a", "b"); }).find("broken.urdf"), std::string::npos);
   const std::string two = "<robot name='two'><link name='a'/><link name='b'/>"
                           "<joint name='j' type='revolute'><parent link='a'/><child link='b'/><axis xyz='0 0 1'/>"
@@ -370,14 +372,6 @@ TEST(UrdfRobot, MimicsOfMimicsResolveToTheIndependentJoint) {
   EXPECT_DOUBLE_EQ(q[1], 2 * 0.3 + 0.1);
   EXPECT_DOUBLE_EQ(q[2], -0.5 * q[1] + 0.2);
 
-  auto message = [](const std::function<void()>& f) {
-    try {
-      f();
-    } catch (const hil::error::FormatError& e) {
-      return std::string(e.what());
-    }
-    return std::string("(no error)");
-  };
   const std::string cycle = "<robot name='m'>" + links + joint("j1", "a", "b", "<mimic joint='j2'/>") +
                             joint("j2", "b", "c", "<mimic joint='j1'/>") + joint("j3", "c", "d", "") + "</robot>";
   const auto cyc = message([&] { hf::parse_urdf_robot(cycle, "cycle.urdf", "a", "d"); });
