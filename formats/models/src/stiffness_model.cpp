@@ -195,10 +195,8 @@ hc::SerialRobot robot_from_json(const nlohmann::json& j, const std::string& file
       const auto master = m.at("joint").get<std::string>();
       const std::string where = "robot.joints." + r.joints[i].name + ".mimic";
       for (std::size_t k = 0; k < r.joints.size(); ++k)
-        if (r.joints[k].name == master) r.joints[i].mimic_master = static_cast<int>(k);
-      if (r.joints[i].mimic_master < 0 || r.joints[static_cast<std::size_t>(r.joints[i].mimic_master)].mimic_master >= 0 ||
-          r.joints[i].mimic_master == static_cast<int>(i))
-        throw FormatError({file, 0, 0, where}, "'" + master + "' is not an independent joint of the chain");
+        if (r.joints[k].name == master && k != i && !j.at("joints").at(k).contains("mimic")) r.joints[i].mimic_master = static_cast<int>(k);
+      if (r.joints[i].mimic_master < 0) throw FormatError({file, 0, 0, where}, "'" + master + "' is not an independent joint of the chain");
       r.joints[i].mimic_multiplier = m.at("multiplier").get<double>();
       r.joints[i].mimic_offset = m.at("offset").get<double>();
       if (!std::isfinite(r.joints[i].mimic_multiplier) || !std::isfinite(r.joints[i].mimic_offset))

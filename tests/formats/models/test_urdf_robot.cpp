@@ -349,6 +349,14 @@ TEST(UrdfRobot, MimicJointsFollowTheirMasterAsTheUrdfStates) {
   EXPECT_EQ(back.joints[3].mimic_master, 2);
   EXPECT_EQ(back.joints[3].mimic_multiplier, -1.0);
   EXPECT_EQ(back.joints[1].mimic_master, -1);
+  // A hand-edited model whose mimic follows another mimic, or a joint it does not have, is refused.
+  for (const std::string master : {"wrist_pitch", "gripper"}) {
+    auto bad = hil::models::robot_to_json(robot);
+    bad["joints"][1]["mimic"] = {{"joint", master}, {"multiplier", 1.0}, {"offset", 0.0}};
+    EXPECT_NE(message([&] { hil::models::robot_from_json(bad, "model.json"); }).find("'" + master + "' is not an independent joint"),
+              std::string::npos)
+        << master;
+  }
 }
 
 TEST(UrdfRobot, MimicsOfMimicsResolveToTheIndependentJoint) {
