@@ -13,6 +13,7 @@
 #include <cmath>
 #include <filesystem>
 #include <functional>
+#include <limits>
 #include <random>
 
 #include <hil/calibration/gravity.hpp>
@@ -388,6 +389,31 @@ TEST(UrdfRobot, MimicsOfMimicsResolveToTheIndependentJoint) {
                             joint("j3", "c", "d", "") + "</robot>";
   const auto gh = message([&] { hf::parse_urdf_robot(ghost, "ghost.urdf", "a", "d"); });
   EXPECT_NE(gh.find("mimics 'jx'"), std::string::npos) << gh;
+  // A multiplier that is not a number: refused by urdfdom or by hil, never read as NaN.
+  const std::string nan = "<robot name='m'>" + links + joint("j1", "a", "b", "") +
+                          joint("j2", "b", "c", "<mimic joint='j1' multiplier='nan'/>") + joint("j3", "c", "d", "") + "</robot>";
+  const auto nn = message([&] { hf::parse_urdf_robot(nan, "nan.urdf", "a", "d"); });
+  EXPECT_NE(nn.find("nan.urdf"), std::string::npos) << nn;
+
+  // A model file's mimic with a multiplier that is not finite.
+  const hc::SerialRobot three = hil::models::to_serial_robot(spec);
+  auto bad = hil::models::robot_to_json(three);
+  bad["joints"][2]["mimic"]["multiplier"] = std::numeric_limits<double>::infinity();
+  const auto inf = message([&] { hil::models::robot_from_json(bad, "model.json"); });
+  EXPECT_NE(inf.find("the multiplier and offset must be numbers"), std::string::npos) << inf;
+
+  // Limits the coupling can never satisfy: planning refuses instead of looping or leaving them.
+  hc::SerialRobot stuck = three;
+  stuck.joints[2].mimic_offset = 10.0;  // j3 = -q1 + 10, its limits [-3, 3]
+  hc::ExperimentPlan plan;
+  plan.configurations = 1;
+  const hc::VjmModel model(stuck);
+  try {
+    hc::simulate(model, model.zero_compliance(), plan, hc::NoiseModel{});
+    ADD_FAILURE() << "a plan outside the mimic joint's limits was made";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("no posture within every joint's limits"), std::string::npos) << e.what();
+  }
 }
 
 TEST(UrdfRobot, CalibrationRunsDeriveAMimicJointTheyDoNotLog) {
