@@ -69,24 +69,37 @@ list(REMOVE_DUPLICATES _hil_header_dirs)
 get_target_property(_hil_idl_bin hil_idl_types BINARY_DIR)
 target_include_directories(hil_idl_types SYSTEM INTERFACE $<INSTALL_INTERFACE:${CMAKE_INSTALL_INCLUDEDIR}/hil/idl>)
 
+# Two components: `runtime` (the command, the Python module, the profiles, examples and licence)
+# and `devel` (libraries, headers, the CMake and pkg-config files). `cmake --install build
+# --component runtime --strip` is what a lab machine that only runs hil needs (docs/install.md).
 install(TARGETS ${HIL_EXPORTED_TARGETS} EXPORT hilTargets
-  ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR}
-  LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}
+  ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR} COMPONENT devel
+  LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR} COMPONENT devel
   INCLUDES DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
-install(DIRECTORY ${_hil_header_dirs} DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}
+# `--strip` strips executables and modules only; the archives carry most of a RelWithDebInfo
+# install's size (debug info), so they lose their debug sections as well.
+foreach(target IN LISTS HIL_EXPORTED_TARGETS)
+  get_target_property(type ${target} TYPE)
+  if(type STREQUAL "STATIC_LIBRARY" AND CMAKE_STRIP)
+    install(CODE "if(CMAKE_INSTALL_DO_STRIP)
+  execute_process(COMMAND \"${CMAKE_STRIP}\" --strip-debug \"\$ENV{DESTDIR}\${CMAKE_INSTALL_PREFIX}/${CMAKE_INSTALL_LIBDIR}/$<TARGET_FILE_NAME:${target}>\" COMMAND_ERROR_IS_FATAL ANY)
+endif()" COMPONENT devel)
+  endif()
+endforeach()
+install(DIRECTORY ${_hil_header_dirs} DESTINATION ${CMAKE_INSTALL_INCLUDEDIR} COMPONENT devel
   FILES_MATCHING PATTERN "*.hpp" PATTERN "*.h")
-install(DIRECTORY ${_hil_idl_bin}/generated/ DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/hil/idl
+install(DIRECTORY ${_hil_idl_bin}/generated/ DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/hil/idl COMPONENT devel
   FILES_MATCHING PATTERN "*.h")
 
 set(HIL_CMAKE_DIR ${CMAKE_INSTALL_LIBDIR}/cmake/hil)
-install(EXPORT hilTargets NAMESPACE hil:: DESTINATION ${HIL_CMAKE_DIR})
+install(EXPORT hilTargets NAMESPACE hil:: DESTINATION ${HIL_CMAKE_DIR} COMPONENT devel)
 set(HIL_INSTALL_DATA_DIR ${CMAKE_INSTALL_DATADIR}/hil)  # hil_DATA_DIR for consumers
 configure_package_config_file(${CMAKE_CURRENT_LIST_DIR}/hilConfig.cmake.in ${PROJECT_BINARY_DIR}/hilConfig.cmake
   INSTALL_DESTINATION ${HIL_CMAKE_DIR} PATH_VARS HIL_INSTALL_DATA_DIR)
 # 0.x: a new minor version may break the interfaces.
 write_basic_package_version_file(${PROJECT_BINARY_DIR}/hilConfigVersion.cmake COMPATIBILITY SameMinorVersion)
 install(FILES ${PROJECT_BINARY_DIR}/hilConfig.cmake ${PROJECT_BINARY_DIR}/hilConfigVersion.cmake
-  DESTINATION ${HIL_CMAKE_DIR})
+  DESTINATION ${HIL_CMAKE_DIR} COMPONENT devel)
 
 # pkg-config: static archives need dependents before dependencies on the link line, so the -l list
 # is the exported targets in reverse topological order of their links.
@@ -138,9 +151,9 @@ string(APPEND HIL_PC_LIBS " -lkdl_parser")
 file(RELATIVE_PATH HIL_PC_TO_PREFIX /${CMAKE_INSTALL_LIBDIR}/pkgconfig /)
 string(REGEX REPLACE "/$" "" HIL_PC_TO_PREFIX "${HIL_PC_TO_PREFIX}")
 configure_file(${CMAKE_CURRENT_LIST_DIR}/hil.pc.in ${PROJECT_BINARY_DIR}/hil.pc @ONLY)
-install(FILES ${PROJECT_BINARY_DIR}/hil.pc DESTINATION ${CMAKE_INSTALL_LIBDIR}/pkgconfig)
+install(FILES ${PROJECT_BINARY_DIR}/hil.pc DESTINATION ${CMAKE_INSTALL_LIBDIR}/pkgconfig COMPONENT devel)
 
 # Data: the examples (`hil demo` finds them through tools/hil/data_dir.cpp) and the licence.
-install(DIRECTORY ${PROJECT_SOURCE_DIR}/examples/ DESTINATION ${HIL_INSTALL_DATA_DIR}/examples
+install(DIRECTORY ${PROJECT_SOURCE_DIR}/examples/ DESTINATION ${HIL_INSTALL_DATA_DIR}/examples COMPONENT runtime
   PATTERN "__pycache__" EXCLUDE)
-install(FILES ${PROJECT_SOURCE_DIR}/LICENSE DESTINATION ${CMAKE_INSTALL_DOCDIR})
+install(FILES ${PROJECT_SOURCE_DIR}/LICENSE DESTINATION ${CMAKE_INSTALL_DOCDIR} COMPONENT runtime)

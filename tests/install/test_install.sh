@@ -4,9 +4,12 @@
 #  2./3. a CMake project with find_package(hil) built against it, run, its numbers checked;
 #  4. a program built with `pkg-config --cflags --libs hil`, run;
 #  5. the installed `hil` run from elsewhere: its data dir lookup ($HIL_DATA_DIR, then the prefix
-#     beside the binary, also once the tree is moved) and `hil validate` on the installed examples.
+#     beside the binary, also once the tree is moved) and `hil validate` on the installed examples;
+#  6. the installed Python module imported by Debian's python3 from the prefix alone;
+#  7. `--strip` (no debug sections left in the command, the module or the archives) and the
+#     `runtime` component alone (no libraries or headers), with the sizes docs/install.md quotes.
 # Environment (from tests/install/CMakeLists.txt): BUILD WORK HERE CMAKE GENERATOR CXX VERSION
-# BINDIR LIBDIR INCLUDEDIR DATADIR DOCDIR.
+# BINDIR LIBDIR INCLUDEDIR DATADIR DOCDIR PYTHONDIR (empty when the module is not built).
 set -euo pipefail
 
 fail() { echo "FAIL: $*" >&2; exit 1; }
@@ -136,5 +139,45 @@ out=$(env -u HIL_DDS_PROFILE HIL_DDS_DOMAIN=229 "$WORK/moved/$BINDIR/hil" --log-
 has "moved hil's DDS profile" "$out" "from $WORK/moved/$DATADIR/hil/dds_localhost.xml"
 out=$(env -u HIL_DATA_DIR "$WORK/moved/$BINDIR/hil" demo --help)
 has "moved hil demo --help" "$out" "$WORK/moved/$DATADIR/hil/examples/acu/acu.yaml"
+
+echo "== 6. import hil from $prefix/$PYTHONDIR"
+if [[ -z $PYTHONDIR ]]; then
+  echo "(the Python module is not built: pybind11-dev or python3-dev missing)"
+else
+  # Away from the build tree, so only the installed extension can be found.
+  out=$(cd "$WORK" && env -i PATH=/usr/bin:/bin PYTHONPATH="$prefix/$PYTHONDIR" /usr/bin/python3 -c '
+import hil, sys
+print("file", hil.__file__)
+print("version", hil.__version__)
+rig = hil.read_rig(sys.argv[1])
+print("rig", rig["name"], "frames", len(rig["frames"]), "robot", rig["robot"]["name"])
+' "$prefix/$DATADIR/hil/examples/rigs/press_bench.yaml") || fail "import hil from $prefix/$PYTHONDIR"
+  echo "$out"
+  has "import hil" "$out" "^file $prefix/$PYTHONDIR/hil\\.cpython-[0-9]+-.*\\.so$"
+  has "import hil" "$out" "^version $VERSION$"
+  has "import hil" "$out" "^rig press_bench frames 3 robot ur5e$"
+fi
+
+echo "== 7. --strip, and --component runtime"
+# debug_sections FILE: the names of FILE's .debug_* sections (an archive's members together).
+debug_sections() { readelf -S -W "$1" 2>/dev/null | grep -oE '\.debug_[a-z_]+' | sort -u | tr '\n' ' '; }
+[[ -n $(debug_sections "$prefix/$BINDIR/hil") ]] || fail "the default install's hil has no debug info: the check below proves nothing"
+stripped=$WORK/stripped
+"$CMAKE" --install "$BUILD" --prefix "$stripped" --strip >"$WORK/install-strip.log" || { cat "$WORK/install-strip.log"; fail "cmake --install --strip"; }
+for f in "$stripped/$BINDIR/hil" "$stripped/$LIBDIR"/libhil_*.a ${PYTHONDIR:+"$stripped/$PYTHONDIR"/hil.*.so}; do
+  [[ -z $(debug_sections "$f") ]] || fail "--strip left debug sections in $f: $(debug_sections "$f")"
+done
+"$stripped/$BINDIR/hil" validate "$stripped/$DATADIR/hil/examples/rigs/press_bench.yaml" >/dev/null || fail "the stripped hil does not run"
+runtime=$WORK/runtime
+"$CMAKE" --install "$BUILD" --prefix "$runtime" --component runtime --strip >"$WORK/install-runtime.log" ||
+  { cat "$WORK/install-runtime.log"; fail "cmake --install --component runtime"; }
+for f in "$BINDIR/hil" "$DATADIR/hil/dds_localhost.xml" "$DATADIR/hil/examples/acu/acu.yaml" "$DOCDIR/LICENSE"; do
+  [[ -f $runtime/$f ]] || fail "runtime component: not installed: $f"
+done
+[[ -z $PYTHONDIR ]] || compgen -G "$runtime/$PYTHONDIR/hil.*.so" >/dev/null || fail "runtime component: no Python module"
+[[ ! -e $runtime/$INCLUDEDIR && ! -e $runtime/$LIBDIR/cmake ]] || fail "runtime component: headers or CMake files installed"
+! compgen -G "$runtime/$LIBDIR/*.a" >/dev/null || fail "runtime component: libraries installed"
+echo "sizes (KiB): default $(du -sk "$prefix" | cut -f1), --strip $(du -sk "$stripped" | cut -f1)," \
+  "runtime --strip $(du -sk "$runtime" | cut -f1), stripped hil $(($(stat -c %s "$stripped/$BINDIR/hil") / 1024))"
 echo "install: all checks passed"
-rm -rf "$WORK"  # ~1 GB (static libraries and the binary with debug info); kept when a check fails
+rm -rf "$WORK"  # ~2 GB (static libraries, the binary and the module with debug info); kept when a check fails
