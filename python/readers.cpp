@@ -289,6 +289,11 @@ py::dict rig_dict(const fmt_::RigSpec& rig) {
     frames.append(x);
   }
   d["frames"] = frames;
+  py::dict tf;
+  tf["world"] = rig.tf.world;
+  tf["base"] = rig.tf.base;
+  tf["ee"] = rig.tf.ee;
+  d["tf"] = tf;
   d["robot"] = rig.robot ? py::object(robot_dict(*rig.robot)) : py::none();
   d["objects"] = objects_list(rig.objects);
   d["devices"] = devices_dict(rig.devices);

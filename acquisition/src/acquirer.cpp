@@ -133,6 +133,9 @@ Acquirer::Acquirer(AcquirerOptions options, std::unique_ptr<drivers::ForcePlate>
       // whole tree), so a listener started later still gets the frames.
       if (!opt_.static_frames.empty())
         w_tf_static_ = std::make_unique<dds::Writer<tf2_msgs::msg::TFMessage>>(*bus_, dds::topics::kTfStatic, dds::StreamQos{true, 1, 1});
+      // tf2's TransformBroadcaster QoS: reliable, volatile, keep last 100.
+      if (opt_.tf_moving)
+        w_tf_ = std::make_unique<dds::Writer<tf2_msgs::msg::TFMessage>>(*bus_, dds::topics::kTf, dds::StreamQos{true, 100, 0});
       // diagnostic_updater's QoS: reliable, volatile, a short keep-last history.
       w_diagnostics_ = std::make_unique<dds::Writer<diagnostic_msgs::msg::DiagnosticArray>>(*bus_, dds::topics::kDiagnostics,
                                                                                             dds::StreamQos{true, 10, 0});
@@ -357,9 +360,16 @@ void Acquirer::emit(const SyncedSample& s) {
   if (w_pose_) {
     geometry_msgs::msg::PoseStamped p;
     p.header(m.header());
+    p.header().frame_id(opt_.world_frame);
     p.pose(m.pose_world_ee());
     w_pose_->write(p);
     if (s.joints_rad.size() > 0) w_joints_->write(to_joint_state(m, opt_.joint_names));
+  }
+  if (w_tf_) {
+    format::Pose T_world_ee;
+    T_world_ee.translation_m = s.p_world_ee_m;
+    T_world_ee.rotation = s.q_world_ee;
+    w_tf_->write(to_tf_message({opt_.tf_moving->at(T_world_ee)}, m.header().stamp()));
   }
 }
 

@@ -7,8 +7,8 @@
 namespace hil::acquisition {
 
 McapSink::McapSink(const std::string& path, const format::RigSpec& rig, std::size_t joint_count, std::int64_t start_ns,
-                   mcap::Compression compression)
-    : writer_(path, &rig, joint_count, start_ns, mcap::RecordingOptions{compression, 1 << 20, 0}), start_ns_(start_ns),
+                   mcap::Compression compression, bool tf)
+    : writer_(path, &rig, joint_count, start_ns, mcap::RecordingOptions{compression, 1 << 20, 0, tf}), start_ns_(start_ns),
       joints_(joint_count), joints_buf_(joint_count, 0.0) {}
 
 void McapSink::sample(const acquisition::SyncedSample& s) {

@@ -172,7 +172,7 @@ class Cli(unittest.TestCase):
                 run = os.path.join(out, "run")
                 c = subprocess.run([os.environ["HIL_MCAP_NODE"], os.environ["HIL_MCAP_CHECK"], os.path.join(run, "run.mcap"),
                                     os.path.join(run, "samples.csv"), "--tf", "force_plate,receptacle_frame,acu_frame",
-                                    "--min-status", "2"], capture_output=True, text=True, timeout=120)
+                                    "--min-status", "2", "--edge", "world,ee"], capture_output=True, text=True, timeout=120)
                 self.assertEqual(c.returncode, 0, c.stdout + c.stderr)
         finally:
             shutil.rmtree(out)

@@ -86,6 +86,7 @@ def test_read_rig():
     frames = {f["name"]: f for f in rig["frames"]}
     assert set(frames) == {"force_plate", "object2", "object1"}
     assert frames["object2"]["parent"] == "force_plate"
+    assert rig["tf"] == {"world": "world", "base": "robot_base", "ee": "ee"}
     np.testing.assert_array_equal(frames["object2"]["T_parent_frame"]["translation_m"], [0, 0, 0.05])
     np.testing.assert_array_equal(frames["object2"]["T_parent_frame"]["matrix"][:3, 3], [0, 0, 0.05])
     robot = rig["robot"]
@@ -133,6 +134,8 @@ def test_a_urdf_robot_reads_and_identifies_as_its_dh_table():
     pal = hil.read_rig(os.path.join(SRC, "examples", "robots", "palletizer_mimic.yaml"))["robot"]
     assert pal["joints"][3]["mimic"] == {"joint": "elbow", "multiplier": -1.0, "offset": 0.0}
     assert all("mimic" not in j for i, j in enumerate(pal["joints"]) if i != 3)
+    # A URDF robot's base is its base link on /tf.
+    assert hil.read_rig(os.path.join(SRC, "examples", "robots", "palletizer_mimic.yaml"))["tf"]["base"] == "base_link"
 
 
 @needs_cli

@@ -3,7 +3,9 @@
 // a rig whose joints are named. A participant joining after the start still gets /tf_static
 // (transient local) with the rig's frames; /diagnostics carries each device's status as
 // diagnostic_msgs, the same as hil's DeviceStatus, and a Modbus fault turns the robot's entry
-// ERROR; /hil/joint_states names the joints as the rig does.
+// ERROR; /hil/joint_states names the joints as the rig does; /tf carries the moving robot base ->
+// ee with every sample, under the names of the rig's tf: section, and composed with /tf_static's
+// map -> base_link it is the sample's pose: one tree.
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -42,6 +44,7 @@ format::RigSpec named_rig() {
     text.insert(pos + 7, "name: " + name + ", ");
     pos += 12;
   }
+  text += "tf: {world: map, base: base_link, ee: tool0}\n";
   return format::parse_rig(text, "press_bench_named.yaml");
 }
 
@@ -50,6 +53,8 @@ struct Collected {
   std::vector<hil_msgs::msg::DeviceStatus> status;
   std::vector<diagnostic_msgs::msg::DiagnosticArray> diagnostics;
   std::vector<sensor_msgs::msg::JointState> joints;
+  std::vector<tf2_msgs::msg::TFMessage> tf;
+  std::vector<geometry_msgs::msg::PoseStamped> poses;
 };
 
 }  // namespace
@@ -92,11 +97,26 @@ TEST(RosTopics, TfStaticForLateJoinersDiagnosticsAndNamedJoints) {
     got.joints.push_back(m);
   });
 
+  // tf2's TransformListener QoS for /tf: reliable, volatile, keep last 100.
+  hil::dds::Reader<tf2_msgs::msg::TFMessage> moving_tf_reader(
+      participant, hil::dds::topics::kTf,
+      [&](const auto& m, const auto&) {
+        std::lock_guard<std::mutex> lock(got.m);
+        got.tf.push_back(m);
+      },
+      hil::dds::StreamQos{true, 100, 0});
+  hil::dds::Reader<geometry_msgs::msg::PoseStamped> pose_reader(participant, hil::dds::topics::kPose, [&](const auto& m, const auto&) {
+    std::lock_guard<std::mutex> lock(got.m);
+    got.poses.push_back(m);
+  });
+
   acquisition::AcquirerOptions ao;
   ao.sync.wrench_rate_hz = pcfg.rate_hz;
   ao.sync.output_rate_hz = 50;
   ao.T_world_base = T_world_base;
   ao.static_frames = format::static_frames(rig);
+  ao.tf_moving = format::moving_frame(&rig);
+  ao.world_frame = rig.tf.world;
   ao.joint_names = format::joint_names(rig, mcfg.map.joint_count());
   ao.status_period_s = 0.5;
   ASSERT_EQ(ao.static_frames.size(), 4u) << "force_plate, object2, object1 and robot_base";
@@ -162,7 +182,9 @@ TEST(RosTopics, TfStaticForLateJoinersDiagnosticsAndNamedJoints) {
       EXPECT_EQ(a.transform(), e.transform()) << a.child_frame_id();
       EXPECT_GT(a.header().stamp().sec(), 1'600'000'000) << "stamped with the time it was sent";
     }
-    EXPECT_EQ(tf.transforms()[3].child_frame_id(), "robot_base");
+    EXPECT_EQ(tf.transforms()[0].header().frame_id(), "map") << "world under its tf: name";
+    EXPECT_EQ(tf.transforms()[3].header().frame_id(), "map");
+    EXPECT_EQ(tf.transforms()[3].child_frame_id(), "base_link");
     EXPECT_DOUBLE_EQ(tf.transforms()[3].transform().translation().x(), -0.45);
   }
 
@@ -189,6 +211,33 @@ TEST(RosTopics, TfStaticForLateJoinersDiagnosticsAndNamedJoints) {
   EXPECT_TRUE(plate_ok) << "the force plate was never OK on /diagnostics";
   EXPECT_TRUE(robot_ok) << "the robot was never OK on /diagnostics";
   EXPECT_TRUE(robot_error) << "the Modbus fault never reached /diagnostics as ERROR naming the exception";
+
+  // /tf: one base_link -> tool0 per sample, stamped as the pose; map -> base_link (-0.45 m in x,
+  // /tf_static) composed with it is the pose on /hil/pose, which is in map.
+  ASSERT_GT(got.tf.size(), 20u);
+  ASSERT_EQ(got.tf.size(), got.poses.size()) << "one /tf message per sample";
+  const auto to_iso = [](const geometry_msgs::msg::Vector3& p, const geometry_msgs::msg::Quaternion& q) {
+    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+    T.linear() = Eigen::Quaterniond(q.w(), q.x(), q.y(), q.z()).toRotationMatrix();
+    T.translation() = Eigen::Vector3d(p.x(), p.y(), p.z());
+    return T;
+  };
+  const Eigen::Isometry3d T_map_base = Eigen::Translation3d(-0.45, 0, 0) * Eigen::Isometry3d::Identity();
+  EXPECT_TRUE(T_map_base.isApprox(T_world_base, 1e-12)) << "the rig's robot base moved; the check below assumes it";
+  for (std::size_t i = 0; i < got.tf.size(); ++i) {
+    ASSERT_EQ(got.tf[i].transforms().size(), 1u) << i;
+    const auto& x = got.tf[i].transforms()[0];
+    const auto& pose = got.poses[i];
+    ASSERT_EQ(x.header().frame_id(), "base_link") << i;
+    ASSERT_EQ(x.child_frame_id(), "tool0") << i;
+    ASSERT_EQ(x.header().stamp(), pose.header().stamp()) << i;
+    ASSERT_EQ(pose.header().frame_id(), "map") << i;
+    geometry_msgs::msg::Vector3 p;
+    p.x(pose.pose().position().x()), p.y(pose.pose().position().y()), p.z(pose.pose().position().z());
+    const Eigen::Isometry3d T_map_tool = T_map_base * to_iso(x.transform().translation(), x.transform().rotation());
+    const Eigen::Isometry3d T_map_pose = to_iso(p, pose.pose().orientation());
+    ASSERT_TRUE(T_map_tool.isApprox(T_map_pose, 1e-12)) << i << ":\n" << T_map_tool.matrix() << "\nvs\n" << T_map_pose.matrix();
+  }
 
   // /hil/joint_states: the rig's names.
   ASSERT_GT(got.joints.size(), 20u);

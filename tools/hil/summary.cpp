@@ -2,6 +2,8 @@
 
 #include <fmt/format.h>
 
+#include <hil/format/ros_frames.hpp>
+
 namespace hil::cli {
 
 void print_samples_summary(std::ostream& os, const format::SampleTable& t) {
@@ -31,6 +33,9 @@ void print_rig_summary(std::ostream& os, const format::RigSpec& rig) {
                : fmt::format(", robot '{}' ({} joints, {} DH)", rig.robot->name, rig.robot->joints.size(),
                              format::convention_name(rig.robot->convention)));
   os << '\n';
+  const auto moving = format::moving_frame(&rig);
+  os << fmt::format("  tf: {} -> {} on /tf with every sample{}\n", moving.parent, moving.child,
+                    rig.robot ? fmt::format(" ({} -> {} on /tf_static)", rig.tf.world, rig.tf.base) : "");
   if (rig.robot)
     for (const auto& j : rig.robot->joints)
       if (!j.mimic_of.empty())
@@ -80,6 +85,9 @@ nlohmann::json rig_summary_json(const format::RigSpec& rig) {
             {"robot_controller", nullptr},
             {"contact_model", nullptr},
             {"geometric_uncertainties", rig.model.uncertainties.size()}};
+  const auto moving = format::moving_frame(&rig);
+  j["tf"] = {
+      {"world", rig.tf.world}, {"base", rig.tf.base}, {"ee", rig.tf.ee}, {"moving_parent", moving.parent}, {"moving_child", moving.child}};
   if (rig.robot) {
     j["robot"] = {{"name", rig.robot->name},
                   {"joints", rig.robot->joints.size()},

@@ -200,7 +200,9 @@ AcquireResult run_acquisition(const AcquireOptions& o, const std::function<void(
   ao.sync.output_rate_hz = o.output_rate_hz;
   ao.T_world_base = d.T_world_base;
   ao.ros_topics = o.ros_topics;
-  ao.static_frames = format::static_frames(rig);  // rt/tf_static
+  ao.static_frames = format::static_frames(rig);        // rt/tf_static
+  if (o.tf) ao.tf_moving = format::moving_frame(&rig);  // rt/tf
+  ao.world_frame = rig.tf.world;
   ao.joint_names = format::joint_names(rig, with_robot ? mcfg.map.joint_count() : 0);
   ao.wait_for_subscribers = o.wait_subscribers;
   ao.rt_priority = o.rt_priority;
@@ -209,7 +211,7 @@ AcquireResult run_acquisition(const AcquireOptions& o, const std::function<void(
   std::unique_ptr<acquisition::McapSink> mcap_sink;
   if (o.mcap)
     mcap_sink = std::make_unique<acquisition::McapSink>(recorder.dir() + "/run.mcap", rig, with_robot ? mcfg.map.joint_count() : 0,
-                                                        start_ns, mcap::parse_compression(o.mcap_compression));
+                                                        start_ns, mcap::parse_compression(o.mcap_compression), o.tf);
   acquisition::Acquirer acq(ao, std::move(plate), std::move(robot), bus.get(), &recorder);
   if (observer) acq.on_sample(observer);
   if (mcap_sink) acq.on_sample([&mcap_sink](const acquisition::SyncedSample& s) { mcap_sink->sample(s); });

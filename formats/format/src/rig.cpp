@@ -4,6 +4,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <set>
 #include <sstream>
 
@@ -41,6 +42,12 @@ std::size_t ObjectSpec::polyhedron_count() const {
   std::size_t n = 0;
   for (const auto& f : features) n += f.polyhedra.size();
   return n;
+}
+
+const std::string& TfNames::ros(const std::string& rig_frame) const {
+  if (rig_frame == "world") return world;
+  if (rig_frame == "ee") return ee;
+  return rig_frame;
 }
 
 const FrameSpec* RigSpec::frame(const std::string& n) const {
@@ -124,6 +131,34 @@ void check_polyhedron(const YNode& n, const PolyhedronSpec& p) {
   if (s3 <= 1e-9 * scale)
     n.fail("degenerate polyhedron: its " + std::to_string(p.vertices_m.size()) +
            " vertices are coplanar (or collinear); at least 4 non-coplanar vertices are needed");
+}
+
+/// A tf frame id: letters, digits, '_', '-' and '/' (namespaced ids such as `arm1/base_link`), not
+/// starting with '/' (tf2 refuses a leading slash).
+std::string read_tf_name(const YNode& n, const std::string& key) {
+  const auto s = n.req(key).str();
+  if (s.empty()) n.child(key).fail("must not be empty");
+  if (s.front() == '/') n.child(key).fail("tf frame ids do not start with '/', found '" + s + "'");
+  for (char c : s)
+    if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-' || c == '/'))
+      n.child(key).fail("tf frame ids use letters, digits, '_', '-' and '/' only, found '" + s + "'");
+  return s;
+}
+
+/// `tf: {world: W, base: B, ee: E}`, read after the robot (a URDF robot's base link is the default
+/// base name). The names must differ from each other: two frames joined into one would break the tree.
+TfNames read_tf(const YNode& n, const RigSpec& rig) {
+  n.only({"world", "base", "ee"});
+  TfNames t;
+  if (rig.robot && rig.robot->convention == DhConvention::urdf && !rig.robot->base_link.empty()) t.base = rig.robot->base_link;
+  if (n.has("world")) t.world = read_tf_name(n, "world");
+  if (n.has("base")) t.base = read_tf_name(n, "base");
+  if (n.has("ee")) t.ee = read_tf_name(n, "ee");
+  std::map<std::string, std::string> used;  // tf name -> the key that took it
+  for (const auto& [key, name] : {std::pair{"world", t.world}, {"base", t.base}, {"ee", t.ee}})
+    if (!used.emplace(name, key).second)
+      (n.has(key) ? n.child(key) : n).fail("'" + name + "' is already the tf name of '" + used[name] + "'");
+  return t;
 }
 
 FrameSpec read_frame(const YNode& n) {
@@ -479,7 +514,7 @@ RigSpec parse_rig(const std::string& text, const std::string& display_name) {
   const YAML::Node doc = load_yaml(text, display_name);
   if (!doc.IsDefined() || doc.IsNull()) throw error::FormatError({display_name, 0, 0, ""}, "empty rig file");
   const YNode root(doc, "", &rig.source);
-  root.only({"format_version", "name", "frames", "robot", "objects", "devices", "model"});
+  root.only({"format_version", "name", "frames", "robot", "objects", "devices", "model", "tf"});
   rig.format_version = static_cast<int>(root.req("format_version").integer());
   if (rig.format_version != 1)
     root.child("format_version").fail("this hil reads rig format version 1, found " + std::to_string(rig.format_version));
@@ -507,6 +542,21 @@ RigSpec parse_rig(const std::string& text, const std::string& display_name) {
     }
   }
   if (root.has("robot")) rig.robot = read_robot(root.child("robot"), display_name);
+  if (root.has("tf")) {
+    rig.tf = read_tf(root.child("tf"), rig);
+  } else if (rig.robot && rig.robot->convention == DhConvention::urdf && !rig.robot->base_link.empty()) {
+    rig.tf.base = rig.robot->base_link;
+  }
+  // The rig's own frames keep their names on /tf_static: none may take a name world, base or ee have there.
+  for (std::size_t i = 0; i < rig.frames.size(); ++i) {
+    const auto& name = rig.frames[i].name;
+    if (name == rig.tf.world || (rig.robot && name == rig.tf.base) || name == rig.tf.ee)
+      root.child("frames").seq()[i].child("name").fail("'" + name + "' is the name of " +
+                                                       (name == rig.tf.world ? "world"
+                                                        : name == rig.tf.ee  ? "ee"
+                                                                             : "the robot base") +
+                                                       " on /tf (tf: section; a URDF robot's base link): rename one");
+  }
   if (root.has("objects")) {
     std::set<std::string> names;
     for (const auto& on : root.child("objects").seq()) {

@@ -181,7 +181,7 @@ void from_cdr(const std::string& d, geometry_msgs::msg::WrenchStamped& m, const 
 void from_cdr(const std::string& d, sensor_msgs::msg::JointState& m, const std::string& w) { decode(d, m, w); }
 
 std::string tf_message_cdr(const std::vector<format::StaticFrame>& frames, std::int64_t stamp_ns) {
-  return encode(messages::to_tf_message(frames, to_ros_time(stamp_ns)));  // the tree /tf_static carries on DDS
+  return encode(messages::to_tf_message(frames, to_ros_time(stamp_ns)));  // the messages /tf_static and /tf carry on DDS
 }
 
 std::vector<format::StaticFrame> tf_message_from_cdr(const std::string& data, const std::string& where) {
@@ -237,7 +237,8 @@ std::int64_t parse_utc_ns(const std::string& s) {
 
 RunMcapWriter::RunMcapWriter(const std::string& path, const format::RigSpec* rig, std::size_t joint_count, std::int64_t start_ns,
                              RecordingOptions options)
-    : start_ns_(start_ns), joint_names_(format::joint_names(rig, joint_count)) {
+    : start_ns_(start_ns), joint_names_(format::joint_names(rig, joint_count)), world_frame_(rig ? rig->tf.world : "world") {
+  if (options.tf) tf_moving_ = format::moving_frame(rig);
   WriterOptions wo;
   wo.compression = options.compression;
   wo.chunk_size_bytes = options.chunk_size_bytes;
@@ -255,6 +256,7 @@ RunMcapWriter::RunMcapWriter(const std::string& path, const format::RigSpec* rig
   ch_sample_ = channel("hil_msgs/msg/PoseWrenchSample", topic::kPoseWrench);
   ch_status_ = channel("hil_msgs/msg/DeviceStatus", topic::kDeviceStatus);
   ch_tf_ = channel("tf2_msgs/msg/TFMessage", topic::kTfStatic, true);
+  if (tf_moving_) ch_tf_moving_ = channel("tf2_msgs/msg/TFMessage", topic::kTf);
   if (rig) {
     const auto frames = format::static_frames(*rig);
     const auto t = static_cast<std::uint64_t>(start_ns_);
@@ -289,8 +291,15 @@ void RunMcapWriter::write_sample(const format::Sample& s, std::uint64_t index, c
 
   geometry_msgs::msg::PoseStamped ps;
   ps.header(m.header());
+  ps.header().frame_id(world_frame_);
   ps.pose(m.pose_world_ee());
   w_->write({ch_pose_, seq_++, t, t, to_cdr(ps)});
+  if (tf_moving_) {
+    format::Pose T_world_ee;
+    T_world_ee.translation_m = s.p_world_ee_m;
+    T_world_ee.rotation = s.q_world_ee;
+    w_->write({ch_tf_moving_, seq_++, t, t, tf_message_cdr({tf_moving_->at(T_world_ee)}, t_ns)});
+  }
 
   if (n_joints > 0) w_->write({ch_joints_, seq_++, t, t, to_cdr(messages::to_joint_state(m, joint_names_))});
   w_->write({ch_sample_, seq_++, t, t, to_cdr(m)});

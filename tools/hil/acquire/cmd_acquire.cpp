@@ -41,7 +41,8 @@ void add_acquire(CLI::App& app) {
       ->check(CLI::Range(0, 99))
       ->capture_default_str();
   cmd->add_flag("!--no-ros-topics", o.ros_topics,
-                "do not publish rt/hil/wrench, rt/hil/pose, rt/hil/joint_states, rt/tf_static, rt/diagnostics");
+                "do not publish rt/hil/wrench, rt/hil/pose, rt/hil/joint_states, rt/tf_static, rt/tf, rt/diagnostics");
+  cmd->add_flag("!--no-tf", o.tf, "do not publish the moving robot base -> ee transform on rt/tf (nor /tf in run.mcap)");
   cmd->add_option("--play", o.play, "start the fake rig in-process playing this run (no hardware, no SocketCAN)")
       ->check(CLI::ExistingDirectory);
   cmd->add_flag("--mcap", o.mcap, "also record run.mcap in the run folder (ROS 2 channels, docs/mcap.md)");

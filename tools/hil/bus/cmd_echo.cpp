@@ -117,6 +117,7 @@ std::string resolve(const std::string& t) {
   if (t == "stiffness_estimate") return dds::topics::kStiffnessEstimate;
   if (t == "stiffness_measurement") return dds::topics::kStiffnessMeasurement;
   if (t == "tf_static") return dds::topics::kTfStatic;
+  if (t == "tf") return dds::topics::kTf;
   if (t == "diagnostics") return dds::topics::kDiagnostics;
   return "rt/" + (t.front() == '/' ? t.substr(1) : t);
 }
@@ -125,7 +126,7 @@ std::string resolve(const std::string& t) {
 
 void add_echo(CLI::App& app) {
   auto* cmd = app.add_subcommand("echo", "Print a bus topic live: pose_wrench, device_status, contact_estimate, "
-                                         "stiffness_estimate, stiffness_measurement, tf_static, diagnostics (or its rt/... name)");
+                                         "stiffness_estimate, stiffness_measurement, tf_static, tf, diagnostics (or its rt/... name)");
   static EchoOptions o;
   cmd->add_option("TOPIC", o.topic, "topic")->required();
   cmd->add_option("-n,--count", o.count, "stop after this many messages (0: until Ctrl-C)");
@@ -144,11 +145,12 @@ void add_echo(CLI::App& app) {
       if (topic == dds::topics::kStiffnessMeasurement) return echo<hil_msgs::msg::StiffnessMeasurement>(p, topic, fmt_measurement, o);
       // /tf_static is latched (transient local): a late echo still gets the tree.
       if (topic == dds::topics::kTfStatic) return echo<tf2_msgs::msg::TFMessage>(p, topic, fmt_tf, o, dds::StreamQos{true, 1, 1});
+      if (topic == dds::topics::kTf) return echo<tf2_msgs::msg::TFMessage>(p, topic, fmt_tf, o, dds::StreamQos{true, 100, 0});
       if (topic == dds::topics::kDiagnostics) return echo<diagnostic_msgs::msg::DiagnosticArray>(p, topic, fmt_diagnostics, o);
       throw error::FormatError({"command line", 0, 0, "TOPIC"},
                                "unknown topic '" + o.topic +
                                    "' (known: pose_wrench, device_status, contact_estimate, stiffness_estimate, "
-                                   "stiffness_measurement, tf_static, diagnostics)");
+                                   "stiffness_measurement, tf_static, tf, diagnostics)");
     });
   });
 }

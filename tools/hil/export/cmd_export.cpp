@@ -15,6 +15,7 @@ namespace {
 struct ExportOptions {
   std::string run, rig, mcap;
   std::string compression = "zstd";
+  bool tf = true;
 };
 }  // namespace
 
@@ -26,12 +27,14 @@ void add_export(CLI::App& app) {
   cmd->add_option("--compression", o.compression, "chunk compression: none, zstd or lz4")
       ->check(CLI::IsMember({"none", "zstd", "lz4"}))
       ->capture_default_str();
+  cmd->add_flag("!--no-tf", o.tf, "no /tf channel (the moving robot base -> ee transform with every sample)");
   cmd->add_option("--rig", o.rig, "rig file (default: the run's rig.yaml; without one, no /tf_static)")->check(CLI::ExistingFile);
   cmd->callback([] {
     set_action([] {
       const auto run = format::load_run(o.run, o.rig);
       mcap::RecordingOptions ro;
       ro.compression = mcap::parse_compression(o.compression);
+      ro.tf = o.tf;
       mcap::export_run(run, o.mcap, ro);
       std::cout << fmt::format("exported {} samples of {} -> {} ({}{})\n", run.samples.size(), o.run, o.mcap, o.compression,
                                run.rig ? "" : ", no rig: no /tf_static");

@@ -17,6 +17,8 @@
 #include <hil/acquisition/recorder.hpp>
 #include <hil/acquisition/sync.hpp>
 #include <hil/dds/bus.hpp>
+#include <optional>
+
 #include <hil/drivers/force_plate.hpp>
 #include <hil/drivers/robot_controller.hpp>
 #include <hil/format/ros_frames.hpp>
@@ -37,6 +39,11 @@ struct AcquirerOptions {
   bool ros_topics = true;
   /// The rig's fixed frames (format::static_frames(rig)); none: nothing on rt/tf_static.
   std::vector<format::StaticFrame> static_frames;
+  /// The moving edge (format::moving_frame(rig)) on rt/tf with every synchronized sample; none:
+  /// nothing on rt/tf (`hil acquire --no-tf`).
+  std::optional<format::MovingFrame> tf_moving;
+  /// header.frame_id of rt/hil/pose: world's name on ROS topics (RigSpec::tf.world).
+  std::string world_frame = "world";
   /// JointState names (format::joint_names(rig, n)); joints beyond these are named jK.
   std::vector<std::string> joint_names;
   /// SCHED_FIFO priority (1-99) for the two device threads; 0 = the normal scheduler. Where the
@@ -109,6 +116,7 @@ class Acquirer {
   std::unique_ptr<dds::Writer<geometry_msgs::msg::PoseStamped>> w_pose_;
   std::unique_ptr<dds::Writer<sensor_msgs::msg::JointState>> w_joints_;
   std::unique_ptr<dds::Writer<tf2_msgs::msg::TFMessage>> w_tf_static_;
+  std::unique_ptr<dds::Writer<tf2_msgs::msg::TFMessage>> w_tf_;
   std::unique_ptr<dds::Writer<diagnostic_msgs::msg::DiagnosticArray>> w_diagnostics_;
   std::string plate_hardware_id_, robot_hardware_id_;  ///< set in start(), before the threads
   std::vector<std::function<void(const SyncedSample&)>> sinks_;

@@ -15,8 +15,9 @@ namespace hil::acquisition {
 
 class McapSink {
  public:
+  /// \param tf  the moving edge on /tf with every sample (mcap::RecordingOptions::tf).
   McapSink(const std::string& path, const format::RigSpec& rig, std::size_t joint_count, std::int64_t start_ns,
-           mcap::Compression compression);
+           mcap::Compression compression, bool tf = true);
   /// A synchronized sample, as the recorder gets it (pipeline thread).
   void sample(const acquisition::SyncedSample& s);
   /// The devices' health now: a DeviceStatus for each device whose state changed, and for every

@@ -10,6 +10,7 @@ inline constexpr const char* kTwist = "rt/hil/twist";                   ///< geo
 inline constexpr const char* kJointStates = "rt/hil/joint_states";      ///< sensor_msgs/JointState
 /// ROS 2's well-known topics: the rig's fixed frames (tf2 static broadcaster QoS) and device health.
 inline constexpr const char* kTfStatic = "rt/tf_static";       ///< tf2_msgs/TFMessage
+inline constexpr const char* kTf = "rt/tf";                    ///< tf2_msgs/TFMessage: the moving edge, per sample
 inline constexpr const char* kDiagnostics = "rt/diagnostics";  ///< diagnostic_msgs/DiagnosticArray
 inline constexpr const char* kStiffnessMeasurement = "rt/hil/stiffness/measurement";
 inline constexpr const char* kStiffnessEstimate = "rt/hil/stiffness/estimate";

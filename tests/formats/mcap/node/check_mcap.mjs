@@ -4,6 +4,9 @@
 // every CDR message, which is compared with the run's samples.csv.
 //
 // node check_mcap.mjs FILE.mcap SAMPLES.csv [--tf child,child,...] [--min-status N] [--joints N]
+//                      [--edge parent,child] [--world NAME]
+// --edge: the moving transform expected on /tf with every sample (without it: no /tf channel); it
+// is composed here with /tf_static's chain to the root and compared with the pose in samples.csv.
 import { readFileSync } from "node:fs";
 import { McapIndexedReader, McapStreamReader } from "@mcap/core";
 import { loadDecompressHandlers } from "@mcap/support";
@@ -15,11 +18,13 @@ if (!file || !samplesCsv) {
   console.error("usage: node check_mcap.mjs FILE.mcap SAMPLES.csv [--tf a,b] [--min-status N] [--joints N]");
   process.exit(2);
 }
-const opt = { tf: null, minStatus: 0, joints: null };
+const opt = { tf: null, minStatus: 0, joints: null, edge: null, world: "world" };
 for (let i = 0; i < rest.length; i += 2) {
   if (rest[i] === "--tf") opt.tf = rest[i + 1].split(",");
   else if (rest[i] === "--min-status") opt.minStatus = Number(rest[i + 1]);
   else if (rest[i] === "--joints") opt.joints = Number(rest[i + 1]);
+  else if (rest[i] === "--edge") opt.edge = rest[i + 1].split(",");
+  else if (rest[i] === "--world") opt.world = rest[i + 1];
   else throw new Error(`unknown option ${rest[i]}`);
 }
 
@@ -79,6 +84,8 @@ const expected = {
   "/hil/device_status": "hil_msgs/msg/DeviceStatus",
   "/tf_static": "tf2_msgs/msg/TFMessage",
 };
+if (opt.edge) expected["/tf"] = "tf2_msgs/msg/TFMessage";
+else check(!topics.has("/tf"), "a /tf channel where none was asked for");
 const decoders = new Map();
 for (const [topic, type] of Object.entries(expected)) {
   const ch = topics.get(topic);
@@ -96,6 +103,10 @@ let indexed = 0;
 for await (const m of reader.readMessages({ validateCrcs: true })) {
   indexed++;
   const d = decoders.get(m.channelId);
+  if (!d) {
+    check(false, `a message on channel ${m.channelId} (${reader.channelsById.get(m.channelId)?.topic}), not one this check expects`);
+    continue;
+  }
   const value = d.reader.readMessage(m.data);
   check(!d.reader.lastReadHadTrailingBytes(), `${d.topic}: trailing bytes after a message (schema and payload disagree)`);
   byTopic.get(d.topic).push({ log: m.logTime, pub: m.publishTime, value });
@@ -124,7 +135,7 @@ for (let i = 0; i < Math.min(n, pw.length, wr.length, po.length); i++) {
   check(near(w.wrench.force.x, r.fx) && near(w.wrench.torque.z, r.mz), `${where}: WrenchStamped fx/mz`);
   check(w.header.frame_id === "force_plate", `${where}: wrench frame '${w.header.frame_id}'`);
   check(stampNs(w.header.stamp) === wr[i].log && wr[i].log === wr[i].pub, `${where}: wrench stamp, log and publish time differ`);
-  check(near(p.pose.position.y, r.py) && p.header.frame_id === "world", `${where}: PoseStamped`);
+  check(near(p.pose.position.y, r.py) && p.header.frame_id === opt.world, `${where}: PoseStamped (frame '${p.header.frame_id}')`);
   const tNs = t0 + BigInt(Math.round(r.t * 1e9));
   check(pw[i].log - tNs <= 1n && tNs - pw[i].log <= 1n, `${where}: log time ${pw[i].log} is not start + t (${tNs})`);
   jointCols.forEach((c, k) => check(near(s.joint_positions_rad[k], r[c]), `${where}: ${c}`));
@@ -153,6 +164,57 @@ if (opt.tf) {
 } else {
   check(tf.length === 0, `/tf_static: ${tf.length} messages without a rig`);
 }
+// Rigid transforms as {p: [x,y,z], q: [w,x,y,z]}: compose, and from a ROS Transform.
+const qmul = (a, b) => [a[0] * b[0] - a[1] * b[1] - a[2] * b[2] - a[3] * b[3], a[0] * b[1] + a[1] * b[0] + a[2] * b[3] - a[3] * b[2],
+                        a[0] * b[2] - a[1] * b[3] + a[2] * b[0] + a[3] * b[1], a[0] * b[3] + a[1] * b[2] - a[2] * b[1] + a[3] * b[0]];
+const rot = (q, v) => qmul(qmul(q, [0, ...v]), [q[0], -q[1], -q[2], -q[3]]).slice(1);
+const compose = (A, B) => ({ p: rot(A.q, B.p).map((x, k) => x + A.p[k]), q: qmul(A.q, B.q) });
+const fromRos = (t) => ({ p: [t.translation.x, t.translation.y, t.translation.z], q: [t.rotation.w, t.rotation.x, t.rotation.y, t.rotation.z] });
+const identity = { p: [0, 0, 0], q: [1, 0, 0, 0] };
+
+const moving = byTopic.get("/tf") ?? [];
+if (opt.edge) {
+  // One tree: every static frame has one parent and reaches the root through /tf_static, or through
+  // the moving edge's child (the frames carried by the end effector).
+  const parentOf = new Map();
+  for (const x of tf[0]?.value.transforms ?? []) {
+    check(!parentOf.has(x.child_frame_id), `/tf_static: ${x.child_frame_id} has two parents`);
+    parentOf.set(x.child_frame_id, { parent: x.header.frame_id, T: fromRos(x.transform) });
+  }
+  const [edgeParent, edgeChild] = opt.edge;
+  check(!parentOf.has(edgeChild), `${edgeChild} has a parent on /tf_static and on /tf`);
+  const chainToRoot = (frame) => {  // T_root_frame through /tf_static, or null
+    let T = identity;
+    for (let hops = 0; frame !== opt.world; hops++) {
+      const e = parentOf.get(frame);
+      if (!e || hops > parentOf.size) return null;
+      T = compose(e.T, T);
+      frame = e.parent;
+    }
+    return T;
+  };
+  for (const child of parentOf.keys()) {
+    let f = child;
+    while (parentOf.has(f) && f !== edgeChild) f = parentOf.get(f).parent;
+    check(f === opt.world || f === edgeChild, `/tf_static: ${child} does not reach ${opt.world} (stops at ${f})`);
+  }
+  const T_world_parent = chainToRoot(edgeParent);
+  check(T_world_parent !== null, `/tf parent ${edgeParent} does not reach ${opt.world} through /tf_static`);
+  check(moving.length === n, `/tf: ${moving.length} messages, samples.csv has ${n} rows`);
+  for (let i = 0; i < Math.min(n, moving.length, po.length) && T_world_parent; i++) {
+    const where = `/tf ${i} (t=${rows[i].t})`, m = moving[i].value;
+    check(m.transforms.length === 1, `${where}: ${m.transforms.length} transforms`);
+    const x = m.transforms[0];
+    check(x.header.frame_id === edgeParent && x.child_frame_id === edgeChild, `${where}: ${x.header.frame_id} -> ${x.child_frame_id}`);
+    check(stampNs(x.header.stamp) === moving[i].log && moving[i].log === po[i].log, `${where}: stamp differs from the pose's`);
+    const T = compose(T_world_parent, fromRos(x.transform)), r = rows[i];
+    const want = { p: [r.px, r.py, r.pz], q: [r.qw, r.qx, r.qy, r.qz] };
+    const dq = Math.abs(T.q.reduce((acc, v, k) => acc + v * want.q[k], 0));  // |<q, q'>| = 1 for one rotation
+    check(T.p.every((v, k) => Math.abs(v - want.p[k]) < 1e-9) && Math.abs(dq - 1) < 1e-9,
+          `${where}: ${opt.world} -> ${edgeChild} through the tree is ${JSON.stringify(T)}, samples.csv has ${JSON.stringify(want)}`);
+  }
+}
+
 const status = byTopic.get("/hil/device_status");
 check(status.length >= opt.minStatus, `/hil/device_status: ${status.length} messages, expected at least ${opt.minStatus}`);
 for (const s of status) check(["force_plate", "robot"].includes(s.value.device), `device_status device '${s.value.device}'`);

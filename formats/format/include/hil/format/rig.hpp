@@ -187,6 +187,16 @@ struct DevicesSpec {
   std::optional<RobotControllerSpec> robot;
 };
 
+/// The names the frame tree has on ROS topics (/tf, /tf_static, header.frame_id): the rig file's
+/// `tf:` section. Inside the rig file the frames stay `world` and `ee` (docs/ros.md).
+struct TfNames {
+  std::string world = "world";
+  std::string base = "robot_base";  ///< the robot's base; a URDF robot's default is its chain's base link
+  std::string ee = "ee";
+  /// A rig frame's name on ROS topics: `world` and `ee` renamed, every other frame as it is.
+  const std::string& ros(const std::string& rig_frame) const;
+};
+
 struct RigSpec {
   int format_version = 1;
   std::string name;
@@ -196,6 +206,7 @@ struct RigSpec {
   std::vector<ObjectSpec> objects;
   DevicesSpec devices;
   ModelSpec model;
+  TfNames tf;
 
   const FrameSpec* frame(const std::string& name) const;
   const ObjectSpec* object(const std::string& name) const;

@@ -17,10 +17,21 @@ struct StaticFrame {
   Pose T_parent_child;
 };
 
-/// The rig's fixed frames, parents before children: every entry of `frames`, then the robot's
-/// base in world (`robot_base`) when the rig has a robot. The moving `world` -> `ee` transform
-/// is not static and is not included (it is the sample's pose).
+/// The rig's fixed frames, parents before children, named as on ROS topics (RigSpec::tf): every
+/// entry of `frames`, then the robot's base in world when the rig has a robot. The moving edge
+/// (moving_frame) is not included.
 std::vector<StaticFrame> static_frames(const RigSpec& rig);
+
+/// The moving edge of the tree, one transform per sample on /tf: robot base -> ee when the rig has a
+/// robot (the static tree holds world -> base), else world -> ee. Without a rig: `world` -> `ee`.
+struct MovingFrame {
+  std::string parent;
+  std::string child;
+  Eigen::Isometry3d T_parent_world = Eigen::Isometry3d::Identity();
+  /// The edge for a sample whose pose is `T_world_ee`.
+  StaticFrame at(const Pose& T_world_ee) const;
+};
+MovingFrame moving_frame(const RigSpec* rig);
 
 /// Joint names for `count` joints: the rig's `robot.joints[i].name` where given, else `j1..jN`
 /// (the samples.csv column names). Joints beyond the rig's table are named `jK` as well.

@@ -12,6 +12,8 @@
 #include <hil/mcap/mcap.hpp>
 
 // Generated bus types (hil::idl): the payloads are their CDR.
+#include <optional>
+
 #include "geometry_msgs.h"
 #include "hil_msgs.h"
 #include "sensor_msgs.h"
@@ -25,6 +27,7 @@ inline constexpr const char* kJointStates = "/hil/joint_states";    ///< sensor_
 inline constexpr const char* kPoseWrench = "/hil/pose_wrench";      ///< hil_msgs/msg/PoseWrenchSample
 inline constexpr const char* kDeviceStatus = "/hil/device_status";  ///< hil_msgs/msg/DeviceStatus
 inline constexpr const char* kTfStatic = "/tf_static";              ///< tf2_msgs/msg/TFMessage
+inline constexpr const char* kTf = "/tf";                           ///< tf2_msgs/msg/TFMessage: the moving edge
 }  // namespace topic
 
 /// The ros2msg schema of `type` ("geometry_msgs/msg/WrenchStamped", ...) as ROS 2 bags store
@@ -66,11 +69,12 @@ struct RecordingOptions {
   Compression compression = Compression::zstd;
   std::size_t chunk_size_bytes = 1 << 20;
   std::size_t chunk_messages = 0;  ///< 0: chunks close on size only
+  bool tf = true;                  ///< the moving edge (format::moving_frame) on /tf with every sample
 };
 
-/// Writes the hil channels of one run. The six channels are declared at construction (a channel
-/// with no messages is still listed) and /tf_static is written once, stamped with the run's
-/// start, when a rig is given.
+/// Writes the hil channels of one run. The channels are declared at construction (a channel with
+/// no messages is still listed: six, and /tf unless RecordingOptions::tf is off) and /tf_static is
+/// written once, stamped with the run's start, when a rig is given.
 class RunMcapWriter {
  public:
   /// \param rig  may be null: no /tf_static, joints named j1..jN.
@@ -81,8 +85,8 @@ class RunMcapWriter {
   RunMcapWriter(const RunMcapWriter&) = delete;
   RunMcapWriter& operator=(const RunMcapWriter&) = delete;
 
-  /// One sample: /hil/wrench, /hil/pose, /hil/pose_wrench and (with joints) /hil/joint_states,
-  /// all stamped (log and publish time) start + s.t_s. `joints_rad` may be null when the run has none.
+  /// One sample: /hil/wrench, /hil/pose, /hil/pose_wrench, (with joints) /hil/joint_states and
+  /// (RecordingOptions::tf) /tf, all stamped (log and publish time) start + s.t_s. `joints_rad` may be null when the run has none.
   void write_sample(const format::Sample& s, std::uint64_t index, const double* joints_rad, const SampleExtras& extras = {});
   /// One DeviceStatus, logged at its own stamp.
   void write_status(const hil_msgs::msg::DeviceStatus& status);
@@ -96,7 +100,9 @@ class RunMcapWriter {
   std::unique_ptr<Writer> w_;
   std::int64_t start_ns_;
   std::vector<std::string> joint_names_;
-  std::uint16_t ch_wrench_ = 0, ch_pose_ = 0, ch_joints_ = 0, ch_sample_ = 0, ch_status_ = 0, ch_tf_ = 0;
+  std::string world_frame_;                       ///< /hil/pose's header.frame_id
+  std::optional<format::MovingFrame> tf_moving_;  ///< what /tf carries; none: no /tf channel
+  std::uint16_t ch_wrench_ = 0, ch_pose_ = 0, ch_joints_ = 0, ch_sample_ = 0, ch_status_ = 0, ch_tf_ = 0, ch_tf_moving_ = 0;
   std::uint32_t seq_ = 0;
 };
 
