@@ -23,7 +23,7 @@ using messages::to_diagnostic_status;
 using messages::to_joint_state;
 using messages::to_message;
 using messages::to_tf_message;
-using messages::to_time;
+using messages::to_time_ns;
 
 // Append-only CSV of each device's own readings, flushed with the run (whole lines per write).
 class RawWriter {
@@ -97,7 +97,7 @@ DeviceHealth merged(const DeviceHealth& h, const drivers::DeviceCounters& c) {
 
 hil_msgs::msg::DeviceStatus to_msg(const DeviceHealth& h, std::int64_t now_ns) {
   hil_msgs::msg::DeviceStatus m;
-  m.stamp(to_time(static_cast<double>(now_ns) * 1e-9));
+  m.stamp(to_time_ns(now_ns));
   m.device(h.device);
   m.state(static_cast<std::uint8_t>(h.state));
   m.connected(h.connected);
@@ -165,7 +165,7 @@ void Acquirer::start() {
   }
   plate_hardware_id_ = plate_info_.protocol + (plate_info_.serial.empty() ? "" : " serial " + plate_info_.serial) + " on " + plate_->link();
   if (robot_) robot_hardware_id_ = robot_->config().describe();
-  if (w_tf_static_) w_tf_static_->write(to_tf_message(opt_.static_frames, to_time(static_cast<double>(realtime_ns()) * 1e-9)));
+  if (w_tf_static_) w_tf_static_->write(to_tf_message(opt_.static_frames, to_time_ns(realtime_ns())));
   if (opt_.wait_for_subscribers > 0 && w_sample_ && !w_sample_->wait_for_readers(opt_.wait_for_subscribers, std::chrono::seconds(10)))
     spdlog::warn("acquire: fewer than {} subscribers after 10 s; starting anyway", opt_.wait_for_subscribers);
   running_ = true;
@@ -350,6 +350,7 @@ void Acquirer::emit(const SyncedSample& s) {
   if (!w_sample_) return;
   // Header stamp: the sample's absolute time; t_s: since the run's start.
   auto m = to_message(to_row(s, static_cast<double>(s.t_ns) * 1e-9), s.index, s.joints_rad.transpose());
+  m.header().stamp(to_time_ns(s.t_ns));
   m.t_s(static_cast<double>(s.t_ns - start_ns_) * 1e-9);
   m.wrench_seq(s.wrench_seq);
   m.pose_seq(s.pose_seq);
@@ -377,7 +378,7 @@ void Acquirer::publish_wrench(const WrenchReading& r) {
   // The live wrench stream: every reading as it arrives, stamped with its receive time, before
   // synchronisation (which waits for poses), so monitors see it with the least delay.
   geometry_msgs::msg::WrenchStamped w;
-  w.header().stamp(to_time(static_cast<double>(r.t_ns) * 1e-9));
+  w.header().stamp(to_time_ns(r.t_ns));
   w.header().frame_id("force_plate");
   auto& f = w.wrench().force();
   f.x(r.wrench_fp[0]), f.y(r.wrench_fp[1]), f.z(r.wrench_fp[2]);
@@ -423,7 +424,7 @@ void Acquirer::publish_status(const std::vector<DeviceHealth>& hs, std::int64_t 
   if (!w_status_) return;
   // Each device on hil's own topic, and the same statuses in one array on ROS's /diagnostics.
   diagnostic_msgs::msg::DiagnosticArray diag;
-  diag.header().stamp(to_time(static_cast<double>(now_ns) * 1e-9));
+  diag.header().stamp(to_time_ns(now_ns));
   for (const auto& h : hs) {
     const auto m = to_msg(h, now_ns);
     w_status_->write(m);

@@ -22,8 +22,9 @@ std::string iso8601_utc(std::int64_t t_ns) {
   const std::time_t sec = static_cast<std::time_t>(t_ns / 1'000'000'000);
   std::tm tm{};
   gmtime_r(&sec, &tm);
-  return fmt::format("{:04}-{:02}-{:02}T{:02}:{:02}:{:02}.{:03}Z", tm.tm_year + 1900, tm.tm_mon + 1, tm.tm_mday, tm.tm_hour, tm.tm_min,
-                     tm.tm_sec, (t_ns / 1'000'000) % 1000);
+  // Nanoseconds: run.yaml's start plus a sample's t is the instant the live stamps carry, to the ns.
+  return fmt::format("{:04}-{:02}-{:02}T{:02}:{:02}:{:02}.{:09}Z", tm.tm_year + 1900, tm.tm_mon + 1, tm.tm_mday, tm.tm_hour, tm.tm_min,
+                     tm.tm_sec, t_ns % 1'000'000'000);
 }
 
 RunRecorder::RunRecorder(const std::string& dir, format::RunInfo info, const std::string& rig_yaml_text, std::int64_t start_ns,

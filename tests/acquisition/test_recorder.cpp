@@ -43,7 +43,7 @@ TEST(Recorder, WritesAReadableRunWithQualityColumns) {
   }
   const auto run = hil::format::load_run(dir);
   ASSERT_EQ(run.samples.size(), 100u);
-  EXPECT_EQ(run.info.start_time_utc, "2025-11-21T09:00:00.000Z");
+  EXPECT_EQ(run.info.start_time_utc, "2025-11-21T09:00:00.000000000Z");
   EXPECT_DOUBLE_EQ(run.samples.samples[99].t_s, 0.099);
   EXPECT_DOUBLE_EQ(run.samples.samples[42].f_fp_n.z(), -42.0);
   EXPECT_EQ(run.samples.joint_count(), 2u);

@@ -9,7 +9,7 @@
   rosidl_interface_packages) depends on every package the .msg files use, and its CMakeLists.txt
   generates every .msg file with those dependencies;
 - the standard ROS 2 types hil carries (idl/msg/{builtin_interfaces,std_msgs,geometry_msgs,
-  sensor_msgs,tf2_msgs,diagnostic_msgs}.idl) are field for field the ROS 2 definitions below
+  sensor_msgs,tf2_msgs,diagnostic_msgs,rosgraph_msgs}.idl) are field for field the ROS 2 definitions below
   (default values aside: they never reach the wire).
 
 No ROS 2 is needed: the IDL subset hil uses and the .msg grammar are parsed here.
@@ -55,6 +55,7 @@ ROS2_REFERENCE = {
     "geometry_msgs/TransformStamped": "std_msgs/Header header\nstring child_frame_id\nTransform transform",
     "sensor_msgs/JointState": "std_msgs/Header header\nstring[] name\nfloat64[] position\nfloat64[] velocity\nfloat64[] effort",
     "tf2_msgs/TFMessage": "geometry_msgs/TransformStamped[] transforms",
+    "rosgraph_msgs/Clock": "builtin_interfaces/Time clock",
     "diagnostic_msgs/KeyValue": "string key\nstring value",
     "diagnostic_msgs/DiagnosticStatus": "byte OK=0\nbyte WARN=1\nbyte ERROR=2\nbyte STALE=3\n"
                                         "byte level\nstring name\nstring message\nstring hardware_id\nKeyValue[] values",
@@ -372,7 +373,7 @@ class HilMsgsPackage(unittest.TestCase):
 class StandardTypes(unittest.TestCase):
     def test_standard_types_are_ros2s(self):
         idl = {}
-        for f in ("builtin_interfaces", "std_msgs", "geometry_msgs", "sensor_msgs", "tf2_msgs", "diagnostic_msgs"):
+        for f in ("builtin_interfaces", "std_msgs", "geometry_msgs", "sensor_msgs", "tf2_msgs", "diagnostic_msgs", "rosgraph_msgs"):
             idl.update(parse_idl(os.path.join(IDL_DIR, f + ".idl")))
         problems = []
         for name, text in ROS2_REFERENCE.items():

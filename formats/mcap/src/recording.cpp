@@ -179,6 +179,8 @@ void from_cdr(const std::string& d, hil_msgs::msg::PoseWrenchSample& m, const st
 void from_cdr(const std::string& d, hil_msgs::msg::DeviceStatus& m, const std::string& w) { decode(d, m, w); }
 void from_cdr(const std::string& d, geometry_msgs::msg::WrenchStamped& m, const std::string& w) { decode(d, m, w); }
 void from_cdr(const std::string& d, sensor_msgs::msg::JointState& m, const std::string& w) { decode(d, m, w); }
+void from_cdr(const std::string& d, geometry_msgs::msg::PoseStamped& m, const std::string& w) { decode(d, m, w); }
+void from_cdr(const std::string& d, tf2_msgs::msg::TFMessage& m, const std::string& w) { decode(d, m, w); }
 
 std::string tf_message_cdr(const std::vector<format::StaticFrame>& frames, std::int64_t stamp_ns) {
   return encode(messages::to_tf_message(frames, to_ros_time(stamp_ns)));  // the messages /tf_static and /tf carry on DDS
@@ -202,17 +204,7 @@ std::vector<format::StaticFrame> tf_message_from_cdr(const std::string& data, co
   return out;
 }
 
-builtin_interfaces::msg::Time to_ros_time(std::int64_t t_ns) {
-  std::int64_t sec = t_ns / 1'000'000'000, ns = t_ns % 1'000'000'000;
-  if (ns < 0) {
-    ns += 1'000'000'000;
-    --sec;
-  }
-  builtin_interfaces::msg::Time t;
-  t.sec(static_cast<std::int32_t>(sec));
-  t.nanosec(static_cast<std::uint32_t>(ns));
-  return t;
-}
+builtin_interfaces::msg::Time to_ros_time(std::int64_t t_ns) { return messages::to_time_ns(t_ns); }
 
 std::int64_t parse_utc_ns(const std::string& s) {
   std::tm tm{};

@@ -17,6 +17,18 @@ builtin_interfaces::msg::Time to_time(double t_s) {
   return t;
 }
 
+builtin_interfaces::msg::Time to_time_ns(std::int64_t t_ns) {
+  std::int64_t sec = t_ns / 1'000'000'000, ns = t_ns % 1'000'000'000;
+  if (ns < 0) {
+    ns += 1'000'000'000;
+    --sec;
+  }
+  builtin_interfaces::msg::Time t;
+  t.sec(static_cast<std::int32_t>(sec));
+  t.nanosec(static_cast<std::uint32_t>(ns));
+  return t;
+}
+
 double from_time(const builtin_interfaces::msg::Time& t) { return t.sec() + t.nanosec() * 1e-9; }
 
 namespace {

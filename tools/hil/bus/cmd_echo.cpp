@@ -32,9 +32,10 @@ std::string fmt_pws(const hil_msgs::msg::PoseWrenchSample& m) {
   const auto& p = m.pose_world_ee().position();
   const auto& f = m.wrench_fp().force();
   const auto& t = m.wrench_fp().torque();
-  return fmt::format("#{} t={:.4f} p=[{:.6f} {:.6f} {:.6f}] f=[{:.3f} {:.3f} {:.3f}] m=[{:.4f} {:.4f} {:.4f}] q={} ages={:.1f}/{:.1f} ms",
-                     m.sample_index(), m.t_s(), p.x(), p.y(), p.z(), f.x(), f.y(), f.z(), t.x(), t.y(), t.z(), m.quality_flags(),
-                     m.wrench_age_s() * 1e3, m.pose_age_s() * 1e3);
+  return fmt::format(
+      "#{} t={:.4f} p=[{:.6f} {:.6f} {:.6f}] f=[{:.3f} {:.3f} {:.3f}] m=[{:.4f} {:.4f} {:.4f}] q={} ages={:.1f}/{:.1f} ms stamp={}.{:09}",
+      m.sample_index(), m.t_s(), p.x(), p.y(), p.z(), f.x(), f.y(), f.z(), t.x(), t.y(), t.z(), m.quality_flags(), m.wrench_age_s() * 1e3,
+      m.pose_age_s() * 1e3, m.header().stamp().sec(), m.header().stamp().nanosec());
 }
 
 std::string fmt_status(const hil_msgs::msg::DeviceStatus& m) {
@@ -71,6 +72,8 @@ std::string fmt_tf(const tf2_msgs::msg::TFMessage& m) {
   }
   return s;
 }
+
+std::string fmt_clock(const rosgraph_msgs::msg::Clock& m) { return fmt::format("{}.{:09}", m.clock().sec(), m.clock().nanosec()); }
 
 std::string fmt_diagnostics(const diagnostic_msgs::msg::DiagnosticArray& m) {
   static const char* levels[] = {"OK", "WARN", "ERROR", "STALE"};
@@ -118,6 +121,7 @@ std::string resolve(const std::string& t) {
   if (t == "stiffness_measurement") return dds::topics::kStiffnessMeasurement;
   if (t == "tf_static") return dds::topics::kTfStatic;
   if (t == "tf") return dds::topics::kTf;
+  if (t == "clock") return dds::topics::kClock;
   if (t == "diagnostics") return dds::topics::kDiagnostics;
   return "rt/" + (t.front() == '/' ? t.substr(1) : t);
 }
@@ -125,8 +129,9 @@ std::string resolve(const std::string& t) {
 }  // namespace
 
 void add_echo(CLI::App& app) {
-  auto* cmd = app.add_subcommand("echo", "Print a bus topic live: pose_wrench, device_status, contact_estimate, "
-                                         "stiffness_estimate, stiffness_measurement, tf_static, tf, diagnostics (or its rt/... name)");
+  auto* cmd = app.add_subcommand("echo",
+                                 "Print a bus topic live: pose_wrench, device_status, contact_estimate, "
+                                 "stiffness_estimate, stiffness_measurement, tf_static, tf, clock, diagnostics (or its rt/... name)");
   static EchoOptions o;
   cmd->add_option("TOPIC", o.topic, "topic")->required();
   cmd->add_option("-n,--count", o.count, "stop after this many messages (0: until Ctrl-C)");
@@ -146,11 +151,13 @@ void add_echo(CLI::App& app) {
       // /tf_static is latched (transient local): a late echo still gets the tree.
       if (topic == dds::topics::kTfStatic) return echo<tf2_msgs::msg::TFMessage>(p, topic, fmt_tf, o, dds::StreamQos{true, 1, 1});
       if (topic == dds::topics::kTf) return echo<tf2_msgs::msg::TFMessage>(p, topic, fmt_tf, o, dds::StreamQos{true, 100, 0});
+      // /clock is best effort, keep last 1 (rclcpp's ClockQoS).
+      if (topic == dds::topics::kClock) return echo<rosgraph_msgs::msg::Clock>(p, topic, fmt_clock, o, dds::StreamQos{false, 1, 0});
       if (topic == dds::topics::kDiagnostics) return echo<diagnostic_msgs::msg::DiagnosticArray>(p, topic, fmt_diagnostics, o);
       throw error::FormatError({"command line", 0, 0, "TOPIC"},
                                "unknown topic '" + o.topic +
                                    "' (known: pose_wrench, device_status, contact_estimate, stiffness_estimate, "
-                                   "stiffness_measurement, tf_static, tf, diagnostics)");
+                                   "stiffness_measurement, tf_static, tf, clock, diagnostics)");
     });
   });
 }

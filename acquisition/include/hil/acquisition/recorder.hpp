@@ -52,7 +52,7 @@ class RunRecorder {
   bool closed_ = false;
 };
 
-/// ISO 8601 UTC text for a CLOCK_REALTIME time.
+/// ISO 8601 UTC text for a CLOCK_REALTIME time, to the nanosecond (2026-11-28T10:00:00.123456789Z).
 std::string iso8601_utc(std::int64_t t_ns);
 /// CLOCK_REALTIME now.
 std::int64_t realtime_ns();

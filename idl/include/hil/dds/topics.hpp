@@ -12,6 +12,7 @@ inline constexpr const char* kJointStates = "rt/hil/joint_states";      ///< sen
 inline constexpr const char* kTfStatic = "rt/tf_static";       ///< tf2_msgs/TFMessage
 inline constexpr const char* kTf = "rt/tf";                    ///< tf2_msgs/TFMessage: the moving edge, per sample
 inline constexpr const char* kDiagnostics = "rt/diagnostics";  ///< diagnostic_msgs/DiagnosticArray
+inline constexpr const char* kClock = "rt/clock";              ///< rosgraph_msgs/Clock (hil replay --clock)
 inline constexpr const char* kStiffnessMeasurement = "rt/hil/stiffness/measurement";
 inline constexpr const char* kStiffnessEstimate = "rt/hil/stiffness/estimate";
 inline constexpr const char* kContactEstimate = "rt/hil/contact/estimate";

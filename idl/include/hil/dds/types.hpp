@@ -6,6 +6,7 @@
 #include "geometry_msgsPubSubTypes.h"
 #include "hil_msgsPubSubTypes.h"
 #include "sensor_msgsPubSubTypes.h"
+#include "rosgraph_msgsPubSubTypes.h"
 #include "std_msgsPubSubTypes.h"
 #include "tf2_msgsPubSubTypes.h"
 
@@ -33,6 +34,7 @@ HIL_DDS_TYPE(geometry_msgs::msg, Transform)
 HIL_DDS_TYPE(geometry_msgs::msg, TransformStamped)
 HIL_DDS_TYPE(sensor_msgs::msg, JointState)
 HIL_DDS_TYPE(tf2_msgs::msg, TFMessage)
+HIL_DDS_TYPE(rosgraph_msgs::msg, Clock)
 HIL_DDS_TYPE(diagnostic_msgs::msg, KeyValue)
 HIL_DDS_TYPE(diagnostic_msgs::msg, DiagnosticStatus)
 HIL_DDS_TYPE(diagnostic_msgs::msg, DiagnosticArray)

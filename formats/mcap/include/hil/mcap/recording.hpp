@@ -17,6 +17,7 @@
 #include "geometry_msgs.h"
 #include "hil_msgs.h"
 #include "sensor_msgs.h"
+#include "tf2_msgs.h"
 
 namespace hil::mcap {
 
@@ -47,6 +48,8 @@ void from_cdr(const std::string& data, hil_msgs::msg::PoseWrenchSample& m, const
 void from_cdr(const std::string& data, hil_msgs::msg::DeviceStatus& m, const std::string& where);
 void from_cdr(const std::string& data, geometry_msgs::msg::WrenchStamped& m, const std::string& where);
 void from_cdr(const std::string& data, sensor_msgs::msg::JointState& m, const std::string& where);
+void from_cdr(const std::string& data, geometry_msgs::msg::PoseStamped& m, const std::string& where);
+void from_cdr(const std::string& data, tf2_msgs::msg::TFMessage& m, const std::string& where);
 
 /// tf2_msgs/msg/TFMessage of the rig's static frames, stamped `stamp_ns`.
 std::string tf_message_cdr(const std::vector<format::StaticFrame>& frames, std::int64_t stamp_ns);

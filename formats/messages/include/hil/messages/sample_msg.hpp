@@ -9,6 +9,9 @@ namespace hil::messages {
 
 /// Time since the epoch (or since run start) in seconds -> ROS 2 Time.
 builtin_interfaces::msg::Time to_time(double t_s);
+/// The same from integer ns since the epoch, exactly: every stamp of a sample (live, run folder,
+/// MCAP) goes through this one (a double of epoch seconds resolves only ~240 ns).
+builtin_interfaces::msg::Time to_time_ns(std::int64_t t_ns);
 double from_time(const builtin_interfaces::msg::Time& t);
 
 /// A sample as a PoseWrenchSample; `index` becomes sample_index, stamp = t_s.
