@@ -81,6 +81,25 @@ class JsonOutputs(unittest.TestCase):
         self.assertIn("OK", r.stdout)  # with a file, the text stays on stdout
         with open(out) as f:
             self.assertEqual(self.check("validation", json.load(f))["kind"], "run_info")
+        # An MCAP recording: its channels and counts; cut, refused with what --recover saves.
+        mcap = os.path.join(self.dir, "run.mcap")
+        self.assertEqual(hil("export", RUN, "--mcap", mcap, "--compression", "none").returncode, 0)
+        d = self.check("validation", self.stdout_json(hil("validate", mcap, "--json", "-")))
+        self.assertEqual((d["kind"], d["summary"]["profile"]), ("mcap", "ros2"))
+        counts = {c["topic"]: c["messages"] for c in d["summary"]["channels"]}
+        self.assertEqual((counts["/hil/pose_wrench"], counts["/tf"], counts["/tf_static"]), (325, 325, 1))
+        self.assertEqual(d["summary"]["messages"], sum(counts.values()))
+        self.assertAlmostEqual(d["summary"]["duration_s"], 6.48, places=6)
+        with open(mcap, "rb") as f:
+            data = f.read()
+        cut = os.path.join(self.dir, "cut.mcap")
+        with open(cut, "wb") as f:
+            f.write(data[: len(data) * 2 // 3])
+        r = hil("validate", cut, "--json", "-")
+        self.assertEqual(r.returncode, 2, r.stderr)
+        d = self.check("validation", json.loads(r.stdout))
+        self.assertEqual((d["ok"], d["kind"]), (False, "mcap"))
+        self.assertRegex(d["errors"][0]["message"], r"hil export --recover .*cut\.mcap --mcap OUT saves \d+ messages in \d+ chunks")
 
     def test_validation_failure_still_writes_the_json(self):
         run = os.path.join(self.dir, "run")

@@ -323,6 +323,26 @@ void export_run(const format::Run& run, const std::string& out, RecordingOptions
   w.close();
 }
 
+std::uint64_t rewrite(const File& file, const std::string& out, Compression compression) {
+  WriterOptions wo;
+  wo.compression = compression;
+  wo.profile = file.header.profile;
+  wo.library = file.header.library.empty() ? "hil " HIL_MCAP_VERSION : file.header.library;
+  Writer w(out, wo);
+  // Ids are the writer's own (1, 2, ... and 0, 1, ...): map the file's onto them.
+  std::map<std::uint16_t, std::uint16_t> schema_id, channel_id;
+  for (const auto& s : file.schemas) schema_id[s.id] = w.add_schema(s.name, s.encoding, s.data);
+  for (const auto& c : file.channels)
+    channel_id[c.id] = w.add_channel(c.schema_id == 0 ? 0 : schema_id.at(c.schema_id), c.topic, c.message_encoding, c.metadata);
+  for (const auto& m : file.messages) {
+    auto copy = m;
+    copy.channel_id = channel_id.at(m.channel_id);
+    w.write(copy);
+  }
+  w.close();
+  return w.messages();
+}
+
 std::vector<hil_msgs::msg::PoseWrenchSample> read_pose_wrench(const File& file) {
   const auto* ch = file.channel(topic::kPoseWrench);
   if (!ch) throw error::FormatError({file.path, 0, 0, ""}, fmt::format("no {} channel: not a hil recording", topic::kPoseWrench));

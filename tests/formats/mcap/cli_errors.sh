@@ -18,15 +18,18 @@ expect() {  # expect WHAT-IN-STDERR COMMAND...
 "$hil" export "$src/examples/runs/press_slide" --mcap "$work/good.mcap" --compression lz4 > /dev/null || exit 1
 size=$(stat -c %s "$work/good.mcap")
 head -c $((size / 2)) "$work/good.mcap" > "$work/half.mcap"
-expect "half.mcap: offset " "$hil" replay "$work/half.mcap" --speed 0
+expect "half.mcap: offset " "$hil" validate "$work/half.mcap"
+# replay recovers what it can of a cut file; of this one nothing (its first chunk is cut), and says why.
+expect "nothing of it can be replayed: reading stopped at offset" "$hil" replay "$work/half.mcap" --speed 0
 expect "runs past the end of the file" "$hil" replay "$work/half.mcap" --speed 0
 printf 'not an mcap file at all' > "$work/text.mcap"
 expect "text.mcap: offset 0: bad magic" "$hil" replay "$work/text.mcap" --speed 0
 head -c $((size - 3)) "$work/good.mcap" > "$work/cut.mcap"
-expect "closing magic is missing" "$hil" replay "$work/cut.mcap" --speed 0
+expect "closing magic is missing" "$hil" validate "$work/cut.mcap"
 expect "gzip" "$hil" export "$src/examples/runs/press_slide" --mcap "$work/x.mcap" --compression gzip
 # A recording killed mid-way: the CSV run stays valid (the primary record), the MCAP holds its
-# complete chunks and is refused as truncated, not misread.
+# complete chunks and is refused as truncated by hil validate, not misread (hil export --recover
+# and hil replay save its chunks: node_check.sh killed).
 "$hil" acquire --rig "$src/examples/rigs/press_bench.yaml" --out "$work/killed" --play "$src/examples/runs/press_slide" \
   --duration 60 --mcap > /dev/null 2>&1 &
 pid=$!
@@ -42,5 +45,5 @@ kill -9 "$pid"
 wait "$pid" 2> /dev/null
 "$hil" validate "$work/killed" > /dev/null || { echo "FAIL: the CSV run of a killed --mcap acquisition does not validate" >&2; fail=1; }
 [[ $(stat -c %s "$work/killed/run.mcap") -gt 20000 ]] || { echo "FAIL: run.mcap of the killed acquisition holds less than ~1 s of chunks after 30 s" >&2; fail=1; }
-expect "truncated" "$hil" replay "$work/killed/run.mcap" --speed 0  # at a chunk boundary or within one
+expect "truncated" "$hil" validate "$work/killed/run.mcap"  # at a chunk boundary or within one
 exit $fail

@@ -3,7 +3,10 @@
 #   node_check.sh MODE HIL NODE CHECK_MJS SOURCE_DIR WORK_DIR
 # MODE: export-none|export-zstd|export-lz4 (hil export of the shipped run), export-tf-names (the
 # rig's tf: section renames world, the robot base and ee), export-no-tf (hil export --no-tf),
-# acquire (hil acquire --play ... --mcap, recorded live), replay (hil replay FILE.mcap seen by hil echo).
+# acquire (hil acquire --play ... --mcap, recorded live), replay (hil replay FILE.mcap seen by hil echo),
+# killed (a live recording ended by kill -9: hil validate refuses it naming what can be saved,
+# hil export --recover saves exactly what @mcap/core's streaming reader reads of it, hil replay
+# publishes it).
 set -euo pipefail
 mode=$1 hil=$2 node=$3 check=$4 src=$5 work=$6
 run=$src/examples/runs/press_slide
@@ -46,6 +49,41 @@ case $mode in
     got=$(wc -l < "$work/echo.txt")
     if [[ $got -ne $rows ]]; then echo "hil echo saw $got samples of $rows replayed from MCAP" >&2; exit 1; fi
     head -1 "$work/echo.txt" | grep -q '^#0 t=0.0000' || { echo "first echoed sample: $(head -1 "$work/echo.txt")" >&2; exit 1; }
+    ;;
+  killed)
+    "$hil" acquire --rig "$rig" --out "$work/run" --play "$run" --mcap > "$work/acquire.log" 2>&1 &
+    pid=$!
+    # The recording closes a chunk once a second: wait for two, then kill without warning.
+    for _ in $(seq 100); do
+      (( $(stat -c %s "$work/run/run.mcap" 2>/dev/null || echo 0) > 20000 )) && break
+      sleep 0.1
+    done
+    sleep 1.2
+    kill -9 "$pid"
+    wait "$pid" 2>/dev/null || true
+    broken=$work/run/run.mcap
+    if "$hil" validate "$broken" > "$work/validate.txt" 2>&1; then echo "hil validate accepted a killed recording" >&2; exit 1; fi
+    grep -q "without a Footer" "$work/validate.txt" && grep -q "hil export --recover" "$work/validate.txt" ||
+      { echo "hil validate of the killed recording: $(cat "$work/validate.txt")" >&2; exit 1; }
+    out=$("$hil" export --recover "$broken" --mcap "$work/recovered.mcap")
+    echo "$out"
+    n=$(sed -nE 's/^recovered ([0-9]+) messages \(([0-9]+) samples\).*/\1/p' <<<"$out")
+    s=$(sed -nE 's/^recovered ([0-9]+) messages \(([0-9]+) samples\).*/\2/p' <<<"$out")
+    [[ -n $n && $s -gt 0 ]] || { echo "hil export --recover said: $out" >&2; exit 1; }
+    # The independent reader streams the same messages out of the killed file, and reads the
+    # recovered one to its end.
+    peer=$("$node" "$(dirname "$check")/count_messages.mjs" "$broken")
+    [[ $peer == "messages $n samples $s incomplete" ]] || { echo "@mcap/core on the killed file: '$peer', hil recovered $n messages, $s samples" >&2; exit 1; }
+    peer=$("$node" "$(dirname "$check")/count_messages.mjs" "$work/recovered.mcap")
+    [[ $peer == "messages $n samples $s complete" ]] || { echo "@mcap/core on the recovered file: '$peer'" >&2; exit 1; }
+    "$hil" validate "$work/recovered.mcap" | grep -q "messages: $n in" || { echo "hil validate of the recovered file" >&2; exit 1; }
+    # hil replay reads the killed file itself, says so, and publishes every recovered sample.
+    "$hil" echo pose_wrench -n "$s" --timeout 60 > "$work/echo.txt" &
+    echo_pid=$!
+    "$hil" replay "$broken" --speed 0 --wait-subscribers 1 2> "$work/replay.log"
+    wait "$echo_pid"
+    grep -q "was not closed or is damaged" "$work/replay.log" || { echo "hil replay did not say the file was cut: $(cat "$work/replay.log")" >&2; exit 1; }
+    [[ $(wc -l < "$work/echo.txt") -eq $s ]] || { echo "hil echo saw $(wc -l < "$work/echo.txt") of $s recovered samples" >&2; exit 1; }
     ;;
   *) echo "node_check.sh: unknown mode $mode" >&2; exit 2 ;;
 esac

@@ -253,6 +253,80 @@ TEST(McapCorrupt, CompressedDataThatDoesNotDecompress) {
   }
 }
 
+// ---- recovery of a file that was not closed ---------------------------------------------------
+
+void expect_same_message(const Message& a, const Message& b, const std::string& where) {
+  EXPECT_EQ(a.channel_id, b.channel_id) << where;
+  EXPECT_EQ(a.sequence, b.sequence) << where;
+  EXPECT_EQ(a.log_time_ns, b.log_time_ns) << where;
+  EXPECT_EQ(a.data, b.data) << where;
+}
+
+TEST(McapRecovery, EveryCutKeepsTheWholeChunksBeforeItAndNothingElse) {
+  for (const auto c : {Compression::none, Compression::zstd, Compression::lz4}) {
+    const auto b = slurp(write_sample_file(c, std::string("cut-") + record_name(c) + ".mcap"));
+    const auto full = read_bytes(b, "full.mcap");
+    const auto header_end = find_once(b, "hil-test-lib") + 12;  // magic, then the Header record
+    std::size_t previous = 0;
+    for (std::size_t cut = 0; cut <= b.size(); ++cut) {
+      const auto where = std::string(record_name(c)) + " cut at " + std::to_string(cut) + " of " + std::to_string(b.size());
+      Recovery r;
+      if (cut < header_end) {
+        EXPECT_THROW(recover_bytes(b.substr(0, cut), "cut.mcap", r), FormatError) << where;
+        continue;
+      }
+      const auto f = recover_bytes(b.substr(0, cut), "cut.mcap", r);
+      EXPECT_EQ(r.complete, cut == b.size()) << where;
+      EXPECT_EQ(r.bytes_total, cut) << where;
+      EXPECT_LE(r.bytes_read, cut) << where;
+      EXPECT_EQ(r.messages, f.messages.size()) << where;
+      EXPECT_EQ(r.stopped.empty(), r.complete) << where;
+      // Whole chunks of 5 messages (the last holds 3), a prefix of the file's, never fewer as the cut grows.
+      ASSERT_LE(f.messages.size(), full.messages.size()) << where;
+      EXPECT_TRUE(f.messages.size() % 5 == 0 || f.messages.size() == full.messages.size()) << where << ": " << f.messages.size();
+      EXPECT_GE(f.messages.size(), previous) << where;
+      previous = f.messages.size();
+      for (std::size_t i = 0; i < f.messages.size(); ++i) expect_same_message(f.messages[i], full.messages[i], where);
+    }
+    EXPECT_EQ(previous, full.messages.size());
+  }
+}
+
+TEST(McapRecovery, ACorruptChunkEndsTheRecoveryBeforeIt) {
+  auto b = slurp(write_sample_file(Compression::none, "rcrc.mcap"));
+  b[find_once(b, "PAYLOAD-7") + 3] = 'X';  // the second chunk (messages 5-9)
+  Recovery r;
+  const auto f = recover_bytes(b, "rcrc.mcap", r);
+  EXPECT_FALSE(r.complete);
+  EXPECT_EQ(f.messages.size(), 5u);
+  EXPECT_EQ(r.chunks, 1u);
+  EXPECT_NE(r.stopped.find("CRC mismatch of its records"), std::string::npos) << r.stopped;
+  EXPECT_EQ(r.stopped.rfind("offset ", 0), 0u) << r.stopped;
+}
+
+TEST(McapRecovery, ARewrittenRecoveryIsACompleteFileWithTheSameRecords) {
+  const auto b = slurp(write_sample_file(Compression::zstd, "rw.mcap"));
+  const auto full = read_bytes(b, "rw.mcap");
+  Recovery r;
+  const auto part = recover_bytes(b.substr(0, b.size() * 3 / 4), "rw-cut.mcap", r);
+  ASSERT_FALSE(r.complete);
+  ASSERT_GT(part.messages.size(), 0u);
+  const auto out = temp_path("rw-fixed.mcap");
+  EXPECT_EQ(rewrite(part, out, Compression::lz4), part.messages.size());
+  const auto fixed = read_file(out);  // strict: footer, summary, every CRC
+  EXPECT_EQ(fixed.header.profile, "test-profile");
+  ASSERT_EQ(fixed.schemas.size(), full.schemas.size());
+  for (std::size_t i = 0; i < fixed.schemas.size(); ++i) EXPECT_EQ(fixed.schemas[i].data, full.schemas[i].data);
+  ASSERT_EQ(fixed.channels.size(), full.channels.size());
+  EXPECT_EQ(fixed.channels[0].metadata, full.channels[0].metadata);
+  ASSERT_EQ(fixed.messages.size(), part.messages.size());
+  for (std::size_t i = 0; i < fixed.messages.size(); ++i) {
+    EXPECT_EQ(fixed.channels[fixed.messages[i].channel_id].topic, full.channels[full.messages[i].channel_id].topic) << i;
+    EXPECT_EQ(fixed.messages[i].data, full.messages[i].data) << i;
+    EXPECT_EQ(fixed.messages[i].log_time_ns, full.messages[i].log_time_ns) << i;
+  }
+}
+
 // ---- hil recordings --------------------------------------------------------------------------
 
 const std::string kRun = std::string(HIL_SOURCE_DIR) + "/examples/runs/press_slide";

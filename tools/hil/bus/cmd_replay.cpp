@@ -147,7 +147,12 @@ int replay(const ReplayOptions& o) {
   const bool folder = std::filesystem::is_directory(o.run);
   if (!folder && !o.rig.empty())
     throw error::FormatError({"command line", 0, 0, "--rig"}, "--rig is for a run folder; an MCAP recording carries its frames");
-  const auto file = folder ? run_as_recording(o.run, o.rig) : mcap::read_file(o.run);
+  mcap::Recovery recovery;
+  const auto file = folder ? run_as_recording(o.run, o.rig) : mcap::recover_file(o.run, recovery);
+  if (!recovery.complete)
+    spdlog::warn("{} was not closed or is damaged at its end: replaying the {} messages in its first {} chunks ({} of {} bytes); "
+                 "reading stopped at {}",
+                 o.run, recovery.messages, recovery.chunks, recovery.bytes_read, recovery.bytes_total, recovery.stopped);
   // Log-time order, file order among equal times (a sample's messages share its stamp).
   std::vector<const mcap::Message*> order;
   order.reserve(file.messages.size());
@@ -156,6 +161,8 @@ int replay(const ReplayOptions& o) {
   std::map<std::uint16_t, std::string> topic_of;
   for (const auto& c : file.channels) topic_of[c.id] = c.topic;
   // The samples' channel checked as a hil recording's (encoding, schema, every payload).
+  if (!recovery.complete && file.messages_on(mcap::topic::kPoseWrench).empty())
+    throw error::FormatError({o.run, 0, 0, ""}, "nothing of it can be replayed: reading stopped at " + recovery.stopped);
   if (mcap::read_pose_wrench(file).empty())
     throw error::FormatError({o.run, 0, 0, ""}, fmt::format("the recording holds no {} message", mcap::topic::kPoseWrench));
 

@@ -186,6 +186,22 @@ File read_file(const std::string& path);
 /// The same on bytes in memory (`display_name` names them in errors).
 File read_bytes(const std::string& bytes, const std::string& display_name);
 
+/// What recover_file() could read of a file.
+struct Recovery {
+  bool complete = true;           ///< the whole file read and checked as read_file() does
+  std::uint64_t bytes_total = 0;  ///< the file's size
+  std::uint64_t bytes_read = 0;   ///< where reading stopped: every record before it is kept
+  std::size_t chunks = 0, messages = 0;
+  std::string stopped;  ///< why reading stopped (offset and reason); empty when complete
+};
+/// A recording that was not closed (killed, power lost) or is damaged at its end: its records
+/// from the start, chunk by chunk, up to the first that is incomplete or fails its checks (length,
+/// CRC, decompression); the records before it are kept, nothing after it is trusted. A complete
+/// file is read exactly as read_file() reads it. \throws error::FormatError when not even the
+/// magic and the Header are there.
+File recover_file(const std::string& path, Recovery& recovery);
+File recover_bytes(const std::string& bytes, const std::string& display_name, Recovery& recovery);
+
 /// CRC-32 (ISO-HDLC, as zlib and the MCAP spec) of `n` bytes, continuing from `crc`.
 std::uint32_t crc32(const void* data, std::size_t n, std::uint32_t crc = 0);
 

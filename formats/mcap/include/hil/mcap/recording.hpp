@@ -113,6 +113,11 @@ class RunMcapWriter {
 /// none, so the channel is declared with no messages.
 void export_run(const format::Run& run, const std::string& out, RecordingOptions options = {});
 
+/// `hil export --recover`: what `file` holds (recover_file's part of a damaged recording) as a
+/// complete MCAP file at `out`: its schemas, channels (with their metadata) and messages, in order.
+/// \returns the number of messages written.
+std::uint64_t rewrite(const File& file, const std::string& out, Compression compression = Compression::zstd);
+
 /// The samples of a recording (its /hil/pose_wrench channel), in file order.
 /// \throws error::FormatError when the file has no such channel or a payload does not decode.
 std::vector<hil_msgs::msg::PoseWrenchSample> read_pose_wrench(const File& file);
