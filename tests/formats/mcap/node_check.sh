@@ -6,7 +6,8 @@
 # acquire (hil acquire --play ... --mcap, recorded live), replay (hil replay FILE.mcap seen by hil echo),
 # killed (a live recording ended by kill -9: hil validate refuses it naming what can be saved,
 # hil export --recover saves exactly what @mcap/core's streaming reader reads of it, hil replay
-# publishes it).
+# publishes it), import-bag (a ros2 bag of standard topics written by node/make_bag.mjs -> hil import
+# -> a run that agrees with its source and that hil diagnose takes).
 set -euo pipefail
 mode=$1 hil=$2 node=$3 check=$4 src=$5 work=$6
 run=$src/examples/runs/press_slide
@@ -84,6 +85,24 @@ case $mode in
     wait "$echo_pid"
     grep -q "was not closed or is damaged" "$work/replay.log" || { echo "hil replay did not say the file was cut: $(cat "$work/replay.log")" >&2; exit 1; }
     [[ $(wc -l < "$work/echo.txt") -eq $s ]] || { echo "hil echo saw $(wc -l < "$work/echo.txt") of $s recovered samples" >&2; exit 1; }
+    ;;
+  import-bag)
+    "$node" "$(dirname "$check")/make_bag.mjs" "$run/samples.csv" 1767225600000000000 "$work/bag"
+    "$hil" import "$work/bag" --rig "$rig" --out "$work/imported" --wrench /ft/wrench --pose /robot/ee_pose --joints /joint_states
+    "$hil" validate "$work/imported" > /dev/null
+    /usr/bin/python3 "$(dirname "$0")/compare_import.py" "$run/samples.csv" "$work/imported/samples.csv"
+    "$hil" diagnose "$work/imported" > "$work/diagnose.txt" || { cat "$work/diagnose.txt" >&2; exit 1; }
+    # The bag's single file as well, and wrong input named.
+    "$hil" import "$work/bag/bag_0.mcap" --rig "$rig" --out "$work/from_file" --wrench /ft/wrench --pose /robot/ee_pose > /dev/null
+    cmp <(cut -d, -f1-20 "$work/imported/samples.csv") <(cut -d, -f1-20 "$work/from_file/samples.csv") ||
+      { echo "the bag folder and its file imported differently" >&2; exit 1; }
+    if err=$("$hil" import "$work/bag" --rig "$rig" --out "$work/x" --wrench /nope --pose /robot/ee_pose 2>&1); then exit 1; fi
+    grep -q "no topic /nope (the recording has: /ft/wrench, /robot/ee_pose, /joint_states)" <<<"$err" || { echo "$err" >&2; exit 1; }
+    if err=$("$hil" import "$work/bag" --rig "$rig" --out "$work/x" --wrench /robot/ee_pose --pose /robot/ee_pose 2>&1); then exit 1; fi
+    grep -q "/robot/ee_pose is geometry_msgs/msg/PoseStamped (cdr), expected geometry_msgs/msg/WrenchStamped" <<<"$err" || { echo "$err" >&2; exit 1; }
+    sed -i 's/storage_identifier: mcap/storage_identifier: sqlite3/' "$work/bag/metadata.yaml"
+    if err=$("$hil" import "$work/bag" --rig "$rig" --out "$work/x" 2>&1); then exit 1; fi
+    grep -q "metadata.yaml:.*storage 'sqlite3': hil reads MCAP storage" <<<"$err" || { echo "$err" >&2; exit 1; }
     ;;
   *) echo "node_check.sh: unknown mode $mode" >&2; exit 2 ;;
 esac
