@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <map>
 
 #include <hil/acquisition/recorder.hpp>
@@ -20,26 +21,14 @@ std::vector<mcap::File> load_ros_recording(const std::string& path) {
   const auto meta_path = (fs::path(path) / "metadata.yaml").string();
   if (!fs::exists(meta_path))
     throw error::FormatError({path, 0, 0, ""}, "a folder without metadata.yaml: not a ros2 bag (give the bag folder or an .mcap file)");
-  const auto doc = format::load_yaml_file(meta_path);
-  const format::YamlNode root(doc, "", &meta_path);
-  const auto info = root.req("rosbag2_bagfile_information");
-  const auto storage = info.req("storage_identifier").str();
-  if (storage != "mcap")
-    info.child("storage_identifier")
-        .fail(fmt::format("storage '{}': hil reads MCAP storage (convert with `ros2 bag convert -i {} -o out.yaml`, out.yaml "
-                          "naming storage_id: mcap)",
-                          storage, path));
-  if (info.has("compression_format") && !info.child("compression_format").str().empty())
-    info.child("compression_format")
-        .fail(fmt::format("a file-compressed bag ({}): decompress it first (`ros2 bag decompress`)",
-                          info.child("compression_format").str()));
+  std::ifstream in(meta_path, std::ios::binary);
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   std::vector<mcap::File> files;
-  for (const auto& f : info.req("relative_file_paths").seq()) {
-    const auto file = (fs::path(path) / f.str()).string();
-    if (!fs::exists(file)) f.fail("no such file: " + file);
+  for (const auto& name : parse_bag_metadata(text, meta_path)) {
+    const auto file = (fs::path(path) / name).string();
+    if (!fs::exists(file)) throw error::FormatError({meta_path, 0, 0, "relative_file_paths"}, "no such file: " + file);
     files.push_back(mcap::read_file(file));
   }
-  if (files.empty()) info.child("relative_file_paths").fail("the bag lists no file");
   return files;
 }
 

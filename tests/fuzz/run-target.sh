@@ -26,7 +26,7 @@ if [[ -e ${regressions[0]} ]]; then
 fi
 
 case $target in
-  fuzz_rig | fuzz_run_info | fuzz_import_config) dict=(-dict="$here/yaml.dict") ;;
+  fuzz_rig | fuzz_run_info | fuzz_import_config | fuzz_bag_metadata) dict=(-dict="$here/yaml.dict") ;;
   fuzz_candump) dict=(-dict="$here/candump.dict") ;;
   *) dict=() ;;
 esac

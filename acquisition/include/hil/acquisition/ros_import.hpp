@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include <hil/acquisition/bag_metadata.hpp>
 #include <hil/acquisition/sync.hpp>
 #include <hil/format/rig.hpp>
 #include <hil/mcap/mcap.hpp>
