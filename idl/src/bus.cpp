@@ -136,8 +136,14 @@ Participant::Participant(const ParticipantOptions& o) : domain_id_(o.domain_id) 
                                   : std::string(" (security properties of profile '") + o.profile_name + "')") +
                              " (Fast DDS logs why)");
   if (!participant_) throw std::runtime_error("DDS: cannot create a participant in domain " + std::to_string(o.domain_id));
-  publisher_ = participant_->create_publisher(PUBLISHER_QOS_DEFAULT);
-  subscriber_ = participant_->create_subscriber(SUBSCRIBER_QOS_DEFAULT);
+  PublisherQos pub_qos = PUBLISHER_QOS_DEFAULT;
+  SubscriberQos sub_qos = SUBSCRIBER_QOS_DEFAULT;
+  if (!o.partition.empty()) {
+    pub_qos.partition().push_back(o.partition.c_str());
+    sub_qos.partition().push_back(o.partition.c_str());
+  }
+  publisher_ = participant_->create_publisher(pub_qos);
+  subscriber_ = participant_->create_subscriber(sub_qos);
   if (!publisher_ || !subscriber_) {
     factory->delete_participant(participant_);
     throw std::runtime_error("DDS: cannot create publisher/subscriber");

@@ -152,6 +152,11 @@ class Cli(unittest.TestCase):
 
     def test_demo_runs_the_chain(self):
         out = tempfile.mkdtemp()
+        # Another participant publishing samples on the demo's domain throughout (a slow replay): the
+        # demo keeps to a partition of its own, so its bus count stays its own.
+        env = dict(os.environ, HIL_DDS_DOMAIN=str(150 + os.getpid() % 50))
+        intruder = subprocess.Popen([HIL, "replay", EXAMPLE_RUN, "--speed", "0.05"], stdout=subprocess.DEVNULL,
+                                    stderr=subprocess.DEVNULL, env=env)
         try:
             raw = hil("demo", "--out", os.path.join(out, "run"), "--seed", "6", text=False)
             r = subprocess.CompletedProcess(raw.args, raw.returncode, raw.stdout.decode(), raw.stderr.decode())
@@ -161,6 +166,8 @@ class Cli(unittest.TestCase):
             self.assertIn("cause:           sensor_bias", r.stdout)
             self.assertIn("[6/6] the hidden effect was sensor_bias", r.stdout)
             self.assertIn("named by the diagnosis", r.stdout)
+            self.assertRegex(r.stdout, r"on DDS domain \d+, partition hil-demo-\d+ \(watch: hil echo pose_wrench --dds-domain")
+            self.assertIsNone(intruder.poll(), "the other publisher stopped before the demo ended: the test proves nothing")
             # stdout is a pipe here, as in a log file: plain progress lines, no carriage returns.
             self.assertNotIn(b"\r", raw.stdout)
             self.assertRegex(r.stdout, r"\n      \[1/\d+\] ")
@@ -175,6 +182,8 @@ class Cli(unittest.TestCase):
                                     "--min-status", "2", "--edge", "world,ee"], capture_output=True, text=True, timeout=120)
                 self.assertEqual(c.returncode, 0, c.stdout + c.stderr)
         finally:
+            intruder.kill()
+            intruder.wait()
             shutil.rmtree(out)
 
     def test_acquire_check_reads_each_device_once(self):

@@ -8,6 +8,7 @@
 
 #include <atomic>
 #include <chrono>
+#include <map>
 #include <mutex>
 #include <thread>
 #include <vector>
@@ -121,6 +122,53 @@ TEST(DdsExchange, BadProfileIsAClearError) {
   } catch (const std::runtime_error& e) {
     EXPECT_NE(std::string(e.what()).find("/nonexistent/profile.xml"), std::string::npos);
   }
+}
+
+// A partition keeps a run apart on a shared domain (hil demo): a reader gets the samples of writers
+// in its own partition only, and a reader without one (a ROS 2 node) none of a partitioned writer's.
+TEST(DdsExchange, APartitionKeepsARunApartOnASharedDomain) {
+  const int domain = 100 + static_cast<int>((getpid() + 53) % 100);
+  auto opts = [&](const char* name, const char* partition) {
+    hil::dds::ParticipantOptions o;
+    o.domain_id = domain;
+    o.name = name;
+    o.partition = partition;
+    return o;
+  };
+  hil::dds::Participant run_a(opts("test-run-a", "hil-demo-a")), run_b(opts("test-run-b", "hil-demo-b")), open(opts("test-open", ""));
+  hil::dds::Writer<hil_msgs::msg::PoseWrenchSample> wa(run_a, hil::dds::topics::kPoseWrenchSample);
+  hil::dds::Writer<hil_msgs::msg::PoseWrenchSample> wb(run_b, hil::dds::topics::kPoseWrenchSample);
+  hil::dds::Writer<hil_msgs::msg::PoseWrenchSample> wo(open, hil::dds::topics::kPoseWrenchSample);
+  std::mutex m;
+  std::map<std::string, std::vector<std::uint64_t>> got;
+  auto reader = [&](hil::dds::Participant& p, const std::string& who) {
+    return std::make_unique<hil::dds::Reader<hil_msgs::msg::PoseWrenchSample>>(p, hil::dds::topics::kPoseWrenchSample,
+                                                                               [&, who](const auto& msg, const auto&) {
+                                                                                 std::lock_guard<std::mutex> lock(m);
+                                                                                 got[who].push_back(msg.sample_index());
+                                                                               });
+  };
+  hil::dds::Participant sub_a(opts("test-sub-a", "hil-demo-a")), sub_open(opts("test-sub-open", ""));
+  auto ra = reader(sub_a, "a");
+  auto ro = reader(sub_open, "open");
+  ASSERT_TRUE(wa.wait_for_readers(1, std::chrono::seconds(20)));
+  ASSERT_TRUE(wo.wait_for_readers(1, std::chrono::seconds(20)));
+  std::this_thread::sleep_for(std::chrono::milliseconds(500));  // time for b to be discovered, were it to match
+  Eigen::RowVectorXd q(2);
+  q << 0.0, 0.0;
+  for (int i = 0; i < 10; ++i) {
+    ASSERT_TRUE(wa.write(hil::messages::to_message(make_sample(i), 100 + static_cast<std::uint64_t>(i), q)));
+    ASSERT_TRUE(wb.write(hil::messages::to_message(make_sample(i), 200 + static_cast<std::uint64_t>(i), q)));
+    ASSERT_TRUE(wo.write(hil::messages::to_message(make_sample(i), 300 + static_cast<std::uint64_t>(i), q)));
+  }
+  ASSERT_TRUE(wa.wait_for_acknowledgments(std::chrono::seconds(10)));
+  ASSERT_TRUE(wo.wait_for_acknowledgments(std::chrono::seconds(10)));
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  std::lock_guard<std::mutex> lock(m);
+  std::vector<std::uint64_t> want_a, want_open;
+  for (std::uint64_t i = 0; i < 10; ++i) want_a.push_back(100 + i), want_open.push_back(300 + i);
+  EXPECT_EQ(got["a"], want_a) << "the partition's reader: its own run's samples, none of b's or of the open writer's";
+  EXPECT_EQ(got["open"], want_open) << "a reader without a partition: the open writer's samples only";
 }
 
 // QoS by intent (docs/ros.md): a sensor stream is volatile, so a reader that joins late gets no

@@ -93,7 +93,15 @@ int demo(const DemoOptions& o) {
   simulate_run(sa);
   const auto played = format::load_run(played_dir);
 
-  dds::Participant participant(participant_options("hil-demo-monitor"));
+  // A partition of its own (unless --dds-partition names one): another participant on the domain
+  // (a second demo, a replay) cannot add to what the demo counts, nor take its samples.
+  const std::string partition = globals().dds_partition.empty() ? fmt::format("hil-demo-{}", ::getpid()) : globals().dds_partition;
+  auto in_partition = [&](const std::string& name) {
+    auto po = participant_options(name);
+    po.partition = partition;
+    return po;
+  };
+  dds::Participant participant(in_partition("hil-demo-monitor"));
   std::atomic<std::uint64_t> bus_samples{0}, bus_status{0}, bus_estimates{0};
   dds::Reader<hil_msgs::msg::PoseWrenchSample> samples(participant, dds::topics::kPoseWrenchSample,
                                                        [&](const auto&, const auto&) { ++bus_samples; });
@@ -104,6 +112,8 @@ int demo(const DemoOptions& o) {
   ContactWorker worker(participant, *played.rig);
 
   std::cout << fmt::format("[2/6] acquiring from the fake rig (in-process CAN bus, Modbus on 127.0.0.1) into {}\n", out);
+  std::cout << fmt::format("      on DDS domain {}, partition {} (watch: hil echo pose_wrench --dds-domain {} --dds-partition {})\n",
+                           participant.domain_id(), partition, participant.domain_id(), partition);
   AcquireOptions ao;
   ao.rig = o.rig;
   ao.out = out;
@@ -111,9 +121,9 @@ int demo(const DemoOptions& o) {
   ao.play_speed = o.speed;
   ao.output_rate_hz = played.info.output_rate_hz;
   ao.progress = false;
-  ao.participant = participant_options("hil-acquire");  // the monitor's domain, profile and security
-  ao.wait_subscribers = 1;                              // our own monitor sees the run from its first sample
-  ao.mcap = true;                                       // run.mcap beside the CSV: open it in Foxglove or PlotJuggler (docs/mcap.md)
+  ao.participant = in_partition("hil-acquire");  // the monitor's domain, profile, security and partition
+  ao.wait_subscribers = 1;                       // our own monitor sees the run from its first sample
+  ao.mcap = true;                                // run.mcap beside the CSV: open it in Foxglove or PlotJuggler (docs/mcap.md)
   std::atomic<std::uint64_t> n{0};
   const double total_s = played.samples.samples.back().t_s / o.speed;
   const auto t0 = std::chrono::steady_clock::now();
@@ -185,7 +195,7 @@ int demo(const DemoOptions& o) {
   const bool named = diag.result.cause == effect;
   std::cout << fmt::format("[6/6] the hidden effect was {} ({}): {}\n", effect, truth_file,
                            named ? "named by the diagnosis" : "NOT named by the diagnosis (" + diag.result.cause + ")");
-  std::cout << "      Look at it live with `hil echo pose_wrench`, replay it with `hil replay " << out << "`.\n";
+  std::cout << "      Replay it with `hil replay " << out << "` and watch with `hil echo pose_wrench`.\n";
   std::cout << "      The recording as MCAP (Foxglove, PlotJuggler, ros2 bag): " << (fs::path(out) / "run.mcap").string() << "\n";
   const bool ok = rec.samples.size() > 0 && bus_samples == rec.samples.size() && std::abs(fz_rec - fz_played) < 5.0 &&
                   worker.processed() > 0 && named;

@@ -30,6 +30,9 @@ int main(int argc, char** argv) {
     a.add_option("--dds-profile-name", g.dds_profile_name, "participant profile in that file")->capture_default_str();
     a.add_option("--dds-domain", g.dds_domain, "DDS domain id (default: $HIL_DDS_DOMAIN, else $ROS_DOMAIN_ID, else 0)")
         ->check(CLI::Range(0, 232));
+    a.add_option("--dds-partition", g.dds_partition,
+                 "DDS partition of every writer and reader: only participants in the same partition exchange data (default: none, "
+                 "as ROS 2 nodes; hil demo: a private one)");
     a.add_option("--secure", g.secure, "DDS Security: keystore directory[:participant] (hil keystore; docs/security.md)");
     a.add_option("--secure-name", g.secure_name, "keystore participant for --secure (default: the command's role, e.g. replay)");
   };

@@ -46,6 +46,10 @@ struct ParticipantOptions {
   eprosima::fastdds::dds::DomainParticipantListener* listener = nullptr;
   /// When enabled: authentication, access control and encryption with these files.
   SecurityFiles security{};
+  /// A DDS partition for every writer and reader: only participants in the same partition
+  /// exchange data (a run kept apart from others on the same domain). Empty: none, as ROS 2 nodes
+  /// use, so they match.
+  std::string partition{};
 };
 
 /// The host-only profile: $HIL_DDS_PROFILE if set, else the installed copy, else the source tree's.

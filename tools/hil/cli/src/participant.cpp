@@ -29,6 +29,7 @@ dds::ParticipantOptions participant_options(const std::string& name) {
   o.domain_id = g.dds_domain >= 0 ? g.dds_domain : dds::domain_from_env();
   o.profile_file = g.dds_profile;
   o.profile_name = g.dds_profile_name;
+  o.partition = g.dds_partition;
   o.name = name;
   o.security = security_files(name);
   return o;

@@ -13,9 +13,10 @@ struct GlobalOptions {
   std::string log_level = "info";
   std::string dds_profile;
   std::string dds_profile_name = "hil_localhost";
-  int dds_domain = -1;      ///< -1: $HIL_DDS_DOMAIN, else $ROS_DOMAIN_ID, else 0
-  std::string secure;       ///< --secure KEYSTORE[:NAME]: DDS Security (participant.hpp)
-  std::string secure_name;  ///< --secure-name: keystore participant (default: the command's role)
+  std::string dds_partition;  ///< --dds-partition: empty = none
+  int dds_domain = -1;        ///< -1: $HIL_DDS_DOMAIN, else $ROS_DOMAIN_ID, else 0
+  std::string secure;         ///< --secure KEYSTORE[:NAME]: DDS Security (participant.hpp)
+  std::string secure_name;    ///< --secure-name: keystore participant (default: the command's role)
 };
 GlobalOptions& globals();
 
