@@ -13,6 +13,7 @@
 
 #include <hil/messages/ros_msgs.hpp>
 #include <hil/messages/sample_msg.hpp>
+#include <hil/dds/qos.hpp>
 #include <hil/dds/topics.hpp>
 #include <hil/drivers/can_channel.hpp>
 #include <hil/drivers/error.hpp>
@@ -120,25 +121,19 @@ Acquirer::Acquirer(AcquirerOptions options, std::unique_ptr<drivers::ForcePlate>
       robot_mon_(opt_.robot_name, robot_ ? robot_->config().rate_hz : 1.0) {
   if (!plate_) throw std::invalid_argument("acquirer: a force plate is required");
   if (bus_) {
-    // Keep-last with a deep history: a slow subscriber never blocks acquisition; 5 s of samples
-    // are kept for it to catch up.
-    dds::StreamQos q{true, 5000, 0};
-    w_sample_ = std::make_unique<dds::Writer<hil_msgs::msg::PoseWrenchSample>>(*bus_, dds::topics::kPoseWrenchSample, q);
-    w_status_ = std::make_unique<dds::Writer<hil_msgs::msg::DeviceStatus>>(*bus_, dds::topics::kDeviceStatus, dds::StreamQos{true, 10, 10});
+    // Every writer's QoS from the one table (idl/src/qos.cpp, docs/ros.md).
+    namespace tp = dds::topics;
+    const auto qos = [this](const char* topic) { return dds::qos_of(topic, opt_.sensor_best_effort); };
+    w_sample_ = std::make_unique<dds::Writer<hil_msgs::msg::PoseWrenchSample>>(*bus_, tp::kPoseWrenchSample, qos(tp::kPoseWrenchSample));
+    w_status_ = std::make_unique<dds::Writer<hil_msgs::msg::DeviceStatus>>(*bus_, tp::kDeviceStatus, qos(tp::kDeviceStatus));
     if (opt_.ros_topics) {
-      w_wrench_ = std::make_unique<dds::Writer<geometry_msgs::msg::WrenchStamped>>(*bus_, dds::topics::kWrench, q);
-      w_pose_ = std::make_unique<dds::Writer<geometry_msgs::msg::PoseStamped>>(*bus_, dds::topics::kPose, q);
-      w_joints_ = std::make_unique<dds::Writer<sensor_msgs::msg::JointState>>(*bus_, dds::topics::kJointStates, q);
-      // tf2's static broadcaster QoS: reliable, transient local, keep last 1 (one message, the
-      // whole tree), so a listener started later still gets the frames.
+      w_wrench_ = std::make_unique<dds::Writer<geometry_msgs::msg::WrenchStamped>>(*bus_, tp::kWrench, qos(tp::kWrench));
+      w_pose_ = std::make_unique<dds::Writer<geometry_msgs::msg::PoseStamped>>(*bus_, tp::kPose, qos(tp::kPose));
+      w_joints_ = std::make_unique<dds::Writer<sensor_msgs::msg::JointState>>(*bus_, tp::kJointStates, qos(tp::kJointStates));
       if (!opt_.static_frames.empty())
-        w_tf_static_ = std::make_unique<dds::Writer<tf2_msgs::msg::TFMessage>>(*bus_, dds::topics::kTfStatic, dds::StreamQos{true, 1, 1});
-      // tf2's TransformBroadcaster QoS: reliable, volatile, keep last 100.
-      if (opt_.tf_moving)
-        w_tf_ = std::make_unique<dds::Writer<tf2_msgs::msg::TFMessage>>(*bus_, dds::topics::kTf, dds::StreamQos{true, 100, 0});
-      // diagnostic_updater's QoS: reliable, volatile, a short keep-last history.
-      w_diagnostics_ = std::make_unique<dds::Writer<diagnostic_msgs::msg::DiagnosticArray>>(*bus_, dds::topics::kDiagnostics,
-                                                                                            dds::StreamQos{true, 10, 0});
+        w_tf_static_ = std::make_unique<dds::Writer<tf2_msgs::msg::TFMessage>>(*bus_, tp::kTfStatic, qos(tp::kTfStatic));
+      if (opt_.tf_moving) w_tf_ = std::make_unique<dds::Writer<tf2_msgs::msg::TFMessage>>(*bus_, tp::kTf, qos(tp::kTf));
+      w_diagnostics_ = std::make_unique<dds::Writer<diagnostic_msgs::msg::DiagnosticArray>>(*bus_, tp::kDiagnostics, qos(tp::kDiagnostics));
     }
   }
   if (recorder_) raw_ = std::make_unique<RawWriter>(*recorder_);

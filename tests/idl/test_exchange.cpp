@@ -15,6 +15,7 @@
 
 #include <hil/messages/sample_msg.hpp>
 #include <hil/dds/bus.hpp>
+#include <hil/dds/qos.hpp>
 #include <hil/dds/topics.hpp>
 #include <hil/messages/ros_msgs.hpp>
 
@@ -231,4 +232,25 @@ TEST(DdsExchange, ALateReaderGetsNoStaleSensorSamplesButTheLatchedFrames) {
   // A transient-local reader does not match a volatile writer: no burst of history.
   for (const auto i : latched_reader) EXPECT_GE(i, 50u) << "a stale sample reached the transient-local reader";
   EXPECT_EQ(tf_got, 1);
+}
+
+// The QoS table: sensor streams switch to ROS 2's SensorDataQoS on request, nothing else does;
+// what is latched stays latched.
+TEST(QosTable, SensorStreamsAloneGoBestEffortAndOnlyTfStaticIsLatched) {
+  for (const auto& t : hil::dds::qos_table()) {
+    const auto reliable = hil::dds::qos_of(t.topic), chosen = hil::dds::qos_of(t.topic, true);
+    if (t.sensor) {
+      EXPECT_TRUE(reliable.reliable) << t.topic;
+      EXPECT_FALSE(chosen.reliable) << t.topic;
+      EXPECT_EQ(chosen.history_depth, 5) << t.topic;
+    } else {
+      EXPECT_EQ(chosen.reliable, reliable.reliable) << t.topic;
+      EXPECT_EQ(chosen.history_depth, reliable.history_depth) << t.topic;
+    }
+    const std::string topic = t.topic;
+    EXPECT_EQ(reliable.durable_depth > 0, topic == hil::dds::topics::kTfStatic || topic == hil::dds::topics::kDeviceStatus) << t.topic;
+  }
+  EXPECT_FALSE(hil::dds::qos_of(hil::dds::topics::kClock).reliable) << "rclcpp's ClockQoS";
+  EXPECT_TRUE(hil::dds::qos_of(hil::dds::topics::kPoseWrenchSample, true).reliable) << "the workers' stream stays lossless";
+  EXPECT_THROW(hil::dds::qos_of("rt/nowhere"), std::invalid_argument);
 }

@@ -9,7 +9,9 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <fastdds/dds/domain/DomainParticipantListener.hpp>
 #include <fstream>
+#include <map>
 #include <mutex>
 #include <sstream>
 #include <thread>
@@ -17,6 +19,7 @@
 #include <hil/acquisition/acquirer.hpp>
 #include <hil/messages/ros_msgs.hpp>
 #include <hil/messages/sample_msg.hpp>
+#include <hil/dds/qos.hpp>
 #include <hil/dds/topics.hpp>
 #include <hil/drivers/fake_devices.hpp>
 #include <hil/format/rig.hpp>
@@ -47,6 +50,25 @@ format::RigSpec named_rig() {
   text += "tf: {world: map, base: base_link, ee: tool0}\n";
   return format::parse_rig(text, "press_bench_named.yaml");
 }
+
+// What discovery says of every writer on the domain: its topic, reliability and durability, as a
+// ROS 2 node (or `ros2 topic info -v`) learns them.
+struct WriterAudit : eprosima::fastdds::dds::DomainParticipantListener {
+  struct Seen {
+    bool reliable;
+    bool transient_local;
+  };
+  std::mutex m;
+  std::map<std::string, std::vector<Seen>> writers;
+  void on_publisher_discovery(eprosima::fastdds::dds::DomainParticipant*, eprosima::fastrtps::rtps::WriterDiscoveryInfo&& info) override {
+    if (info.status != eprosima::fastrtps::rtps::WriterDiscoveryInfo::DISCOVERED_WRITER) return;
+    std::lock_guard<std::mutex> lock(m);
+    writers[info.info.topicName().to_string()].push_back({info.info.m_qos.m_reliability.kind ==
+                                                              eprosima::fastdds::dds::RELIABLE_RELIABILITY_QOS,
+                                                          info.info.m_qos.m_durability.kind ==
+                                                              eprosima::fastdds::dds::TRANSIENT_LOCAL_DURABILITY_QOS});
+  }
+};
 
 struct Collected {
   std::mutex m;
@@ -81,6 +103,12 @@ TEST(RosTopics, TfStaticForLateJoinersDiagnosticsAndNamedJoints) {
 
   const int domain = 10 + static_cast<int>(getpid() % 40);
   hil::dds::Participant participant({domain, "", "hil_localhost", "ros-topics"});
+  WriterAudit audit;
+  hil::dds::ParticipantOptions audit_options;
+  audit_options.domain_id = domain;
+  audit_options.name = "ros-topics-audit";
+  audit_options.listener = &audit;
+  hil::dds::Participant auditor(audit_options);
   Collected got;
   hil::dds::Reader<hil_msgs::msg::DeviceStatus> status_reader(participant, hil::dds::topics::kDeviceStatus,
                                                               [&](const auto& m, const auto&) {
@@ -186,6 +214,24 @@ TEST(RosTopics, TfStaticForLateJoinersDiagnosticsAndNamedJoints) {
     EXPECT_EQ(tf.transforms()[3].header().frame_id(), "map");
     EXPECT_EQ(tf.transforms()[3].child_frame_id(), "base_link");
     EXPECT_DOUBLE_EQ(tf.transforms()[3].transform().translation().x(), -0.45);
+  }
+
+  // On the wire: every writer the acquirer made, as discovery announces it, has the QoS of the one
+  // table (idl/src/qos.cpp) that docs/ros.md and the MCAP metadata follow; and it made one of each.
+  {
+    std::lock_guard<std::mutex> lock(audit.m);
+    for (const char* topic :
+         {hil::dds::topics::kPoseWrenchSample, hil::dds::topics::kDeviceStatus, hil::dds::topics::kWrench, hil::dds::topics::kPose,
+          hil::dds::topics::kJointStates, hil::dds::topics::kTfStatic, hil::dds::topics::kTf, hil::dds::topics::kDiagnostics}) {
+      const auto it = audit.writers.find(topic);
+      ASSERT_NE(it, audit.writers.end()) << topic << ": no writer discovered";
+      ASSERT_EQ(it->second.size(), 1u) << topic;
+      const auto want = hil::dds::qos_of(topic);
+      EXPECT_EQ(it->second[0].reliable, want.reliable) << topic;
+      EXPECT_EQ(it->second[0].transient_local, want.durable_depth > 0) << topic;
+    }
+    EXPECT_TRUE(audit.writers.at(hil::dds::topics::kTfStatic)[0].transient_local) << "the table itself: /tf_static latched";
+    EXPECT_FALSE(audit.writers.at(hil::dds::topics::kWrench)[0].transient_local) << "the table itself: a sensor stream is volatile";
   }
 
   std::lock_guard<std::mutex> lock(got.m);

@@ -200,6 +200,7 @@ AcquireResult run_acquisition(const AcquireOptions& o, const std::function<void(
   ao.sync.output_rate_hz = o.output_rate_hz;
   ao.T_world_base = d.T_world_base;
   ao.ros_topics = o.ros_topics;
+  ao.sensor_best_effort = o.sensor_best_effort;
   ao.static_frames = format::static_frames(rig);        // rt/tf_static
   if (o.tf) ao.tf_moving = format::moving_frame(&rig);  // rt/tf
   ao.world_frame = rig.tf.world;

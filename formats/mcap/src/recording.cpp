@@ -14,6 +14,7 @@
 #include <set>
 #include <stdexcept>
 
+#include <hil/dds/qos.hpp>
 #include <hil/messages/ros_msgs.hpp>
 #include <hil/messages/sample_msg.hpp>
 #include <hil/error/error.hpp>
@@ -143,11 +144,16 @@ void decode(const std::string& data, T& m, const std::string& where) {
 /// The ros2 profile's required channel metadata: the publisher's QoS as rosbag2 records it
 /// (YAML, Humble's numeric enums, which later distributions still read): reliable, and
 /// transient_local for /tf_static so that `ros2 bag play` latches it as tf2 expects.
-std::string offered_qos(bool transient_local) {
+/// rosbag2's offered_qos_profiles (Humble's YAML) of the live writer of `topic` (/x -> rt/x in
+/// dds::qos_table()): history 1 keep last, 2 keep all; reliability 1 reliable, 2 best effort;
+/// durability 1 transient local, 2 volatile (rmw's enums).
+std::string offered_qos(const std::string& topic) {
+  const auto q = dds::qos_of("rt" + topic);
   constexpr const char* kForever = "    sec: 2147483647\n    nsec: 4294967295\n";
-  return fmt::format("- history: 3\n  depth: 0\n  reliability: 1\n  durability: {}\n  deadline:\n{}  lifespan:\n{}"
+  return fmt::format("- history: {}\n  depth: {}\n  reliability: {}\n  durability: {}\n  deadline:\n{}  lifespan:\n{}"
                      "  liveliness: 1\n  liveliness_lease_duration:\n{}  avoid_ros_namespace_conventions: false",
-                     transient_local ? 1 : 2, kForever, kForever, kForever);
+                     q.history_depth > 0 ? 1 : 2, q.history_depth, q.reliable ? 1 : 2, q.durable_depth > 0 ? 1 : 2, kForever, kForever,
+                     kForever);
 }
 
 }  // namespace
@@ -238,16 +244,16 @@ RunMcapWriter::RunMcapWriter(const std::string& path, const format::RigSpec* rig
   wo.profile = "ros2";  // ros2 bag's profile: ros2msg schemas, cdr messages
   wo.library = "hil " HIL_MCAP_VERSION;
   w_ = std::make_unique<Writer>(path, wo);
-  auto channel = [&](const char* type, const char* topic, bool latched = false) {
+  auto channel = [&](const char* type, const char* topic) {
     return w_->add_channel(w_->add_schema(type, "ros2msg", ros2msg_schema(type)), topic, "cdr",
-                           {{"offered_qos_profiles", offered_qos(latched)}});
+                           {{"offered_qos_profiles", offered_qos(topic)}});
   };
   ch_wrench_ = channel("geometry_msgs/msg/WrenchStamped", topic::kWrench);
   ch_pose_ = channel("geometry_msgs/msg/PoseStamped", topic::kPose);
   ch_joints_ = channel("sensor_msgs/msg/JointState", topic::kJointStates);
   ch_sample_ = channel("hil_msgs/msg/PoseWrenchSample", topic::kPoseWrench);
   ch_status_ = channel("hil_msgs/msg/DeviceStatus", topic::kDeviceStatus);
-  ch_tf_ = channel("tf2_msgs/msg/TFMessage", topic::kTfStatic, true);
+  ch_tf_ = channel("tf2_msgs/msg/TFMessage", topic::kTfStatic);
   if (tf_moving_) ch_tf_moving_ = channel("tf2_msgs/msg/TFMessage", topic::kTf);
   if (rig) {
     const auto frames = format::static_frames(*rig);

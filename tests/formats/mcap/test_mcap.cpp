@@ -15,6 +15,7 @@
 #include <hil/format/ros_frames.hpp>
 #include <hil/format/run.hpp>
 #include <hil/mcap/mcap.hpp>
+#include <hil/dds/qos.hpp>
 #include <hil/mcap/recording.hpp>
 #include <hil/test/files.hpp>
 
@@ -380,10 +381,14 @@ TEST_P(ExportPressSlide, ChannelsCountsAndValues) {
   EXPECT_GT(f.chunks.size(), 1u);
   for (const auto& ch : f.channels) {
     EXPECT_EQ(ch.message_encoding, "cdr") << ch.topic;
-    // The ros2 profile requires the QoS; /tf_static is latched (durability 1: transient_local).
-    EXPECT_NE(ch.metadata.at("offered_qos_profiles").find(ch.topic == topic::kTfStatic ? "durability: 1\n" : "durability: 2\n"),
-              std::string::npos)
-        << ch.topic;
+    // The ros2 profile requires the QoS: the live writer's, from the one table (/tf_static latched,
+    // durability 1; the rest volatile, 2; keep last N: history 1, depth N).
+    const auto q = hil::dds::qos_of("rt" + ch.topic);
+    const auto& offered = ch.metadata.at("offered_qos_profiles");
+    EXPECT_NE(offered.find(q.durable_depth > 0 ? "durability: 1\n" : "durability: 2\n"), std::string::npos) << ch.topic;
+    EXPECT_NE(offered.find("- history: 1\n  depth: " + std::to_string(q.history_depth) + "\n  reliability: 1\n"), std::string::npos)
+        << ch.topic << ":\n"
+        << offered;
     EXPECT_EQ(f.schema(ch.schema_id)->encoding, "ros2msg") << ch.topic;
   }
   EXPECT_EQ(f.schema(f.channel(topic::kWrench)->schema_id)->name, "geometry_msgs/msg/WrenchStamped");
@@ -395,8 +400,9 @@ TEST_P(ExportPressSlide, ChannelsCountsAndValues) {
   ASSERT_NE(f.channel(topic::kDeviceStatus), nullptr);       // declared, no record of it in a run
   EXPECT_EQ(f.messages_on(topic::kDeviceStatus).size(), 0u);
   ASSERT_EQ(f.messages_on(topic::kTfStatic).size(), 1u);
+  EXPECT_EQ(f.messages_on(topic::kTf).size(), n);  // the moving robot base -> ee, one per sample
   ASSERT_TRUE(f.statistics);
-  EXPECT_EQ(f.statistics->message_count, 3 * n + 1);
+  EXPECT_EQ(f.statistics->message_count, 4 * n + 1);
 
   const auto start_ns = parse_utc_ns(run.info.start_time_utc);
   const auto samples = read_pose_wrench(f);

@@ -42,6 +42,13 @@ void add_acquire(CLI::App& app) {
       ->capture_default_str();
   cmd->add_flag("!--no-ros-topics", o.ros_topics,
                 "do not publish rt/hil/wrench, rt/hil/pose, rt/hil/joint_states, rt/tf_static, rt/tf, rt/diagnostics");
+  static std::string sensor_qos = "reliable";
+  cmd->add_option("--sensor-qos", sensor_qos,
+                  "QoS of rt/hil/wrench, rt/hil/pose, rt/hil/joint_states and rt/tf: reliable (keep last 5000) or best-effort (keep "
+                  "last 5, ROS 2's SensorDataQoS); rt/hil/pose_wrench stays reliable")
+      ->check(CLI::IsMember({"reliable", "best-effort"}))
+      ->capture_default_str()
+      ->each([](const std::string& v) { o.sensor_best_effort = v == "best-effort"; });
   cmd->add_flag("!--no-tf", o.tf, "do not publish the moving robot base -> ee transform on rt/tf (nor /tf in run.mcap)");
   cmd->add_option("--play", o.play, "start the fake rig in-process playing this run (no hardware, no SocketCAN)")
       ->check(CLI::ExistingDirectory);

@@ -19,6 +19,7 @@
 #include <hil/cli/commands.hpp>
 #include <hil/cli/participant.hpp>
 #include <hil/dds/bus.hpp>
+#include <hil/dds/qos.hpp>
 #include <hil/dds/topics.hpp>
 #include <hil/error/error.hpp>
 #include <hil/format/run.hpp>
@@ -64,23 +65,23 @@ mcap::File run_as_recording(const std::string& dir, const std::string& rig) {
 class Publisher {
  public:
   Publisher(dds::Participant& p, const ReplayOptions& o) : p_(p), ros_(o.ros_topics) {
-    if (o.clock) clock_ = std::make_unique<dds::Writer<rosgraph_msgs::msg::Clock>>(p, dds::topics::kClock, dds::StreamQos{false, 1, 0});
+    if (o.clock)
+      clock_ = std::make_unique<dds::Writer<rosgraph_msgs::msg::Clock>>(p, dds::topics::kClock, dds::qos_of(dds::topics::kClock));
   }
 
   /// Publishes `m` of the recorded `topic` (m null: only makes its writer, so that subscribers can
   /// match before the first message). \returns false for a topic this replay does not publish.
-  /// The QoS are those of the live writers (docs/ros.md).
+  /// The QoS are those of the live writers (dds::qos_table()).
   bool publish(const std::string& topic, const mcap::Message* m, const std::string& where) {
     using namespace dds::topics;
-    const dds::StreamQos stream{true, 5000, 0};
-    if (topic == mcap::topic::kPoseWrench) return send<hil_msgs::msg::PoseWrenchSample>(w_sample_, kPoseWrenchSample, {}, m, where);
-    if (topic == mcap::topic::kDeviceStatus) return send<hil_msgs::msg::DeviceStatus>(w_status_, kDeviceStatus, {true, 10, 10}, m, where);
+    if (topic == mcap::topic::kPoseWrench) return send<hil_msgs::msg::PoseWrenchSample>(w_sample_, kPoseWrenchSample, m, where);
+    if (topic == mcap::topic::kDeviceStatus) return send<hil_msgs::msg::DeviceStatus>(w_status_, kDeviceStatus, m, where);
     if (!ros_) return false;
-    if (topic == mcap::topic::kWrench) return send<geometry_msgs::msg::WrenchStamped>(w_wrench_, kWrench, stream, m, where);
-    if (topic == mcap::topic::kPose) return send<geometry_msgs::msg::PoseStamped>(w_pose_, kPose, stream, m, where);
-    if (topic == mcap::topic::kJointStates) return send<sensor_msgs::msg::JointState>(w_joints_, kJointStates, stream, m, where);
-    if (topic == mcap::topic::kTfStatic) return send<tf2_msgs::msg::TFMessage>(w_tf_static_, kTfStatic, {true, 1, 1}, m, where);
-    if (topic == mcap::topic::kTf) return send<tf2_msgs::msg::TFMessage>(w_tf_, kTf, {true, 100, 0}, m, where);
+    if (topic == mcap::topic::kWrench) return send<geometry_msgs::msg::WrenchStamped>(w_wrench_, kWrench, m, where);
+    if (topic == mcap::topic::kPose) return send<geometry_msgs::msg::PoseStamped>(w_pose_, kPose, m, where);
+    if (topic == mcap::topic::kJointStates) return send<sensor_msgs::msg::JointState>(w_joints_, kJointStates, m, where);
+    if (topic == mcap::topic::kTfStatic) return send<tf2_msgs::msg::TFMessage>(w_tf_static_, kTfStatic, m, where);
+    if (topic == mcap::topic::kTf) return send<tf2_msgs::msg::TFMessage>(w_tf_, kTf, m, where);
     return false;
   }
 
@@ -93,7 +94,7 @@ class Publisher {
 
   /// Waits for `n` readers of the samples (made before the first message for that).
   bool wait_for_readers(int n, std::chrono::milliseconds timeout) {
-    ensure<hil_msgs::msg::PoseWrenchSample>(w_sample_, dds::topics::kPoseWrenchSample, {});
+    send<hil_msgs::msg::PoseWrenchSample>(w_sample_, dds::topics::kPoseWrenchSample, nullptr, "");
     return w_sample_->wait_for_readers(n, timeout);
   }
   void wait_for_acknowledgments(std::chrono::seconds timeout) {
@@ -102,16 +103,11 @@ class Publisher {
 
  private:
   template <class Msg>
-  void ensure(std::unique_ptr<dds::Writer<Msg>>& w, const char* topic, const dds::StreamQos& q) {
-    if (!w) w = std::make_unique<dds::Writer<Msg>>(p_, topic, q);
-  }
-  template <class Msg>
-  bool send(std::unique_ptr<dds::Writer<Msg>>& w, const char* topic, const dds::StreamQos& q, const mcap::Message* m,
-            const std::string& where) {
+  bool send(std::unique_ptr<dds::Writer<Msg>>& w, const char* topic, const mcap::Message* m, const std::string& where) {
     if (denied_.count(topic)) return false;
     if (!w) {
       try {
-        w = std::make_unique<dds::Writer<Msg>>(p_, topic, q);
+        w = std::make_unique<dds::Writer<Msg>>(p_, topic, dds::qos_of(topic));
       } catch (const std::exception& e) {
         // The samples are what a replay is for; any other topic a secure participant may not
         // publish (its permissions name the topics) is left out, said once.

@@ -37,6 +37,9 @@ struct AcquirerOptions {
   /// stream), rt/hil/pose and rt/hil/joint_states (at the output rate), the rig's fixed frames on
   /// rt/tf_static (once, kept for late joiners) and device health on rt/diagnostics (docs/ros.md).
   bool ros_topics = true;
+  /// The sensor streams (rt/hil/wrench, rt/hil/pose, rt/hil/joint_states, rt/tf) best effort, keep
+  /// last 5 (ROS 2's SensorDataQoS) instead of reliable (dds::qos_table()).
+  bool sensor_best_effort = false;
   /// The rig's fixed frames (format::static_frames(rig)); none: nothing on rt/tf_static.
   std::vector<format::StaticFrame> static_frames;
   /// The moving edge (format::moving_frame(rig)) on rt/tf with every synchronized sample; none:

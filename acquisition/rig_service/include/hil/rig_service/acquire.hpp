@@ -22,7 +22,9 @@ struct AcquireOptions {
   bool scan = false;  ///< check: first ask every NETCANOEM base id 0..0x7F for its serial
   bool tare = false;
   bool ros_topics = true;
-  bool tf = true;  ///< the moving base -> ee transform on rt/tf (and /tf in run.mcap) with every sample
+  bool tf = true;
+  bool sensor_best_effort =
+      false;  ///< --sensor-qos best-effort  ///< the moving base -> ee transform on rt/tf (and /tf in run.mcap) with every sample
   bool no_bus = false;
   bool progress = true;
   int wait_subscribers = 0;
