@@ -21,6 +21,7 @@ deps() {
     python3-can python3-pymodbus python3-serial-asyncio python3-numpy python3-jsonschema
     pybind11-dev python3-dev python3-pytest
     openssl
+    cyclonedds-dev cyclonedds-tools  # the second DDS vendor beside hil (tests/interop)
     liburdfdom-dev libkdl-parser-dev liborocos-kdl-dev  # URDF robots (formats/format/src/urdf.cpp)
     clang libclang-rt-14-dev lld  # libFuzzer targets (tests/fuzz)
     clang-format  # the tree's style, checked by tests/architecture/format (tools/format.sh)
