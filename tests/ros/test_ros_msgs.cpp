@@ -3,9 +3,11 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <fstream>
 #include <map>
 #include <string>
 
+#include <hil/dds/qos.hpp>
 #include <hil/messages/ros_msgs.hpp>
 #include <hil/messages/sample_msg.hpp>
 #include <hil/format/rig.hpp>
@@ -143,4 +145,28 @@ TEST(RosJointState, NamesFromTheRigPositionsFromTheSample) {
   EXPECT_EQ(j.header().stamp(), m.header().stamp());
   EXPECT_EQ(j.header().frame_id(), "");
   EXPECT_EQ(messages::to_joint_state(m, {}).name(), (std::vector<std::string>{"j1", "j2", "j3"}));
+}
+
+// docs/ros.md's topic table states the QoS of hil::dds::qos_table(), row for row: the type, the
+// reliability, the durability, the depth and whether it is a sensor stream.
+TEST(RosDocs, TheTopicTableIsTheQosTable) {
+  std::ifstream in(std::string(HIL_SOURCE_DIR) + "/docs/ros.md");
+  ASSERT_TRUE(in) << "docs/ros.md";
+  std::map<std::string, std::string> rows;  // ROS 2 topic -> the whole row
+  for (std::string line; std::getline(in, line);) {
+    if (line.rfind("| `/", 0) != 0) continue;
+    const auto end = line.find('`', 3);
+    rows[line.substr(3, end - 3)] = line;
+  }
+  for (const auto& t : hil::dds::qos_table()) {
+    const std::string ros_topic = std::string(t.topic).substr(2);  // rt/x -> /x
+    ASSERT_TRUE(rows.count(ros_topic)) << ros_topic << ": no row in docs/ros.md's table";
+    const auto& row = rows[ros_topic];
+    const auto want = std::string(t.qos.reliable ? "reliable" : "best effort") + ", " +
+                      (t.qos.durable_depth > 0 ? "transient local" : "volatile") + ", keep last " + std::to_string(t.qos.history_depth) +
+                      (t.sensor ? "; sensor stream" : "") + " |";
+    EXPECT_NE(row.find("`" + std::string(t.type) + "`"), std::string::npos) << row;
+    EXPECT_TRUE(row.size() >= want.size() && row.compare(row.size() - want.size(), want.size(), want) == 0)
+        << ros_topic << ": the table says\n  " << row << "\nthe code: " << want;
+  }
 }
