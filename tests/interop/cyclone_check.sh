@@ -6,7 +6,8 @@
 # Checks: 1. discovery shows every hil writer with ROS 2's type name and the QoS docs/ros.md's table
 # states (written out below, not taken from hil's code); 2. each standard topic arrives, decoded
 # by the other vendor's code from its own type definitions (tests/interop/ros2_types.idl), and a
-# wrench is value for value a reading of the run's raw/force_plate.csv; 3. hil receives the peer's
+# wrench is value for value a reading of the run's raw/force_plate.csv and a PoseWrenchSample the
+# run's sample of its index (hil_msgs as ros/hil_msgs defines them); 3. hil receives the peer's
 # tf2_msgs/TFMessage.
 set -euo pipefail
 hil=$1 peer=$2 src=$3 work=$4
@@ -44,6 +45,14 @@ grep -qE '^got rt/hil/pose [1-9][0-9]* frame world stamp [0-9]+\.[0-9]{9} qw 1$'
 grep -qE '^got rt/tf [1-9][0-9]* transforms 1 first robot_base -> ee$' <<<"$out" || fail "tf"
 grep -qE '^got rt/tf_static 1 transforms 4 first world -> force_plate$' <<<"$out" || fail "tf_static (latched: the peer joined before)"
 grep -qE '^got rt/diagnostics [1-9][0-9]* status [12] first hil/(force_plate|robot)$' <<<"$out" || fail "diagnostics"
+grep -qE '^got rt/hil/joint_states [1-9][0-9]* names 6 first j1 positions 6$' <<<"$out" || fail "joint_states (the rig's joints, unnamed: j1..j6)"
+grep -qE '^got rt/hil/device_status [1-9][0-9]* device (force_plate|robot) state [0-3]$' <<<"$out" || fail "device_status"
+# A received PoseWrenchSample is the run's sample of its index, value for value (samples.csv).
+read -r index sfz < <(sed -nE 's/^got rt\/hil\/pose_wrench [0-9]+ index ([0-9]+) fz ([^ ]+) pz .*$/\1 \2/p' <<<"$out")
+[[ -n $index ]] || fail "pose_wrench"
+csv_fz=$(awk -F, -v i="$index" '/^#/ { next } !h { for (c = 1; c <= NF; ++c) if ($c == "fz") col = c; h = 1; next } n++ == i { print $col; exit }' \
+  "$work/run/samples.csv")
+awk -v a="$csv_fz" -v b="$sfz" 'BEGIN { exit !(a != "" && a + 0 == b + 0) }' || fail "pose_wrench sample $index: fz $sfz, samples.csv has '$csv_fz'"
 # A received wrench is a reading of the run: its stamp is a raw row's t_ns and its fz that row's fz.
 read -r sec nsec fz < <(sed -nE 's/^got rt\/hil\/wrench [0-9]+ frame force_plate stamp ([0-9]+)\.([0-9]{9}) fz (.*)$/\1 \2 \3/p' <<<"$out")
 t_ns="$sec$nsec"

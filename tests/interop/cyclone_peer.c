@@ -19,8 +19,10 @@
 
 #include "ros2_types.h"
 
-enum { kWrench, kPose, kTf, kTfStatic, kDiagnostics, kTopics };
-static const char* const kNames[kTopics] = {"rt/hil/wrench", "rt/hil/pose", "rt/tf", "rt/tf_static", "rt/diagnostics"};
+enum { kWrench, kPose, kTf, kTfStatic, kDiagnostics, kJoints, kSamples, kStatus, kTopics };
+static const char* const kNames[kTopics] = {"rt/hil/wrench",    "rt/hil/pose",       "rt/tf",
+                                            "rt/tf_static",     "rt/diagnostics",    "rt/hil/joint_states",
+                                            "rt/hil/pose_wrench", "rt/hil/device_status"};
 
 static dds_entity_t reader(dds_entity_t p, const dds_topic_descriptor_t* desc, const char* name, int transient_local, int depth) {
   dds_entity_t t = dds_create_topic(p, desc, name, NULL, NULL);
@@ -58,6 +60,9 @@ int main(int argc, char** argv) {
   r[kTf] = reader(p, &tf2_msgs_msg_dds__TFMessage__desc, kNames[kTf], 0, 100);
   r[kTfStatic] = reader(p, &tf2_msgs_msg_dds__TFMessage__desc, kNames[kTfStatic], 1, 1);  // tf2's static listener
   r[kDiagnostics] = reader(p, &diagnostic_msgs_msg_dds__DiagnosticArray__desc, kNames[kDiagnostics], 0, 10);
+  r[kJoints] = reader(p, &sensor_msgs_msg_dds__JointState__desc, kNames[kJoints], 0, 1000);
+  r[kSamples] = reader(p, &hil_msgs_msg_dds__PoseWrenchSample__desc, kNames[kSamples], 0, 1000);
+  r[kStatus] = reader(p, &hil_msgs_msg_dds__DeviceStatus__desc, kNames[kStatus], 1, 10);
 
   // The publisher into hil: tf2's TransformBroadcaster QoS.
   dds_entity_t tf_topic = dds_find_topic(DDS_FIND_SCOPE_PARTICIPANT, p, "rt/tf", NULL, DDS_SECS(1));
@@ -111,6 +116,17 @@ int main(int argc, char** argv) {
             const geometry_msgs_msg_dds__TransformStamped_* t = m->transforms._length ? &m->transforms._buffer[0] : NULL;
             snprintf(first[k], sizeof first[k], "transforms %u first %s -> %s", m->transforms._length, t ? t->header.frame_id : "-",
                      t ? t->child_frame_id : "-");
+          } else if (k == kJoints) {
+            const sensor_msgs_msg_dds__JointState_* m = s[i];
+            snprintf(first[k], sizeof first[k], "names %u first %s positions %u", m->name._length, m->name._length ? m->name._buffer[0] : "-",
+                     m->position._length);
+          } else if (k == kSamples) {
+            const hil_msgs_msg_dds__PoseWrenchSample_* m = s[i];
+            snprintf(first[k], sizeof first[k], "index %llu fz %.17g pz %.17g", (unsigned long long)m->sample_index, m->wrench_fp.force.z,
+                     m->pose_world_ee.position.z);
+          } else if (k == kStatus) {
+            const hil_msgs_msg_dds__DeviceStatus_* m = s[i];
+            snprintf(first[k], sizeof first[k], "device %s state %u", m->device, (unsigned)m->state);
           } else {
             const diagnostic_msgs_msg_dds__DiagnosticArray_* m = s[i];
             snprintf(first[k], sizeof first[k], "status %u first %s", m->status._length,
