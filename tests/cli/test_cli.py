@@ -155,7 +155,8 @@ class Cli(unittest.TestCase):
         # Another participant publishing samples on the demo's domain throughout (a slow replay): the
         # demo keeps to a partition of its own, so its bus count stays its own.
         env = dict(os.environ, HIL_DDS_DOMAIN=str(150 + os.getpid() % 50))
-        intruder = subprocess.Popen([HIL, "replay", EXAMPLE_RUN, "--speed", "0.05"], stdout=subprocess.DEVNULL,
+        # 6.5 s of samples at 1/50 of real time: 325 s, longer than the demo even on a loaded or sanitizer machine.
+        intruder = subprocess.Popen([HIL, "replay", EXAMPLE_RUN, "--speed", str(0.02 / TIME_SCALE)], stdout=subprocess.DEVNULL,
                                     stderr=subprocess.DEVNULL, env=env)
         try:
             raw = hil("demo", "--out", os.path.join(out, "run"), "--seed", "6", text=False)
