@@ -26,6 +26,11 @@ printf 'not an mcap file at all' > "$work/text.mcap"
 expect "text.mcap: offset 0: bad magic" "$hil" replay "$work/text.mcap" --speed 0
 head -c $((size - 3)) "$work/good.mcap" > "$work/cut.mcap"
 expect "closing magic is missing" "$hil" validate "$work/cut.mcap"
+# Options that do not apply are refused by name, nothing written.
+expect "--recover copies a recording: it takes no --rig" "$hil" export --recover "$work/good.mcap" --mcap "$work/r.mcap" \
+  --rig "$src/examples/rigs/press_bench.yaml"
+[[ ! -e $work/r.mcap ]] || { echo "FAIL: export --recover --rig wrote a file" >&2; fail=1; }
+expect "--rig is for a run folder" "$hil" replay "$work/good.mcap" --rig "$src/examples/rigs/press_bench.yaml" --speed 0
 expect "gzip" "$hil" export "$src/examples/runs/press_slide" --mcap "$work/x.mcap" --compression gzip
 # A recording killed mid-way: the CSV run stays valid (the primary record), the MCAP holds its
 # complete chunks and is refused as truncated by hil validate, not misread (hil export --recover

@@ -100,6 +100,23 @@ case $mode in
     grep -q "no topic /nope (the recording has: /ft/wrench, /robot/ee_pose, /joint_states)" <<<"$err" || { echo "$err" >&2; exit 1; }
     if err=$("$hil" import "$work/bag" --rig "$rig" --out "$work/x" --wrench /robot/ee_pose --pose /robot/ee_pose 2>&1); then exit 1; fi
     grep -q "/robot/ee_pose is geometry_msgs/msg/PoseStamped (cdr), expected geometry_msgs/msg/WrenchStamped" <<<"$err" || { echo "$err" >&2; exit 1; }
+    # A pose in another frame than the rig's world: hil's own export (world) against a rig naming it map.
+    "$hil" export "$run" --rig "$rig" --mcap "$work/hil.mcap" > /dev/null
+    { cat "$rig"; printf 'tf: {world: map}\n'; } > "$work/map_rig.yaml"
+    if err=$("$hil" import "$work/hil.mcap" --rig "$work/map_rig.yaml" --out "$work/x" 2>&1); then exit 1; fi
+    grep -q "hil.mcap: /hil/pose message 0.*frame 'world', expected 'map'" <<<"$err" || { echo "$err" >&2; exit 1; }
+    [[ ! -e $work/x ]] || { echo "a refused import left $work/x" >&2; exit 1; }
+    # A pose whose quaternion is not unit.
+    "$node" "$(dirname "$check")/make_bag.mjs" "$run/samples.csv" 1767225600000000000 "$work/badq" --bad-quaternion > /dev/null
+    if err=$("$hil" import "$work/badq" --rig "$rig" --out "$work/x" --wrench /ft/wrench --pose /robot/ee_pose 2>&1); then exit 1; fi
+    grep -q "/robot/ee_pose message 100.*unit quaternion (norm 2)" <<<"$err" || { echo "$err" >&2; exit 1; }
+    # metadata.yaml naming an absolute path, or a file that is not there.
+    sed -i 's|    - bag_0.mcap|    - /etc/hostname|' "$work/badq/metadata.yaml"
+    if err=$("$hil" import "$work/badq" --rig "$rig" --out "$work/x" 2>&1); then exit 1; fi
+    grep -q "metadata.yaml:.*relative to the bag folder, found '/etc/hostname'" <<<"$err" || { echo "$err" >&2; exit 1; }
+    sed -i 's|    - /etc/hostname|    - gone.mcap|' "$work/badq/metadata.yaml"
+    if err=$("$hil" import "$work/badq" --rig "$rig" --out "$work/x" 2>&1); then exit 1; fi
+    grep -q "metadata.yaml.*no such file: .*gone.mcap" <<<"$err" || { echo "$err" >&2; exit 1; }
     sed -i 's/storage_identifier: mcap/storage_identifier: sqlite3/' "$work/bag/metadata.yaml"
     if err=$("$hil" import "$work/bag" --rig "$rig" --out "$work/x" 2>&1); then exit 1; fi
     grep -q "metadata.yaml:.*storage 'sqlite3': hil reads MCAP storage" <<<"$err" || { echo "$err" >&2; exit 1; }

@@ -3,7 +3,7 @@
 // written out here. The motion and forces come from a run's samples.csv (50 Hz), sampled as the
 // devices would be: the wrench at 1 kHz (linear between rows), the pose and the joints at 125 Hz.
 //
-// node make_bag.mjs SAMPLES.csv START_NS BAG_FOLDER
+// node make_bag.mjs SAMPLES.csv START_NS BAG_FOLDER [--bad-quaternion]
 //   -> BAG_FOLDER/metadata.yaml, BAG_FOLDER/bag_0.mcap; topics /ft/wrench (frame force_plate),
 //      /robot/ee_pose (frame world), /joint_states (joints a1..a6).
 import { mkdirSync, readFileSync, writeFileSync } from "node:fs";
@@ -11,7 +11,8 @@ import { McapWriter } from "@mcap/core";
 import { parse } from "@foxglove/rosmsg";
 import { MessageWriter } from "@foxglove/rosmsg2-serialization";
 
-const [csv, startArg, folder] = process.argv.slice(2);
+const [csv, startArg, folder, flag] = process.argv.slice(2);
+const badQuaternion = flag === "--bad-quaternion";  // pose 100's orientation not unit: a bad input
 const start = BigInt(startArg);
 
 const SEP = "\n================================================================================\n";
@@ -77,7 +78,7 @@ for (const e of events) {
     msg = { header: { ...header, frame_id: "force_plate" }, wrench: { force: { x: v.fx, y: v.fy, z: v.fz }, torque: { x: v.mx, y: v.my, z: v.mz } } };
   } else if (e.topic === "/robot/ee_pose") {
     const v = at(e.t, ["px", "py", "pz", "qw", "qx", "qy", "qz"]);
-    const n = Math.hypot(v.qw, v.qx, v.qy, v.qz);
+    const n = Math.hypot(v.qw, v.qx, v.qy, v.qz) / (badQuaternion && counts[e.topic] === 100 ? 2 : 1);
     msg = { header: { ...header, frame_id: "world" }, pose: { position: { x: v.px, y: v.py, z: v.pz },
             orientation: { x: v.qx / n, y: v.qy / n, z: v.qz / n, w: v.qw / n } } };
   } else {
