@@ -7,7 +7,9 @@
 
 #include <cmath>
 #include <fstream>
+#include <map>
 #include <mutex>
+#include <set>
 #include <sstream>
 
 #include <hil/error/error.hpp>
@@ -77,6 +79,40 @@ std::string link_list(const urdf::ModelInterface& m) {
   return s;
 }
 
+/// urdfdom accepts a link that is the child of two joints (and so joints that close a loop):
+/// kdl_parser would then recurse around the loop until the stack runs out. A URDF is a tree:
+/// every link has at most one parent joint and every link hangs from the root. Returns what is
+/// wrong, or an empty string.
+std::string tree_problem(const urdf::ModelInterface& m) {
+  std::map<std::string, std::string> parent_joint_of;  // link -> the first joint naming it as child
+  for (const auto& [name, joint] : m.joints_) {
+    if (!joint) continue;
+    const auto [it, first] = parent_joint_of.emplace(joint->child_link_name, name);
+    if (!first)
+      return "link '" + joint->child_link_name + "' is the child of both joint '" + it->second + "' and joint '" + name +
+             "': a URDF is a tree (a closed loop cannot be described)";
+  }
+  const auto root = m.getRoot();
+  if (!root) return "no root link";
+  // Walk down from the root without recursion; a link met twice means a loop.
+  std::set<std::string> seen{root->name};
+  std::vector<urdf::LinkConstSharedPtr> todo{root};
+  while (!todo.empty()) {
+    const auto link = todo.back();
+    todo.pop_back();
+    for (const auto& child : link->child_links) {
+      if (!child) continue;
+      if (!seen.insert(child->name).second) return "link '" + child->name + "' is reached twice from the root: the joints form a loop";
+      todo.push_back(child);
+    }
+  }
+  std::string unreached;
+  for (const auto& [name, link] : m.links_)
+    if (!seen.count(name)) unreached += (unreached.empty() ? "'" : ", '") + name + "'";
+  if (!unreached.empty()) return "links " + unreached + " do not hang from the root '" + root->name + "' (their joints form a loop)";
+  return {};
+}
+
 /// A mimic joint's value must be computable from the chain's own joints: its master must be a
 /// moving joint between the base and the tip. A mimic of a mimic is resolved to the independent
 /// joint at the end (q_a = m_a (m_b q_c + o_b) + o_a), so that hil's kinematics need one pass.
@@ -130,9 +166,11 @@ RobotSpec parse_urdf_robot(const std::string& xml, const std::string& display_na
       log.lines.push_back(e.what());
       model.reset();
     }
-    const bool tree_ok = model && kdl_parser::treeFromUrdfModel(*model, tree);
+    const std::string problem = model ? tree_problem(*model) : std::string();
+    const bool tree_ok = model && problem.empty() && kdl_parser::treeFromUrdfModel(*model, tree);
     console_bridge::restorePreviousOutputHandler();
     if (!model) throw FormatError({display_name, 0, 0, "robot"}, "not a URDF robot description: " + joined(log.lines));
+    if (!problem.empty()) throw FormatError({display_name, 0, 0, "robot"}, problem);
     if (!tree_ok) throw FormatError({display_name, 0, 0, "robot"}, "KDL could not build the kinematic tree: " + joined(log.lines));
   }
   for (const auto* end : {&base_link, &tip_link})

@@ -250,6 +250,16 @@ TEST(UrdfRobot, BadDescriptionsFailByName) {
                          "noaxis.urdf", "a", "b");
   });
   EXPECT_NE(no_axis.find("joint 'j' has no axis direction"), std::string::npos) << no_axis;
+  // Found by fuzz_urdf in CI: a joint closing a loop made kdl_parser recurse until the stack ran out.
+  const auto loop = message([] {
+    hf::parse_urdf_robot("<robot name='c'><link name='r'/><link name='a'/><link name='b'/>"
+                         "<joint name='j1' type='fixed'><parent link='r'/><child link='a'/></joint>"
+                         "<joint name='j2' type='fixed'><parent link='a'/><child link='b'/></joint>"
+                         "<joint name='j3' type='fixed'><parent link='b'/><child link='a'/></joint></robot>",
+                         "loop.urdf", "r", "b");
+  });
+  EXPECT_NE(loop.find("loop.urdf"), std::string::npos) << loop;
+  EXPECT_NE(loop.find("link 'a' is the child of both joint 'j1' and joint 'j3'"), std::string::npos) << loop;
   const auto fixed_only = message([&] {
     hf::parse_urdf_robot(
         "<robot name='f'><link name='a'/><link name='b'/><joint name='j' type='fixed'><parent link='a'/><child link='b'/></joint></robot>",
