@@ -1,14 +1,20 @@
 #include <hil/diagnose/diagnose.hpp>
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
+#include <condition_variable>
 #include <cmath>
 #include <limits>
+#include <map>
+#include <mutex>
 #include <set>
 #include <sstream>
 
 #include <Eigen/QR>
 #include <fmt/format.h>
+#include <fmt/ranges.h>
+#include <hil/parallel/run_tasks.hpp>
 
 namespace hil::diagnose {
 
@@ -275,54 +281,98 @@ Diagnosis diagnose(const ModelFactory& make, const std::vector<std::string>& can
   const auto t0 = std::chrono::steady_clock::now();
   Diagnosis d;
   const int total = 1 + static_cast<int>(candidates.size()) + o.second_candidates;
-  int step = 0;
-  std::string current;
-  // The progress line: the model being scored, its fold, the time so far and a rough estimate of
-  // what is left (the steps done so far, each counted as an equal share: screened candidates cost
-  // little, so it runs high early on).
-  auto line = [&](int done, int tasks) {
+  // Progress, shared by the models scored side by side: the steps started (announced in step
+  // order), those finished and, for each running one, its name and the fraction of its tasks done.
+  std::mutex told;
+  std::condition_variable turn;
+  int announced = 0, finished = 0;
+  std::map<int, std::pair<std::string, double>> running;
+  std::atomic<bool> stop{false};
+  // The progress line for step `my`: its model and fold, the time so far, a rough estimate of what
+  // is left (the steps, each counted as an equal share: screened candidates cost little, so it runs
+  // high early on) and the other models running beside it. Called with `told` held.
+  auto line = [&](int my, int done, int tasks) {
     const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    const double fraction = (step - 1 + (tasks > 0 ? static_cast<double>(done) / tasks : 0.0)) / total;
-    std::string s = current;
+    double fraction = finished;
+    for (const auto& [step, r] : running) fraction += r.second;
+    fraction /= total;
+    const auto& [what, part] = running.at(my);
+    std::string s = what;
     if (tasks > 0) s += fmt::format(", fold {} of {}", std::min(done + 1, tasks), tasks);
     s += fmt::format("; {:.0f} s", elapsed);
     if (fraction > 0.05) s += fmt::format(", ~{:.0f} s left", elapsed / fraction * (1.0 - fraction));
-    progress(step, total, s);
+    std::vector<std::string> beside;
+    for (const auto& [step, r] : running)
+      if (step != my) beside.push_back(r.first);
+    if (!beside.empty()) s += fmt::format("; beside it: {}", fmt::join(beside, ", "));
+    progress(my, total, s);
   };
-  auto tell = [&](const std::string& what) {
-    current = what;
-    ++step;
-    if (progress && o.progress_detail) line(0, 0);
-    else if (progress) progress(step, total, what);
+  // Scores the models of steps first+1 .. first+whats.size() side by side (DiagnoseOptions::
+  // model_threads), each as body(i, its CV options). Results go to each step's own slot, so the
+  // outcome is the serial one; a step's failure that is not the model's (a progress callback
+  // stopping the run) stops the steps not yet started and is rethrown.
+  auto run_steps = [&](int first, const std::vector<std::string>& whats, const auto& body) {
+    const std::size_t n = whats.size();
+    const std::size_t workers = parallel::worker_count(n, o.model_threads);
+    parallel::run_tasks(n, workers, [&](std::size_t i, std::size_t) {
+      const int my = first + 1 + static_cast<int>(i);
+      try {
+        {
+          std::unique_lock lock(told);
+          // Announced in step order: the step before this one was taken first and is announced
+          // without waiting for anything but its own predecessor.
+          turn.wait(lock, [&] { return announced == my - 1 || stop; });
+          if (stop) return;
+          running[my] = {whats[i], 0.0};
+          if (progress && o.progress_detail) line(my, 0, 0);
+          else if (progress) progress(my, total, whats[i]);
+          // Only after the callback returned: one that throws lets no later step start.
+          announced = my;
+          turn.notify_all();
+        }
+        CvOptions cv = o.cv;
+        if (progress && o.progress_detail)
+          cv.on_task = [&, my](int done, int tasks) {
+            std::lock_guard lock(told);
+            running[my].second = tasks > 0 ? static_cast<double>(done) / tasks : 0.0;
+            line(my, done, tasks);
+          };
+        body(i, cv);
+        std::lock_guard lock(told);
+        running.erase(my);
+        ++finished;
+      } catch (...) {
+        std::lock_guard lock(told);
+        stop = true;
+        turn.notify_all();
+        throw;
+      }
+    });
   };
-  CvOptions cv = o.cv;
-  if (progress && o.progress_detail) cv.on_task = [&](int done, int tasks) { line(done, tasks); };
-  tell("nominal");
-  d.nominal = score(*make({}), obs, cv);
+  run_steps(0, {"nominal"}, [&](std::size_t, const CvOptions& cv) { d.nominal = score(*make({}), obs, cv); });
   d.nominal_residuals = analyse_residuals(obs, d.nominal.cv_prediction, ctx);
   d.noise_relative = noise_level(obs, d.nominal.cv_prediction);
   // A candidate whose full fit already fails a criterion that needs no held-out data is not scored
   // on held-out data: the folds cost most of a fit's time and could not change its verdict.
-  auto screened_against = [&](const Score& ref) {
-    CvOptions screened = cv;
+  auto screened_against = [&](const Score& ref, CvOptions screened) {
     screened.screen = [&ref, &o](const Score& s) { return fails_without_held_out(s, ref, o); };
     return screened;
   };
-  for (const auto& c : candidates) {
-    tell(c);
-    CandidateResult r;
-    r.name = c;
+  d.candidates.resize(candidates.size());
+  run_steps(1, candidates, [&](std::size_t i, const CvOptions& cv) {
+    CandidateResult& r = d.candidates[i];
+    r.name = candidates[i];
     try {
-      r.score = score(*make({c}), obs, screened_against(d.nominal));
+      r.score = score(*make({r.name}), obs, screened_against(d.nominal, cv));
       judge(r, d.nominal, d.noise_relative, obs, o);
     } catch (const std::exception& e) {
-      r.score.model = c;
+      r.score.model = r.name;
       r.score.cv_error = std::numeric_limits<double>::infinity();
       r.applicable = false;
       r.verdict = std::string("not applicable: ") + e.what();
     }
-    d.candidates.push_back(std::move(r));
-  }
+  });
+  int step = 1 + static_cast<int>(candidates.size());
   rank(d.candidates);
   if (!d.candidates.empty() && d.candidates.front().supported) {
     const auto& first = d.candidates.front();
@@ -335,18 +385,21 @@ Diagnosis diagnose(const ModelFactory& make, const std::vector<std::string>& can
       for (const auto& p : cause_model->linear()) cause_params.insert(p.name);
       for (const auto& p : cause_model->nonlinear()) cause_params.insert(p.name);
     }
-    int tried = 0;
-    for (const auto& c : d.candidates) {
-      // Every other candidate, not only those that helped alone: an extension may only matter
-      // together with the cause (a delay of a compliance's load, say).
-      if (c.name == d.cause || !c.applicable || tried >= o.second_candidates) continue;
-      ++tried;
-      tell(d.cause + " + " + c.name);
-      CandidateResult r;
-      r.name = c.name;
+    // Every other candidate, not only those that helped alone: an extension may only matter
+    // together with the cause (a delay of a compliance's load, say).
+    std::vector<std::string> added, whats;
+    for (const auto& c : d.candidates)
+      if (c.name != d.cause && c.applicable && static_cast<int>(added.size()) < o.second_candidates) {
+        added.push_back(c.name);
+        whats.push_back(d.cause + " + " + c.name);
+      }
+    d.second_step.resize(added.size());
+    run_steps(step, whats, [&](std::size_t i, const CvOptions& cv) {
+      CandidateResult& r = d.second_step[i];
+      r.name = added[i];
       try {
-        const auto model = make({d.cause, c.name});
-        r.score = score(*model, obs, screened_against(first.score), &first.score);
+        const auto model = make({d.cause, r.name});
+        r.score = score(*model, obs, screened_against(first.score, cv), &first.score);
         if (r.score.held_out()) r.effect_fraction = effect_fraction(*model, r.score.full, cause_params, obs, d.noise_relative);
         judge(r, first.score, d.noise_relative, obs, o);
       } catch (const std::exception& e) {
@@ -354,8 +407,8 @@ Diagnosis diagnose(const ModelFactory& make, const std::vector<std::string>& can
         r.applicable = false;
         r.verdict = std::string("not applicable: ") + e.what();
       }
-      d.second_step.push_back(std::move(r));
-    }
+    });
+    step += static_cast<int>(added.size());
     rank(d.second_step);
     if (!d.second_step.empty() && d.second_step.front().supported) {
       d.second_cause = d.second_step.front().name;

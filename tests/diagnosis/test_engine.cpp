@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cmath>
 #include <limits>
 #include <memory>
@@ -777,6 +778,62 @@ TEST(Engine, FoldsOnTwoThreadsScoreExactlyAsOnOne) {
       EXPECT_EQ(a.full.reported[j].std_folds, b.full.reported[j].std_folds) << a.full.reported[j].name;
     }
   }
+}
+
+TEST(Engine, ModelsSideBySideDiagnoseExactlyAsOneAfterAnother) {
+  // DiagnoseOptions::model_threads scores a step's candidates side by side; each result goes to
+  // its candidate's slot, so the diagnosis is the serial one bit for bit, and the progress calls
+  // still come one at a time with the steps in order.
+  const auto r = test::scene_run("press_slide");
+  Effects e;
+  draw_effect("sensor_bias", 12, r.scene, e);
+  const auto d = make_contact_data(r.scene, r.model.v_tm, test::measure(r, e, 12), r.force_scale_n, r.moment_scale_nm);
+  const ModelFactory make = [&d](const std::set<std::string>& x) { return std::make_unique<ContactFamily>(d, x); };
+  const std::vector<std::string> candidates{"sensor_gain", "sensor_bias", "time_offset", "viscous_friction"};
+  DiagnoseOptions serial, side_by_side;
+  serial.model_threads = 1;
+  side_by_side.model_threads = 2;
+  serial.cv.threads = side_by_side.cv.threads = 1;
+  std::vector<int> steps;
+  std::atomic<int> inside{0};
+  bool overlapped = false;
+  const Progress record = [&](int step, int, const std::string&) {
+    overlapped = overlapped || ++inside > 1;
+    steps.push_back(step);
+    --inside;
+  };
+  const Diagnosis a = diagnose(make, candidates, d.obs, {}, serial);
+  const Diagnosis b = diagnose(make, candidates, d.obs, {}, side_by_side, record);
+  EXPECT_EQ(a.cause, "sensor_bias");
+  EXPECT_EQ(b.cause, a.cause);
+  EXPECT_EQ(b.second_cause, a.second_cause);
+  EXPECT_EQ(b.gain_percent, a.gain_percent);
+  for (const auto& [x, y] : {std::pair{&a.candidates, &b.candidates}, std::pair{&a.second_step, &b.second_step}}) {
+    ASSERT_EQ(x->size(), y->size());
+    for (std::size_t i = 0; i < x->size(); ++i) {
+      EXPECT_EQ((*x)[i].name, (*y)[i].name) << i;
+      const double ex = (*x)[i].score.cv_error, ey = (*y)[i].score.cv_error;  // NaN: screened (no folds run)
+      EXPECT_TRUE(ex == ey || (std::isnan(ex) && std::isnan(ey))) << (*x)[i].name << ": " << ex << " vs " << ey;
+      EXPECT_EQ((*x)[i].score.held_out(), (*y)[i].score.held_out()) << (*x)[i].name;
+      EXPECT_EQ((*x)[i].score.full.phi, (*y)[i].score.full.phi) << (*x)[i].name;
+      EXPECT_EQ((*x)[i].verdict, (*y)[i].verdict) << (*x)[i].name;
+    }
+  }
+  EXPECT_FALSE(overlapped);
+  const int total = 1 + static_cast<int>(candidates.size()) + side_by_side.second_candidates;
+  ASSERT_EQ(steps.size(), 1 + candidates.size() + b.second_step.size() + 1);  // + the final "done"
+  for (std::size_t i = 0; i + 1 < steps.size(); ++i) EXPECT_EQ(steps[i], static_cast<int>(i) + 1);
+  EXPECT_EQ(steps.back(), total);
+
+  // A callback that throws (Ctrl-C in Python) stops the steps not yet started; its exception leaves.
+  struct Stop {};
+  std::vector<int> seen;
+  const Progress stop_at_3 = [&](int step, int, const std::string&) {
+    seen.push_back(step);
+    if (step == 3) throw Stop{};
+  };
+  EXPECT_THROW(diagnose(make, candidates, d.obs, {}, side_by_side, stop_at_3), Stop);
+  EXPECT_EQ(seen, (std::vector<int>{1, 2, 3}));
 }
 
 /// Noise-free recovery: the family with the injected extension fits the generator's data exactly.

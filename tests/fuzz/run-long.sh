@@ -12,8 +12,10 @@ seconds=${1:?usage: run-long.sh SECONDS [TARGET...]}
 shift
 bin=${HIL_FUZZ_BUILD:-$root/build/fuzz}
 targets=("$@")
-((${#targets[@]})) || targets=(fuzz_rig fuzz_run_info fuzz_samples fuzz_candump fuzz_ati fuzz_declarative
-                             fuzz_register_map fuzz_import_config fuzz_stiffness_table)
+# Default: every target that has a seed corpus (the list cannot fall behind the targets).
+if ((${#targets[@]} == 0)); then
+  for d in "$here"/corpus/*/; do targets+=("$(basename "$d")"); done
+fi
 mkdir -p "$bin"
 "$here/build.sh" "$bin" || exit 1
 found=0

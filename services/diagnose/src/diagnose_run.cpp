@@ -115,6 +115,7 @@ RunDiagnosis diagnose_table(const std::string& table_path, const std::string& ri
   dg::DiagnoseOptions dopt;
   dopt.cv.folds = o.folds;
   dopt.cv.threads = o.threads;
+  dopt.model_threads = o.threads == 1 ? 1 : 2;
   dopt.progress_detail = o.progress_detail;
   dopt.cv.offsets = cv_offsets(o, candidates);
   try {
@@ -169,6 +170,7 @@ RunDiagnosis diagnose_run(const format::Run& full_run, const Options& o) {
   dg::DiagnoseOptions dopt;
   dopt.cv.folds = o.folds;
   dopt.cv.threads = o.threads;
+  dopt.model_threads = o.threads == 1 ? 1 : 2;
   dopt.progress_detail = o.progress_detail;
   dg::ModelFactory make;
   const auto candidates = checked_candidates(o, rig.model.contact ? dg::contact_extensions() : dg::deflection_extensions());

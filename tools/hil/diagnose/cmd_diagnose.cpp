@@ -121,8 +121,9 @@ void add_diagnose(CLI::App& app) {
   d->add_option("--folds", da.folds, "blocks of the cross-validation over time")->capture_default_str()->check(CLI::Range(2, 1000));
   d->add_option("--cv-offsets", da.cv_offsets, cv_offsets_help())->capture_default_str()->check(CLI::Range(0, 64));
   d->add_option("--threads", da.threads,
-                "threads the cross-validation folds run on (0: one per core; e.g. 1 leaves a core to an acquisition); "
-                "the result is the same on any number")
+                "threads the cross-validation folds run on, with two models scored side by side (0: one per core; "
+                "1: one thread, models one after another, e.g. to leave a core to an acquisition); the result is the "
+                "same on any number")
       ->capture_default_str()
       ->check(CLI::Range(0, 256));
   const std::map<std::string, hil::diagnose::RateSource> rates{{"auto", hil::diagnose::RateSource::automatic},

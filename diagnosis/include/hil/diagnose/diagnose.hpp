@@ -69,9 +69,16 @@ struct DiagnoseOptions {
   /// only the part of its size the first cannot mimic as a held-out reduction.
   double min_noise_fraction = 0.25;
   int second_candidates = 8;  ///< greedy second step: the best single candidates tried with the cause
-  /// Progress at fold granularity: `what` then reads "model, fold N of M; T s, ~L s left" and the
-  /// calls also come after each fold, from the thread that ran it (one at a time). Off: one call
-  /// per step, on the caller's thread, `what` the model's name (the Python binding's contract).
+  /// Models scored side by side (the candidates of a step; 1: one after another), each with its
+  /// folds on CvOptions::threads. Two by default: a model's full fit runs on one thread, and while
+  /// it does, the other model's folds use the remaining cores; more would multiply the threads and
+  /// design caches for little. The results do not depend on it.
+  int model_threads = 2;
+  /// Progress at fold granularity: `what` then reads "model, fold N of M; T s, ~L s left[; beside
+  /// it: other models]" and the calls also come after each fold. Off: one call per step, `what` the
+  /// model's name (the Python binding's contract). Either way the calls come one at a time, steps
+  /// announced in order, from the thread that runs the step (the caller's or a model worker's); a
+  /// callback that throws stops the steps not yet started and its exception leaves diagnose().
   bool progress_detail = false;
 };
 

@@ -22,8 +22,9 @@ struct Options {
   /// most any candidate asks for (Effect::cv_offsets: 8 with rest_change, whose held-out error
   /// depends on where the blocks cut its events), else 1.
   int cv_offsets = 0;
-  /// Threads the cross-validation folds run on (CvOptions::threads; 0: one per core). The result
-  /// does not depend on it.
+  /// Threads the cross-validation folds run on (CvOptions::threads; 0: one per core); 1 also scores
+  /// the models one after another (DiagnoseOptions::model_threads, else two side by side), so that
+  /// the diagnosis keeps to one core. The result does not depend on it.
   int threads = 0;
   /// The most samples a run is diagnosed on (0: all). A longer run is diagnosed on every k-th
   /// sample, k = ⌈samples / max_samples⌉ (RunDiagnosis::every): the cost grows with the samples
