@@ -133,7 +133,16 @@ std::string decompress(const std::string& file, std::uint64_t offset, const std:
     if (in.size() != size) fail(fmt::format("uncompressed records are {} bytes, the chunk says {}", in.size(), size));
     return in;
   }
+  if (compression != "zstd" && compression != "lz4")
+    fail(fmt::format("unknown compression '{}' (this reader knows '', 'zstd', 'lz4')", compression));
   if (size > (std::uint64_t{1} << 34)) fail(fmt::format("uncompressed size {} is beyond any recording", size));
+  // The output is allocated before decompressing, so a size the data cannot hold is refused first
+  // (found by fuzz_mcap: a 250-byte chunk claiming gigabytes). Neither format expands without bound:
+  // a zstd RLE block turns 4 bytes into at most 128 KiB (ratio 32,768), an LZ4 sequence spends one
+  // byte per 255 bytes of match length; the bounds below leave a factor of 2 over those.
+  const std::uint64_t most = compression == "zstd" ? (std::uint64_t{1} << 16) * in.size() : 512 * in.size() + 1024;
+  if (size > most)
+    fail(fmt::format("uncompressed size {} is more than {} bytes of {} data can hold", size, in.size(), compression));
   std::string out(static_cast<std::size_t>(size), '\0');
   if (compression == "zstd") {
     const auto n = ZSTD_decompress(out.data(), out.size(), in.data(), in.size());
@@ -158,7 +167,7 @@ std::string decompress(const std::string& file, std::uint64_t offset, const std:
     if (dst_pos != size) fail(fmt::format("lz4 data decompresses to {} bytes, the chunk says {}", dst_pos, size));
     return out;
   }
-  raise(file, offset, fmt::format("Chunk: unknown compression '{}' (this reader knows '', 'zstd', 'lz4')", compression));
+  return out;  // not reached: the compression was checked above
 }
 
 }  // namespace
