@@ -141,8 +141,7 @@ std::string decompress(const std::string& file, std::uint64_t offset, const std:
   // a zstd RLE block turns 4 bytes into at most 128 KiB (ratio 32,768), an LZ4 sequence spends one
   // byte per 255 bytes of match length; the bounds below leave a factor of 2 over those.
   const std::uint64_t most = compression == "zstd" ? (std::uint64_t{1} << 16) * in.size() : 512 * in.size() + 1024;
-  if (size > most)
-    fail(fmt::format("uncompressed size {} is more than {} bytes of {} data can hold", size, in.size(), compression));
+  if (size > most) fail(fmt::format("uncompressed size {} is more than {} bytes of {} data can hold", size, in.size(), compression));
   std::string out(static_cast<std::size_t>(size), '\0');
   if (compression == "zstd") {
     const auto n = ZSTD_decompress(out.data(), out.size(), in.data(), in.size());

@@ -259,7 +259,7 @@ TEST(McapCorrupt, AChunkClaimingMoreThanItsDataCanHoldIsRefusedBeforeAllocating)
   for (const auto c : {Compression::zstd, Compression::lz4}) {
     auto b = slurp(write_sample_file(c, "huge.mcap"));
     const auto size_at = find_once(b, record_name(c)) - 4 - 4 - 8;  // uncompressed_size, crc, the name's length
-    const std::uint64_t claim = std::uint64_t{1} << 33;              // 8 GiB
+    const std::uint64_t claim = std::uint64_t{1} << 33;             // 8 GiB
     for (int i = 0; i < 8; ++i) b[size_at + static_cast<std::size_t>(i)] = static_cast<char>((claim >> (8 * i)) & 0xFF);
     expect_refused(b, "huge.mcap", "uncompressed size 8589934592 is more than");
   }
