@@ -80,7 +80,19 @@ void OnlineIdentifier::add(const Measurement& m) {
   if (std::find(configs_.begin(), configs_.end(), m.config) == configs_.end()) configs_.push_back(m.config);
 }
 
+PipelineOptions OnlineIdentifier::effective_options() const {
+  // R is the product of rows_ Givens updates, and its backward error grows with them (Higham,
+  // Accuracy and Stability of Numerical Algorithms, 2nd ed., §19.6: γ of the row count): an exactly
+  // dependent column's part outside the others' span climbs from 1e-13 to 1e-9 of the largest over
+  // an hour of 1 kHz measurements (docs/calibration.md, "Online re-reduction"). A singular value
+  // below rows·ε of the largest cannot be told from zero, so the rank tolerance is never below it.
+  PipelineOptions o = options_;
+  o.algebraic.rank.tolerance = std::max(o.algebraic.rank.tolerance, std::numeric_limits<double>::epsilon() * static_cast<double>(rows_));
+  return o;
+}
+
 OnlineEstimate OnlineIdentifier::estimate() const {
+  const PipelineOptions options = effective_options();
   OnlineEstimate out;
   out.measurements = measurements_;
   out.configurations = configs_.size();
@@ -92,10 +104,10 @@ OnlineEstimate OnlineIdentifier::estimate() const {
     std::vector<int> cols(n_free_);
     std::iota(cols.begin(), cols.end(), 0);
     AlgebraicResult a;
-    if (reuse_ && have_reduction_ && reverify_algebraic(model_, sys_, params_, cols, options_, reduction_, a)) {
+    if (reuse_ && have_reduction_ && reverify_algebraic(model_, sys_, params_, cols, options, reduction_, a)) {
       ++stats_.verified;
     } else {
-      a = reduce_algebraic(model_, sys_, params_, cols, options_);
+      a = reduce_algebraic(model_, sys_, params_, cols, options);
       ++stats_.full;
     }
     if (reuse_) {
@@ -116,7 +128,7 @@ OnlineEstimate OnlineIdentifier::estimate() const {
       steps.emplace_back("given");
     }
     s = solve(sys_, free_cols, fixed_cols,
-              Eigen::Map<const Eigen::VectorXd>(fixed_vals.data(), static_cast<Eigen::Index>(fixed_vals.size())), options_.algebraic.rank);
+              Eigen::Map<const Eigen::VectorXd>(fixed_vals.data(), static_cast<Eigen::Index>(fixed_vals.size())), options.algebraic.rank);
   }
   out.rank = s.rank;
   out.full_rank = s.full_rank;

@@ -47,6 +47,9 @@ class OnlineIdentifier {
   const ReductionStats& reduction_stats() const { return stats_; }
   /// false: run the full reduction at every estimate (no cache), e.g. to compare timings.
   void set_reuse_reduction(bool reuse) { reuse_ = reuse; }
+  /// The options estimate() uses: the given ones, with the rank tolerance raised to rows·ε when the
+  /// accumulated rounding of that many Givens updates exceeds it (after ~4.5 million rows at 1e-9).
+  PipelineOptions effective_options() const;
 
   std::size_t measurements() const { return measurements_; }
   Eigen::Index equations() const { return rows_; }
