@@ -2,9 +2,11 @@
 // Scenes for the diagnosis tests: the re-created ACU experiment (examples/acu) and the press bench
 // of the demo (examples/rigs/press_bench.yaml), simulated with hidden effects as
 // `hil contact simulate --inject` does.
+#include <set>
 #include <string>
 
 #include <hil/diagnose/contact_family.hpp>
+#include <hil/diagnose/diagnose.hpp>
 #include <hil/format/rig.hpp>
 #include <hil/format/run.hpp>
 #include <hil/models/contact.hpp>
@@ -59,6 +61,18 @@ inline std::vector<cid::Measurement> measure(const SceneRun& r, const Effects& e
   std::vector<cid::Measurement> m;
   for (std::size_t i = 0; i < sim.size(); ++i) m.push_back({r.t[i] - r.t[0], sim[i].kin, sim[i].w_fp});
   return m;
+}
+
+/// The contact data of `r` measured with `effect` hidden (drawn and measured with `seed`; empty: none).
+inline ContactData hidden_contact_data(const SceneRun& r, const std::string& effect, unsigned seed) {
+  Effects e;
+  if (!effect.empty()) draw_effect(effect, seed, r.scene, e);
+  return make_contact_data(r.scene, r.model.v_tm, measure(r, e, seed), r.force_scale_n, r.moment_scale_nm);
+}
+
+/// The family factory diagnose() takes, over `d` (which must outlive it).
+inline ModelFactory contact_factory(const ContactData& d) {
+  return [&d](const std::set<std::string>& x) { return std::make_unique<ContactFamily>(d, x); };
 }
 
 /// The run folder `hil diagnose` would read for these measurements (in memory): the rig of `rig_path`,

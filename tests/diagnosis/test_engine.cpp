@@ -784,11 +784,8 @@ TEST(Engine, ModelsSideBySideDiagnoseExactlyAsOneAfterAnother) {
   // DiagnoseOptions::model_threads scores a step's candidates side by side; each result goes to
   // its candidate's slot, so the diagnosis is the serial one bit for bit, and the progress calls
   // still come one at a time with the steps in order.
-  const auto r = test::scene_run("press_slide");
-  Effects e;
-  draw_effect("sensor_bias", 12, r.scene, e);
-  const auto d = make_contact_data(r.scene, r.model.v_tm, test::measure(r, e, 12), r.force_scale_n, r.moment_scale_nm);
-  const ModelFactory make = [&d](const std::set<std::string>& x) { return std::make_unique<ContactFamily>(d, x); };
+  const auto d = test::hidden_contact_data(test::scene_run("press_slide"), "sensor_bias", 12);
+  const ModelFactory make = test::contact_factory(d);
   const std::vector<std::string> candidates{"sensor_gain", "sensor_bias", "time_offset", "viscous_friction"};
   DiagnoseOptions serial, side_by_side;
   serial.model_threads = 1;

@@ -106,12 +106,8 @@ INSTANTIATE_TEST_SUITE_P(Press, HiddenEffect,
 // coordinates exists), within a tenth of the cause's gain, and the cause is one of the two
 // descriptions of the softening (nothing else).
 TEST(HiddenEffectPair, RobotComplianceOnAcu2aIsSupportedBesideTheStiffeningItResembles) {
-  const auto r = test::scene_run("acu_2a");
-  Effects e;
-  draw_effect("robot_compliance", 18, r.scene, e);
-  const auto data = make_contact_data(r.scene, r.model.v_tm, test::measure(r, e, 18), r.force_scale_n, r.moment_scale_nm);
-  const ModelFactory make = [&data](const std::set<std::string>& x) { return std::make_unique<ContactFamily>(data, x); };
-  const Diagnosis d = diagnose(make, contact_extensions(), data.obs, {});
+  const auto data = test::hidden_contact_data(test::scene_run("acu_2a"), "robot_compliance", 18);
+  const Diagnosis d = diagnose(test::contact_factory(data), contact_extensions(), data.obs, {});
   std::string table;
   for (const auto& k : d.candidates) table += "  " + k.name + ": " + k.verdict + "\n";
   for (const auto& k : d.second_step) table += "  + " + k.name + ": " + k.verdict + "\n";
