@@ -296,8 +296,7 @@ Diagnosis diagnose(const ModelFactory& make, const std::vector<std::string>& can
     double fraction = finished;
     for (const auto& [step, r] : running) fraction += r.second;
     fraction /= total;
-    const auto& [what, part] = running.at(my);
-    std::string s = what;
+    std::string s = running.at(my).first;
     if (tasks > 0) s += fmt::format(", fold {} of {}", std::min(done + 1, tasks), tasks);
     s += fmt::format("; {:.0f} s", elapsed);
     if (fraction > 0.05) s += fmt::format(", ~{:.0f} s left", elapsed / fraction * (1.0 - fraction));
