@@ -82,10 +82,11 @@ void OnlineIdentifier::add(const Measurement& m) {
 
 PipelineOptions OnlineIdentifier::effective_options() const {
   // R is the product of rows_ Givens updates, and its backward error grows with them (Higham,
-  // Accuracy and Stability of Numerical Algorithms, 2nd ed., §19.6: γ of the row count): an exactly
-  // dependent column's part outside the others' span climbs from 1e-13 to 1e-9 of the largest over
-  // an hour of 1 kHz measurements (docs/calibration.md, "Online re-reduction"). A singular value
-  // below rows·ε of the largest cannot be told from zero, so the rank tolerance is never below it.
+  // Accuracy and Stability of Numerical Algorithms, 2nd ed., §19.6: γ of the row count): the bound
+  // on an exactly dependent column's part outside the others' span climbed from 1e-13 to 5e-10 of
+  // the largest in 40 minutes of 1 kHz measurements (docs/calibration.md, "The rank tolerance over
+  // long streams"). A singular value below rows·ε of the largest cannot be told from zero, so the
+  // rank tolerance is never below it.
   PipelineOptions o = options_;
   o.algebraic.rank.tolerance = std::max(o.algebraic.rank.tolerance, std::numeric_limits<double>::epsilon() * static_cast<double>(rows_));
   return o;
