@@ -15,7 +15,16 @@ rig=$src/examples/rigs/press_bench.yaml
 frames=force_plate,object2,object1,robot_base  # the rig's frames, then the robot base
 edge=robot_base,ee                             # /tf: the robot base -> ee with every sample
 rm -rf "$work" && mkdir -p "$work"
-export HIL_DDS_DOMAIN=$((50 + $$ % 10))  # DDS on the host only (default profile), a range no other test uses
+# DDS on the host only (default profile), on a domain of the range 50-59 that no other test uses;
+# one fixed domain per mode, so that modes ctest runs side by side never hear each other (a pid-drawn
+# one let `replay`'s echo count 8 samples of a concurrent `acquire` in CI).
+case $mode in
+  acquire) export HIL_DDS_DOMAIN=51 ;;
+  replay) export HIL_DDS_DOMAIN=52 ;;
+  killed) export HIL_DDS_DOMAIN=53 ;;
+  import-bag) export HIL_DDS_DOMAIN=54 ;;
+  *) export HIL_DDS_DOMAIN=55 ;;
+esac
 
 case $mode in
   export-none | export-zstd | export-lz4)
