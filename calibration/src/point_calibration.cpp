@@ -56,6 +56,7 @@ struct Layout {
       case PointCandidate::link_bending: return bending;
       case PointCandidate::measured_tilt:
       case PointCandidate::rigid: return 0;
+      case PointCandidate::base_compliance: return 2;
       case PointCandidate::joint_offsets:
       case PointCandidate::joint_compliance:
       case PointCandidate::backlash: return dof;
@@ -87,6 +88,8 @@ struct Problem {
   std::vector<std::vector<Eigen::Vector3d>> bend_pivot, bend_v;
   /// Per posture, the measured tilt of each body 0..N as a rotation vector in its frame (measured_tilt).
   std::vector<std::vector<Eigen::Vector3d>> tilt;
+  /// Per posture, the weight's moment about the base frame's origin in that frame, x and y (base_compliance).
+  std::vector<Eigen::Vector2d> base_moment;
   /// Orientation rows: per posture the first of its 3 rotation residuals (−1: none) and its weight
   /// (m/rad); the measured rotations in order of the postures that have one.
   std::vector<int> rot_row;
@@ -129,6 +132,7 @@ struct Problem {
       nominal.push_back(forward(robot, p.q));
       if (gravity) G.push_back(gravity_torques(robot, nominal.back(), g_world, p.payload_kg, p.payload_com_ee_m));
       if (!bend.empty()) bending_loads(p, nominal.back());
+      if (uses(PointCandidate::base_compliance)) base_moment.push_back(base_load(p, nominal.back()));
       if (uses(PointCandidate::measured_tilt)) {
         tilt.emplace_back(static_cast<std::size_t>(n) + 1, Eigen::Vector3d::Zero());
         for (std::size_t t = 0; t < opt.tilts.size(); ++t)
@@ -163,6 +167,22 @@ struct Problem {
       M += (a + 0.75 * (e - a) - mid).cross(0.5 * robot.inertials[ub].mass_kg * g_world);
       vs.push_back(L * (M - u * u.dot(M)));
     }
+  }
+
+  /// The moment about the base frame's origin, in that frame, of the weight of every body (the base
+  /// link's too: the springs are under it) and of the payload, on the nominal chain.
+  Eigen::Vector2d base_load(const PointObservation& p, const ChainPoses& poses) const {
+    const Eigen::Vector3d o = robot.T_world_base.translation();
+    Eigen::Vector3d M = (poses.T_world_ee * p.payload_com_ee_m - o).cross(p.payload_kg * g_world);
+    for (std::size_t j = 0; j < robot.inertials.size(); ++j)
+      M += (poses.T_world_body[j] * robot.inertials[j].com_m - o).cross(robot.inertials[j].mass_kg * g_world);
+    return (robot.T_world_base.linear().transpose() * M).head<2>();
+  }
+  /// The base's turn at posture k (rotation vector in the base frame, z = 0).
+  Eigen::Vector3d base_turn(const Eigen::VectorXd& x, std::size_t k) const {
+    const int b = layout.block(PointCandidate::base_compliance);
+    if (b < 0) return Eigen::Vector3d::Zero();
+    return Eigen::Vector3d(x[b] * base_moment[k].x(), x[b + 1] * base_moment[k].y(), 0.0);
   }
 
   Eigen::Isometry3d station(const Eigen::VectorXd& x, int s) const {
@@ -202,6 +222,7 @@ struct Problem {
     std::vector<Eigen::Isometry3d> before_error, after_error;
     std::vector<Eigen::Vector3d> axis, on_axis;
     Eigen::Matrix3d R_base_ee;
+    Eigen::Matrix3d R_base_turned;               ///< the base frame after its tilt and its turn (base_compliance)
     Eigen::Vector3d p_rigid;                     ///< the point before the links' bending
     Eigen::Matrix3d R_bend;                      ///< ∂p/∂p_rigid: the bending turns, proximal first
     std::vector<Eigen::Vector3d> w;              ///< per bending body: the point about its pivot, before its turn
@@ -221,6 +242,8 @@ struct Problem {
     const bool tilted = !tilt.empty();
     Eigen::Isometry3d T = robot.T_world_base;
     if (tilted) T.linear() = T.linear() * so3::exp(tilt[k][0]);
+    if (!base_moment.empty()) T.linear() = T.linear() * so3::exp(base_turn(x, k));
+    if (chain) chain->R_base_turned = T.linear();
     for (int i = 0; i < n; ++i) {
       const auto ui = static_cast<std::size_t>(i);
       if (chain) chain->before_error[ui] = T;
@@ -300,6 +323,8 @@ struct Problem {
         for (int i = 0; i < 6 * n; ++i) s[at + i] = i % 6 < 3 ? kLengthScale_m : kAngleScale_rad;
       } else if (c == PointCandidate::link_bending) {
         s.segment(at, layout.bending).setConstant(kBendingScale);
+      } else if (c == PointCandidate::base_compliance) {
+        s.segment<2>(at).setConstant(kComplianceScale);
       } else if (c == PointCandidate::flag_offsets) {
         for (int f = 0; f < layout.flags; ++f)
           for (int i = 0; i < n; ++i)
@@ -330,7 +355,8 @@ struct Problem {
     J.setZero(residual_rows, x.size());
     const int off = layout.block(PointCandidate::joint_offsets), comp = layout.block(PointCandidate::joint_compliance),
               back = layout.block(PointCandidate::backlash), geo = layout.block(PointCandidate::geometric),
-              flag = layout.block(PointCandidate::flag_offsets), bent = layout.block(PointCandidate::link_bending);
+              flag = layout.block(PointCandidate::flag_offsets), bent = layout.block(PointCandidate::link_bending),
+              base = layout.block(PointCandidate::base_compliance);
     Chain chain;
     std::size_t m = 0;
     for (std::size_t k = 0; k < obs.size(); ++k) {
@@ -364,6 +390,14 @@ struct Problem {
         if (rr >= 0)
           J.block<3, 1>(rr, j) = D * R_station * chain.R_before_bend[l] * so3::left_jacobian(Eigen::Vector3d(x[j] * bend_v[k][l])) *
                                  bend_v[k][l];
+      }
+      // The base's turn exp(ω) moves the rigid chain about the base origin: a change dω turns it by
+      // R_turned Jr(ω) dω (world frame).
+      for (int a = 0; base >= 0 && a < 2; ++a) {
+        const Eigen::Vector3d dtheta = chain.R_base_turned * so3::right_jacobian(base_turn(x, k)) * Eigen::Vector3d::Unit(a) *
+                                       base_moment[k][a];
+        J.block<3, 1>(row, base + a) = R_out * dtheta.cross(p_rigid - robot.T_world_base.translation());
+        if (rr >= 0) J.block<3, 1>(rr, base + a) = D_out * dtheta;
       }
       for (int i = 0; i < n; ++i) {
         const auto ui = static_cast<std::size_t>(i);
@@ -441,6 +475,15 @@ struct Problem {
           const auto ub = static_cast<std::size_t>(b);
           n.push_back("bending " + (ub < robot.body_links.size() ? robot.body_links[ub] : "body " + std::to_string(b)));
           units.push_back("1/(N·m²)");
+          parts.push_back(to_string(c));
+        }
+        continue;
+      }
+      if (c == PointCandidate::base_compliance) {
+        const std::string base = robot.body_links.empty() || robot.body_links[0].empty() ? "base" : robot.body_links[0];
+        for (const char* a : {"rx", "ry"}) {
+          n.push_back("compliance " + base + " " + a);
+          units.push_back("rad/(N·m)");
           parts.push_back(to_string(c));
         }
         continue;
@@ -669,6 +712,7 @@ const char* to_string(PointCandidate c) {
     case PointCandidate::flag_offsets: return "flag_offsets";
     case PointCandidate::link_bending: return "link_bending";
     case PointCandidate::measured_tilt: return "measured_tilt";
+    case PointCandidate::base_compliance: return "base_compliance";
   }
   return "rigid";
 }
@@ -691,12 +735,13 @@ PointCandidate point_candidate_from_string(const std::string& name) {
 }
 
 std::vector<PointCandidate> point_candidates() {
-  return {PointCandidate::joint_offsets, PointCandidate::joint_compliance, PointCandidate::backlash,     PointCandidate::geometric,
-          PointCandidate::flag_offsets,  PointCandidate::link_bending,     PointCandidate::measured_tilt};
+  return {PointCandidate::joint_offsets, PointCandidate::joint_compliance, PointCandidate::backlash,      PointCandidate::geometric,
+          PointCandidate::flag_offsets,  PointCandidate::link_bending,     PointCandidate::measured_tilt, PointCandidate::base_compliance};
 }
 
 bool needs_inertials(PointCandidate c) {
-  return c == PointCandidate::joint_compliance || c == PointCandidate::backlash || c == PointCandidate::link_bending;
+  return c == PointCandidate::joint_compliance || c == PointCandidate::backlash || c == PointCandidate::link_bending ||
+         c == PointCandidate::base_compliance;
 }
 
 namespace {
@@ -751,6 +796,13 @@ bool usable(PointCandidate c, const SerialRobot& robot, const std::vector<PointO
       if (obs[k].tilts_rad.size() != opt.tilts.size())
         return no("posture " + std::to_string(k + 1) + " has " + std::to_string(obs[k].tilts_rad.size()) + " tilts, the run names " +
                   std::to_string(opt.tilts.size()));
+  }
+  if (c == PointCandidate::base_compliance) {
+    // A measured tilt of the base is the rotation this candidate would fit: measured_tilt applies it.
+    bool about[2] = {false, false};
+    for (const auto& t : opt.tilts)
+      if (t.body == 0 && (t.axis == 0 || t.axis == 1)) about[t.axis] = true;
+    if (about[0] && about[1]) return no("the run measures the base's tilt (tilt columns): measured_tilt applies it");
   }
   if (c == PointCandidate::link_bending && bending_bodies(robot, obs, opt).empty())
     return no("no link spans " + std::to_string(PointFitOptions::kMinBendingSpan_m) + " m or more");
@@ -1083,7 +1135,8 @@ PointComparison compare_point_candidates(const SerialRobot& robot, const std::ve
   const auto passes = [&](const PointComparison::Row& r) { return r.gain >= kMinGain && r.z >= kMinZ; };
   const auto signed_model = [](const PointModel& m) {
     return std::any_of(m.begin(), m.end(), [](PointCandidate k) {
-      return k == PointCandidate::joint_compliance || k == PointCandidate::backlash || k == PointCandidate::link_bending;
+      return k == PointCandidate::joint_compliance || k == PointCandidate::backlash || k == PointCandidate::link_bending ||
+             k == PointCandidate::base_compliance;
     });
   };
   {
@@ -1108,7 +1161,7 @@ PointComparison compare_point_candidates(const SerialRobot& robot, const std::ve
     const PointFit& f = fit(m);
     for (const auto& p : f.parameters) {
       const bool positive = p.part == to_string(PointCandidate::joint_compliance) || p.part == to_string(PointCandidate::backlash) ||
-                            p.part == to_string(PointCandidate::link_bending);
+                            p.part == to_string(PointCandidate::link_bending) || p.part == to_string(PointCandidate::base_compliance);
       if (!positive || !p.identifiable || !(p.value < -1.96 * p.std)) continue;
       std::ostringstream why;
       why.precision(3);

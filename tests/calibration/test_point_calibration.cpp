@@ -658,3 +658,70 @@ TEST(PointCalibration, AMimicJointIsCalibratedAsThePhysicalJointItIs) {
     }
   EXPECT_TRUE(seen || mentions(fit.undetermined, "offset wrist_pitch"));
 }
+
+// base_compliance: the closed form of its columns (points and orientations, beside a measured tilt
+// of the base about one axis and the other candidates) against central differences; then, on the
+// independent truth's base springs without noise, the two compliances are 1/k and the points fit
+// to rounding; with both of the base's tilts measured the candidate is not compared, by name.
+TEST(PointCalibration, ABaseOnSpringsIsItsComplianceAboutXAndY) {
+  std::mt19937 rng(4411);
+  const hc::SerialRobot robot = ur10();
+  const int stations = 2;
+  auto obs = random_postures(rng, robot.dof(), 14, stations);
+  hc::PointFitOptions opt;
+  opt.fit_orientation = true;
+  opt.tilts = {{0, 0, "tilt_base_link_rx"}, {2, 1, "tilt_forearm_link_ry"}};
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (std::size_t k = 0; k < obs.size(); ++k) {
+    obs[k].tilts_rad = {2e-3 * u(rng), 2e-3 * u(rng)};
+    if (k % 3 != 2) obs[k].r_station_rad = Eigen::Vector3d(u(rng), u(rng), u(rng)) * 1.5;
+    obs[k].payload_kg = k % 2 ? 4.0 : 0.0;
+    obs[k].payload_com_ee_m = Eigen::Vector3d(0.02, 0.0, 0.1);
+  }
+  const std::vector<hc::PointModel> models = {{hc::PointCandidate::base_compliance},
+                                              {hc::PointCandidate::joint_compliance, hc::PointCandidate::geometric,
+                                               hc::PointCandidate::link_bending, hc::PointCandidate::measured_tilt,
+                                               hc::PointCandidate::base_compliance}};
+  for (const auto& m : models) {
+    const auto J = hc::detail::point_jacobians(robot, obs, stations, m, step_by_unit(robot, obs, stations, m, opt, rng), opt);
+    EXPECT_LT(worst_column_error(J), 1e-6) << "model " << hc::to_string(m);
+    EXPECT_GT(J.first.rightCols(2).colwise().norm().minCoeff(), 0.0) << "model " << hc::to_string(m);
+  }
+
+  namespace ts = hil::test::serial;
+  ts::Truth t;
+  t.urdf = kUr10;
+  t.base = "base_link";
+  t.tip = "wrist_3_link";
+  for (int s = 0; s < stations; ++s) t.T_station_base.push_back(ts::random_station(rng, 3.0, 3.0));
+  t.tool_point_m = Eigen::Vector3d(0.03, -0.02, 0.12);
+  t.base_stiffness_Nm_per_rad = 3.1e5;
+  const std::vector<std::pair<double, double>> range = {{-3.0, 3.0}, {-2.6, -0.5}, {-2.5, 2.5}, {-3.0, 3.0}, {-3.0, 3.0}, {-3.0, 3.0}};
+  std::vector<hc::PointObservation> run;
+  for (const auto& s : ts::generate(t, ts::draw_postures(40, range, rng), rng)) {
+    hc::PointObservation o;
+    o.q = s.q;
+    o.station = s.station;
+    o.p_station_m = s.p_station_m;
+    run.push_back(o);
+  }
+  hc::PointFitOptions fit_opt;
+  fit_opt.tool_point_start_ee_m = t.tool_point_m;
+  const auto rigid = hc::fit_points(robot, run, stations, {}, fit_opt);
+  const auto fit = hc::fit_points(robot, run, stations, {hc::PointCandidate::base_compliance}, fit_opt);
+  EXPECT_GT(rigid.rms_m, 50e-6);  // the effect is there to find
+  EXPECT_LT(fit.rms_m, 1e-8);
+  for (const char* name : {"compliance base_link rx", "compliance base_link ry"}) {
+    const auto& p = param(fit, name);
+    EXPECT_EQ(p.unit, "rad/(N·m)");
+    EXPECT_EQ(p.part, "base_compliance");
+    EXPECT_NEAR(p.value, 1.0 / t.base_stiffness_Nm_per_rad, 1e-4 / t.base_stiffness_Nm_per_rad) << name;
+  }
+
+  std::string why;
+  opt.tilts = {{0, 0, "tilt_base_link_rx"}, {0, 1, "tilt_base_link_ry"}};
+  EXPECT_FALSE(hc::usable(hc::PointCandidate::base_compliance, robot, obs, opt, &why));
+  EXPECT_EQ(why, "base_compliance: the run measures the base's tilt (tilt columns): measured_tilt applies it");
+  EXPECT_FALSE(hc::usable(hc::PointCandidate::base_compliance, hc::kr270_like(), random_postures(rng, 6, 6, 1), {}, &why));
+  EXPECT_NE(why.find("needs the robot's inertials"), std::string::npos) << why;
+}

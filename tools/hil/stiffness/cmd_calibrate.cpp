@@ -86,7 +86,8 @@ void add_calibrate(CLI::App& app) {
   cmd->add_option("RUN", args.run, "calibration run (CSV, docs/formats.md; hil import writes one from a lab's table)")->required();
   cmd->add_option("--rig", args.rig, "rig file with the robot (a URDF for the gravity candidates)")->required();
   cmd->add_option("--candidates", args.candidates,
-                  "comma-separated: joint_offsets, joint_compliance, backlash, geometric, flag_offsets, link_bending, measured_tilt "
+                  "comma-separated: joint_offsets, joint_compliance, backlash, geometric, flag_offsets, link_bending, measured_tilt, "
+                  "base_compliance "
                   "(default: all the run allows)")
       ->check(checked_by(parse_candidates, "NAME[,NAME...]"));
   cmd->add_option("--folds", args.folds, "one station: postures left out in this many folds (default 0: one at a time)")

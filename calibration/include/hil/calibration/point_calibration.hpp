@@ -44,6 +44,9 @@ enum class PointCandidate {
   link_bending,      ///< named links bend: the chain beyond a link's mid-point turns by (L/EI)·M⊥, M the weight's
                      ///< moment at that point, L the link's length in that posture; parameter 1/EI in 1/(N·m²) (needs inertials)
   measured_tilt,     ///< the measured tilt columns applied to their links with gain 1, nothing fitted (needs tilts)
+  base_compliance,   ///< the base turns on springs about its frame's origin, about its x and y axes, by c_x M_x and
+                     ///< c_y M_y: M the weight's moment about that origin (every body and the payload), c in
+                     ///< rad/(N·m) (needs inertials; not compared when tilt columns measure the base's tilt)
 };
 const char* to_string(PointCandidate c);
 /// \throws std::invalid_argument for an unknown name.
