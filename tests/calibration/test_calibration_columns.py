@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """`hil calibrate` on calibration runs written by the independent serial truth (serial_truth_run:
 KDL and the equations, no hil code): the flag column reaches flag_offsets, the base inclinometer's
-tilt columns reach measured_tilt, a clean robot with both columns is `none`, and bad bending links
+tilt columns reach measured_tilt (without them the base's springs are base_compliance), a clean robot with both columns is `none`, and bad bending links
 or tilt columns fail by name. Seeds are fixed development seeds, not the blind suite's."""
 import json
 import os
@@ -54,6 +54,27 @@ class CalibrationColumns(unittest.TestCase):
         self.assertTrue(d["noise"]["after_cause"]["within"], d["verdict"])
         # Nothing is fitted for it: the cause's parameters are the stations' and the tool point's.
         self.assertEqual({p["part"] for p in d["cause_fit"]["parameters"]}, {"station", "tool"})
+
+    def test_a_base_on_springs_without_its_inclinometer_is_its_compliance(self):
+        # The base_springs run with the tilt columns dropped: the tilt is fitted from the points.
+        with_tilts = self.generate("base_springs", 5104)
+        d, _ = self.calibrate(with_tilts)
+        self.assertTrue(any("base_compliance: the run measures the base's tilt" in s for s in d["skipped"]), d["skipped"])
+        without = os.path.join(self.dir, "base_springs_no_tilts.csv")
+        with open(with_tilts) as src, open(without, "w") as dst:
+            for line in src:
+                dst.write(line if line.startswith("#") else ",".join(line.rstrip("\n").split(",")[:-2]) + "\n")
+        d, _ = self.calibrate(without)
+        self.assertEqual(d["tilts"], [])
+        self.assertEqual(d["cause"], "base_compliance", d["verdict"])
+        self.assertIsNone(d["second_cause"], d["verdict"])
+        self.assertTrue(d["noise"]["after_cause"]["within"], d["verdict"])
+        fitted = {p["name"]: p for p in d["cause_fit"]["parameters"] if p["part"] == "base_compliance"}
+        self.assertEqual(set(fitted), {"compliance base_link rx", "compliance base_link ry"})
+        for p in fitted.values():
+            self.assertEqual(p["unit"], "rad/(N·m)")
+            self.assertGreater(p["value"], 0.0)  # a spring, k in [2e5, 6e5] N·m/rad: 1.7-5 µrad/(N·m)
+            self.assertLess(abs(p["value"] - 3e-6), 3e-6)
 
     def test_a_clean_robot_with_both_columns_is_none(self):
         d, _ = self.calibrate(self.generate("clean", 5103), "--bending-links", "upper_arm_link,forearm_link")
