@@ -725,3 +725,37 @@ TEST(PointCalibration, ABaseOnSpringsIsItsComplianceAboutXAndY) {
   EXPECT_FALSE(hc::usable(hc::PointCandidate::base_compliance, hc::kr270_like(), random_postures(rng, 6, 6, 1), {}, &why));
   EXPECT_NE(why.find("needs the robot's inertials"), std::string::npos) << why;
 }
+
+// link_bending on the independent truth's Euler-Bernoulli beams without noise: the upper arm and
+// the forearm carry their own weight spread along them and everything beyond. The candidate's turn
+// at the mid-point is the beam's end rotation, so 1/EI comes out near the truth; what remains is
+// the beam's end deflection, which a turn about the mid-point gives only in part.
+TEST(PointCalibration, LinkBendingRecoversTheBeamsStiffnessWithoutNoise) {
+  std::mt19937 rng(4412);
+  namespace ts = hil::test::serial;
+  ts::Truth t;
+  t.urdf = kUr10;
+  t.base = "base_link";
+  t.tip = "wrist_3_link";
+  for (int s = 0; s < 3; ++s) t.T_station_base.push_back(ts::random_station(rng, 3.0, 3.0));
+  t.tool_point_m = Eigen::Vector3d(0.03, -0.02, 0.12);
+  t.beams = {{"upper_arm_link", 4e4, 0.0}, {"forearm_link", 7e4, 0.0}};
+  const std::vector<std::pair<double, double>> range = {{-3.0, 3.0}, {-2.6, -0.5}, {-2.5, 2.5}, {-3.0, 3.0}, {-3.0, 3.0}, {-3.0, 3.0}};
+  std::vector<hc::PointObservation> run;
+  for (const auto& s : ts::generate(t, ts::draw_postures(72, range, rng), rng)) {
+    hc::PointObservation o;
+    o.q = s.q;
+    o.station = s.station;
+    o.p_station_m = s.p_station_m;
+    run.push_back(o);
+  }
+  hc::PointFitOptions opt;
+  opt.tool_point_start_ee_m = t.tool_point_m;
+  opt.bending_bodies = {2, 3};  // upper arm, forearm
+  const auto fit = hc::fit_points(ur10(), run, 3, {hc::PointCandidate::link_bending}, opt);
+  const double upper = param(fit, "bending upper_arm_link").value, fore = param(fit, "bending forearm_link").value;
+  std::cout << "1/EI upper arm " << upper << " (truth " << 1 / 4e4 << "), forearm " << fore << " (truth " << 1 / 7e4 << "); rms "
+            << fit.rms_m << " m\n";
+  EXPECT_NEAR(upper * 4e4, 1.0, 0.05);
+  EXPECT_NEAR(fore * 7e4, 1.0, 0.05);
+}
