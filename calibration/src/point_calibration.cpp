@@ -83,9 +83,9 @@ struct Problem {
   bool analytic = true;
   std::vector<std::string> flag_names;
   std::vector<int> bend;  ///< bodies that may bend (link_bending), one parameter each
-  /// Per posture and bending body: the pivot (the span's mid-point, world) and v with the chain
-  /// beyond it turning by exp(v / EI): v = L · M⊥, the weight's bending moment there times the span.
-  std::vector<std::vector<Eigen::Vector3d>> bend_pivot, bend_v;
+  /// Per posture and bending body: the link's end (world), and the cantilever's end motion per unit
+  /// 1/EI: the chain beyond the end turns about it by exp(v / EI) and moves by d / EI.
+  std::vector<std::vector<Eigen::Vector3d>> bend_end, bend_v, bend_d;
   /// Per posture, the measured tilt of each body 0..N as a rotation vector in its frame (measured_tilt).
   std::vector<std::vector<Eigen::Vector3d>> tilt;
   /// Per posture, the weight's moment about the base frame's origin in that frame, x and y (base_compliance).
@@ -141,31 +141,39 @@ struct Problem {
     }
   }
 
-  /// The bending loads of one posture on the nominal chain. The link's own weight is taken as spread
-  /// evenly along its span: its distal half, at three quarters of the span, loads the mid-point.
+  /// The bending loads of one posture on the nominal chain, as a clamped Euler-Bernoulli
+  /// cantilever's end motion per unit 1/EI: the link's own weight spread evenly along its span, and
+  /// at its end the weight of everything beyond (a force and its moment about the end). Only the
+  /// parts across the span bend it (torsion is not modelled).
   void bending_loads(const PointObservation& p, const ChainPoses& poses) {
     const int n = robot.dof();
-    auto& pivots = bend_pivot.emplace_back();
-    auto& vs = bend_v.emplace_back();
+    auto& ends = bend_end.emplace_back();
+    auto& turns = bend_v.emplace_back();
+    auto& moves = bend_d.emplace_back();
     for (const int b : bend) {
       const auto ub = static_cast<std::size_t>(b);
       const Eigen::Vector3d a = poses.p_world_joint_m[ub - 1];
-      const Eigen::Vector3d e = b < n ? poses.p_world_joint_m[ub] : poses.T_world_body[ub].translation();
-      const double L = (e - a).norm();
-      const Eigen::Vector3d mid = 0.5 * (a + e);
-      pivots.push_back(mid);
+      const Eigen::Vector3d d = b < n ? poses.p_world_joint_m[ub] : poses.T_world_body[ub].translation();
+      const double L = (d - a).norm();
+      ends.push_back(d);
       if (L < 1e-9) {  // a body named to bend that spans nothing: it cannot turn anything
-        vs.push_back(Eigen::Vector3d::Zero());
+        turns.push_back(Eigen::Vector3d::Zero());
+        moves.push_back(Eigen::Vector3d::Zero());
         continue;
       }
-      const Eigen::Vector3d u = (e - a) / L;
-      Eigen::Vector3d M = (poses.T_world_ee * p.payload_com_ee_m - mid).cross(p.payload_kg * g_world);
+      const Eigen::Vector3d u = (d - a) / L;
+      const auto across = [&u](const Eigen::Vector3d& v) { return Eigen::Vector3d(v - u * u.dot(v)); };
+      Eigen::Vector3d P = p.payload_kg * g_world;
+      Eigen::Vector3d M = (poses.T_world_ee * p.payload_com_ee_m - d).cross(p.payload_kg * g_world);
       for (int j = b + 1; j <= n; ++j) {
         const auto& in = robot.inertials[static_cast<std::size_t>(j)];
-        M += (poses.T_world_body[static_cast<std::size_t>(j)] * in.com_m - mid).cross(in.mass_kg * g_world);
+        P += in.mass_kg * g_world;
+        M += (poses.T_world_body[static_cast<std::size_t>(j)] * in.com_m - d).cross(in.mass_kg * g_world);
       }
-      M += (a + 0.75 * (e - a) - mid).cross(0.5 * robot.inertials[ub].mass_kg * g_world);
-      vs.push_back(L * (M - u * u.dot(M)));
+      const Eigen::Vector3d w = across(robot.inertials[ub].mass_kg * g_world / L), Pt = across(P), Mb = across(M);
+      const double L2 = L * L, L3 = L2 * L;
+      turns.push_back(u.cross(w) * L3 / 6.0 + u.cross(Pt) * L2 / 2.0 + Mb * L);
+      moves.push_back(w * L3 * L / 8.0 + Pt * L3 / 3.0 + Mb.cross(u) * L2 / 2.0);
     }
   }
 
@@ -225,7 +233,7 @@ struct Problem {
     Eigen::Matrix3d R_base_turned;               ///< the base frame after its tilt and its turn (base_compliance)
     Eigen::Vector3d p_rigid;                     ///< the point before the links' bending
     Eigen::Matrix3d R_bend;                      ///< ∂p/∂p_rigid: the bending turns, proximal first
-    std::vector<Eigen::Vector3d> w;              ///< per bending body: the point about its pivot, before its turn
+    std::vector<Eigen::Vector3d> w;              ///< per bending body: the point about the link's end, before its turn
     std::vector<Eigen::Matrix3d> R_before_bend;  ///< per bending body: the product of the turns proximal to it
   };
 
@@ -275,13 +283,15 @@ struct Problem {
     Eigen::Vector3d p = T_ee * tool(x);
     if (chain) chain->R_base_ee = T_ee.linear(), chain->p_rigid = p, chain->R_bend.setIdentity();
     if (bend.empty()) return p;
-    // Each bending body turns the chain beyond its pivot; distal first, so that the proximal turns
-    // carry the distal ones (pivots and loads on the nominal chain: the deflections are small).
+    // Each bending body turns the chain beyond its end and moves it; distal first, so that the
+    // proximal motions carry the distal ones (ends and loads on the nominal chain: the deflections
+    // are small).
     const int b0 = layout.block(PointCandidate::link_bending);
     if (chain) chain->w.resize(bend.size()), chain->R_before_bend.resize(bend.size());
     for (std::size_t l = bend.size(); l-- > 0;) {
-      const Eigen::Vector3d w = p - bend_pivot[k][l];
-      p = so3::exp(Eigen::Vector3d(x[b0 + static_cast<int>(l)] * bend_v[k][l])) * w + bend_pivot[k][l];
+      const Eigen::Vector3d w = p - bend_end[k][l];
+      p = so3::exp(Eigen::Vector3d(x[b0 + static_cast<int>(l)] * bend_v[k][l])) * w + bend_end[k][l] +
+          x[b0 + static_cast<int>(l)] * bend_d[k][l];
       if (chain) chain->w[l] = w;
     }
     if (chain) {
@@ -386,7 +396,7 @@ struct Problem {
       for (std::size_t l = 0; bent >= 0 && l < bend.size(); ++l) {
         const int j = bent + static_cast<int>(l);
         J.block<3, 1>(row, j) = R_station * chain.R_before_bend[l] *
-                                so3::rotate_jacobian(Eigen::Vector3d(x[j] * bend_v[k][l]), chain.w[l]) * bend_v[k][l];
+                                (so3::rotate_jacobian(Eigen::Vector3d(x[j] * bend_v[k][l]), chain.w[l]) * bend_v[k][l] + bend_d[k][l]);
         if (rr >= 0)
           J.block<3, 1>(rr, j) = D * R_station * chain.R_before_bend[l] * so3::left_jacobian(Eigen::Vector3d(x[j] * bend_v[k][l])) *
                                  bend_v[k][l];

@@ -41,8 +41,9 @@ enum class PointCandidate {
   backlash,          ///< an offset b_i whose sign follows the gravity torque's: Δq_i = −b_i sign(G_i(q)) (needs inertials)
   geometric,         ///< every joint frame's origin off by a small [translation; rotation] (6 per joint)
   flag_offsets,      ///< per flag column, offsets θ_fi added to the joint values of the postures it flags (needs flags)
-  link_bending,      ///< named links bend: the chain beyond a link's mid-point turns by (L/EI)·M⊥, M the weight's
-                     ///< moment at that point, L the link's length in that posture; parameter 1/EI in 1/(N·m²) (needs inertials)
+  link_bending,      ///< named links bend as Euler-Bernoulli cantilevers under the weight (their own, spread along
+                     ///< the span, and everything beyond): the chain beyond a link's end turns and moves by the
+                     ///< cantilever's end motion; parameter 1/EI in 1/(N·m²) (needs inertials)
   measured_tilt,     ///< the measured tilt columns applied to their links with gain 1, nothing fitted (needs tilts)
   base_compliance,   ///< the base turns on springs about its frame's origin, about its x and y axes, by c_x M_x and
                      ///< c_y M_y: M the weight's moment about that origin (every body and the payload), c in
