@@ -246,6 +246,17 @@ class UrdfRobot(unittest.TestCase):
         self.assertEqual(r.returncode, 2)  # the run's joints are not that robot's
         self.assertIn("'a1'", r.stderr)
 
+    def test_a_dropped_bending_link_is_not_in_the_named_fit(self):
+        # On the real UR10 the forearm's 1/EI fitted to every posture is below zero: the forearm is
+        # dropped before the comparison, and the named link_bending's parameters are of the links kept.
+        run, _ = self.import_ur10()
+        d = self.json_of("calibrate", run, "--rig", UR10_RIG, "--candidates", "link_bending")
+        self.assertEqual(d["cause"], "link_bending", d["verdict"])
+        self.assertEqual(d["bending_links"], ["shoulder_link", "upper_arm_link"])
+        self.assertTrue(any(s.startswith("bending forearm_link dropped") for s in d["bending_dropped"]), d["bending_dropped"])
+        bent = [p["name"] for p in d["cause_fit"]["parameters"] if p["part"] == "link_bending"]
+        self.assertEqual(bent, ["bending shoulder_link", "bending upper_arm_link"])
+
     def test_the_real_ur10_orientations_are_fitted_when_asked(self):
         run, _ = self.import_ur10()
         d = self.json_of("calibrate", run, "--rig", UR10_RIG, "--orientation", "--candidates", "joint_offsets,geometric")

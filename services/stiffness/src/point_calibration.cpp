@@ -87,6 +87,8 @@ Report run(const std::string& run_path, const std::string& rig_path, const Optio
   r.comparison = hc::compare_point_candidates(robot, r.observations, stations, usable, options.folds, fo);
   if (r.comparison.cause >= 0) {
     const int shown = r.comparison.second_cause >= 0 ? r.comparison.second_cause : r.comparison.cause;
+    // The named model as it was compared: link_bending on the links kept, not on those dropped.
+    if (!r.comparison.bending_bodies.empty()) fo.bending_bodies = r.comparison.bending_bodies;
     r.cause = hc::fit_points(robot, r.observations, stations, r.comparison.rows[static_cast<std::size_t>(shown)].model, fo);
   }
   return r;
