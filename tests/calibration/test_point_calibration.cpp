@@ -65,6 +65,33 @@ const hc::PointParameter& param(const hc::PointFit& f, const std::string& name) 
   throw std::runtime_error("no parameter " + name);
 }
 
+namespace ts = hil::test::serial;
+const std::vector<std::pair<double, double>> kUr10Range = {{-3.0, 3.0}, {-2.6, -0.5}, {-2.5, 2.5}, {-3.0, 3.0}, {-3.0, 3.0}, {-3.0, 3.0}};
+
+/// The serial truth's UR10 with `stations` random stations and a fixed tool point, no effect yet.
+ts::Truth serial_ur10(std::mt19937& rng, int stations) {
+  ts::Truth t;
+  t.urdf = kUr10;
+  t.base = "base_link";
+  t.tip = "wrist_3_link";
+  for (int s = 0; s < stations; ++s) t.T_station_base.push_back(ts::random_station(rng, 3.0, 3.0));
+  t.tool_point_m = Eigen::Vector3d(0.03, -0.02, 0.12);
+  return t;
+}
+
+/// `n` postures of the truth, drawn in kUr10Range, as observations (points only).
+std::vector<hc::PointObservation> serial_run(const ts::Truth& t, int n, std::mt19937& rng) {
+  std::vector<hc::PointObservation> run;
+  for (const auto& s : ts::generate(t, ts::draw_postures(n, kUr10Range, rng), rng)) {
+    hc::PointObservation o;
+    o.q = s.q;
+    o.station = s.station;
+    o.p_station_m = s.p_station_m;
+    run.push_back(o);
+  }
+  return run;
+}
+
 }  // namespace
 
 TEST(PointCalibration, JointOffsetsAreRecoveredAndTheUndeterminedOnesNamed) {
@@ -689,23 +716,9 @@ TEST(PointCalibration, ABaseOnSpringsIsItsComplianceAboutXAndY) {
     EXPECT_GT(J.first.rightCols(2).colwise().norm().minCoeff(), 0.0) << "model " << hc::to_string(m);
   }
 
-  namespace ts = hil::test::serial;
-  ts::Truth t;
-  t.urdf = kUr10;
-  t.base = "base_link";
-  t.tip = "wrist_3_link";
-  for (int s = 0; s < stations; ++s) t.T_station_base.push_back(ts::random_station(rng, 3.0, 3.0));
-  t.tool_point_m = Eigen::Vector3d(0.03, -0.02, 0.12);
+  ts::Truth t = serial_ur10(rng, stations);
   t.base_stiffness_Nm_per_rad = 3.1e5;
-  const std::vector<std::pair<double, double>> range = {{-3.0, 3.0}, {-2.6, -0.5}, {-2.5, 2.5}, {-3.0, 3.0}, {-3.0, 3.0}, {-3.0, 3.0}};
-  std::vector<hc::PointObservation> run;
-  for (const auto& s : ts::generate(t, ts::draw_postures(40, range, rng), rng)) {
-    hc::PointObservation o;
-    o.q = s.q;
-    o.station = s.station;
-    o.p_station_m = s.p_station_m;
-    run.push_back(o);
-  }
+  const auto run = serial_run(t, 40, rng);
   hc::PointFitOptions fit_opt;
   fit_opt.tool_point_start_ee_m = t.tool_point_m;
   const auto rigid = hc::fit_points(robot, run, stations, {}, fit_opt);
@@ -734,23 +747,9 @@ TEST(PointCalibration, ABaseOnSpringsIsItsComplianceAboutXAndY) {
 // (docs/calibration.md, the blind suite's fifth series).
 TEST(PointCalibration, LinkBendingRecoversTheBeamsStiffnessWithoutNoise) {
   std::mt19937 rng(4412);
-  namespace ts = hil::test::serial;
-  ts::Truth t;
-  t.urdf = kUr10;
-  t.base = "base_link";
-  t.tip = "wrist_3_link";
-  for (int s = 0; s < 3; ++s) t.T_station_base.push_back(ts::random_station(rng, 3.0, 3.0));
-  t.tool_point_m = Eigen::Vector3d(0.03, -0.02, 0.12);
+  ts::Truth t = serial_ur10(rng, 3);
   t.beams = {{"upper_arm_link", 4e4, 0.0}, {"forearm_link", 7e4, 0.0}};
-  const std::vector<std::pair<double, double>> range = {{-3.0, 3.0}, {-2.6, -0.5}, {-2.5, 2.5}, {-3.0, 3.0}, {-3.0, 3.0}, {-3.0, 3.0}};
-  std::vector<hc::PointObservation> run;
-  for (const auto& s : ts::generate(t, ts::draw_postures(72, range, rng), rng)) {
-    hc::PointObservation o;
-    o.q = s.q;
-    o.station = s.station;
-    o.p_station_m = s.p_station_m;
-    run.push_back(o);
-  }
+  const auto run = serial_run(t, 72, rng);
   hc::PointFitOptions opt;
   opt.tool_point_start_ee_m = t.tool_point_m;
   opt.bending_bodies = {2, 3};  // upper arm, forearm
