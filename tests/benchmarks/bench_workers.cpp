@@ -8,10 +8,16 @@
 // --estimate-period-ms 50 at 1 kHz). Prints each part's CPU per sample (at 1 kHz a core has 1,000 us per sample) and the process's resident
 // memory after every simulated 10 minutes: bounded means it stops growing once the buffers have reached their size.
 //
-// bus (--bus-s, default 20): the real workers on a Fast DDS participant (SHM + UDP on 127.0.0.1), a
-// publisher thread writing a PoseWrenchSample and a StiffnessMeasurement every millisecond: counts
-// published, processed and estimates received, the worst backlog of the stiffness worker, the
-// process's CPU share and resident memory at the start and the end.
+// bus (--bus-s, default 20): the real workers on a Fast DDS participant (SHM + UDP on 127.0.0.1).
+// The contact worker's PoseWrenchSamples come from the fake rig: `hil acquire --play` in-process
+// (rig_service::run_acquisition: the fake NETCANOEM plate on a loopback CAN bus and the fake robot
+// controller on Modbus/TCP at 127.0.0.1, both playing the ACU test 2a run looped, the drivers, the
+// synchronisation at 1 kHz, the recording and the publishing). The stiffness worker's
+// StiffnessMeasurements come from a publisher thread, one every millisecond: the rig has no source
+// of them (a measurement is a posture, a load and a measured displacement, which a stiffness
+// experiment writes). Counts published, processed and estimates received, the worst backlog of the
+// stiffness worker, the process's CPU share (fakes, rig service, publisher, DDS and both workers)
+// and resident memory at the start and the end.
 //
 // Usage: bench_workers [--hour-s S] [--bus-s S]   (0 leaves a part out)
 #include <sys/resource.h>
@@ -22,6 +28,7 @@
 #include <cstdio>
 #include <cstring>
 #include <ctime>
+#include <filesystem>
 #include <fstream>
 #include <string>
 #include <thread>
@@ -34,6 +41,7 @@
 #include <hil/contact_id/online.hpp>
 #include <hil/dds/topics.hpp>
 #include <hil/format/rig.hpp>
+#include <hil/rig_service/acquire.hpp>
 #include <hil/messages/sample_msg.hpp>
 #include <hil/models/contact.hpp>
 #include <hil/services/contact_worker.hpp>
@@ -132,7 +140,7 @@ void numerics(double seconds, const cid::test::AcuRun& acu, const Stiffness& st)
   std::fflush(stdout);
 }
 
-int bus(double seconds, const std::vector<cid::Measurement>& loop, const Stiffness& st) {
+int bus(double seconds, const Stiffness& st) {
   namespace sv = hil::services;
   const auto rig = hil::format::load_rig(std::string(HIL_SOURCE_DIR) + "/examples/acu/acu.yaml");
   const int domain = 120 + static_cast<int>(getpid() % 60);
@@ -146,26 +154,44 @@ int bus(double seconds, const std::vector<cid::Measurement>& loop, const Stiffne
                                                         [&](const hil_msgs::msg::StiffnessEstimate&, const auto&) {
                                                           ++stiffness_estimates;
                                                         });
-  hil::dds::Writer<hil_msgs::msg::PoseWrenchSample> sw(p, hil::dds::topics::kPoseWrenchSample);
   hil::dds::Writer<hil_msgs::msg::StiffnessMeasurement> mw(p, hil::dds::topics::kStiffnessMeasurement);
-  if (!sw.wait_for_readers(1, std::chrono::seconds(10)) || !mw.wait_for_readers(1, std::chrono::seconds(10))) {
-    std::fprintf(stderr, "bus: the workers' readers did not match\n");
+  if (!mw.wait_for_readers(1, std::chrono::seconds(10))) {
+    std::fprintf(stderr, "bus: the stiffness worker's reader did not match\n");
     return 3;
   }
   const long rss0 = rss_kib();
   const double cpu0 = process_cpu_s();
   const auto n = static_cast<std::size_t>(seconds * 1000.0);
-  std::atomic<bool> done{false};
+  // The fake rig, as `hil acquire --play examples/acu/runs/test_2a --duration S` with the run looped.
+  hil::rig_service::AcquireOptions ao;
+  ao.rig = std::string(HIL_SOURCE_DIR) + "/examples/acu/acu.yaml";
+  ao.play = std::string(HIL_SOURCE_DIR) + "/examples/acu/runs/test_2a";
+  ao.play_loop = true;
+  ao.duration_s = seconds;
+  ao.output_rate_hz = 1000.0;
+  ao.progress = false;
+  ao.wait_subscribers = 1;
+  ao.participant = {domain, "", "hil_localhost", "bench-rig"};
+  const auto out = std::filesystem::temp_directory_path() / ("hil-bench-workers-" + std::to_string(getpid()));
+  std::filesystem::remove_all(out);
+  ao.out = out.string();
+  hil::rig_service::AcquireResult acquired;
+  std::string rig_error;
+  std::atomic<bool> rig_done{false}, done{false};
+  std::thread fake_rig([&] {
+    try {
+      acquired = hil::rig_service::run_acquisition(ao, nullptr);
+    } catch (const std::exception& e) {
+      rig_error = e.what();
+    }
+    rig_done = true;
+  });
   std::size_t published = 0;
   std::thread publisher([&] {
     auto next = std::chrono::steady_clock::now();
-    const double period = loop.back().t_s - loop.front().t_s + (loop[1].t_s - loop[0].t_s);
-    for (std::size_t i = 0; i < n; ++i) {
+    for (std::size_t i = 0; i < n && !rig_done; ++i) {
       next += std::chrono::milliseconds(1);
       std::this_thread::sleep_until(next);
-      hil::format::Sample s = hil::models::sample(loop[i % loop.size()]);
-      s.t_s += period * static_cast<double>(i / loop.size());
-      sw.write(hil::messages::to_message(s, i, Eigen::RowVectorXd()));
       mw.write(sv::stiffness::to_message(st.data[i % st.data.size()]));
       ++published;
     }
@@ -173,7 +199,7 @@ int bus(double seconds, const std::vector<cid::Measurement>& loop, const Stiffne
   });
   const auto start = std::chrono::steady_clock::now();
   auto next_rss = start + std::chrono::seconds(60);
-  while (!done || stiffness.processed() < n) {
+  while (!done || !rig_done || stiffness.processed() < published) {
     stiffness.spin(std::chrono::milliseconds(100));
     if (std::chrono::steady_clock::now() >= next_rss) {
       std::printf("bus: after %.0f s, RSS %ld KiB, contact worker %ld, stiffness worker %zu processed\n",
@@ -185,21 +211,29 @@ int bus(double seconds, const std::vector<cid::Measurement>& loop, const Stiffne
     if (std::chrono::steady_clock::now() - start > std::chrono::duration<double>(seconds + 30.0)) break;
   }
   publisher.join();
+  fake_rig.join();
   stiffness.publish_pending();
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   const double cpu = process_cpu_s() - cpu0;
   const auto wait_until = std::chrono::steady_clock::now() + std::chrono::seconds(5);
-  while ((contact.processed() < static_cast<long>(n)) && std::chrono::steady_clock::now() < wait_until)
+  while ((contact.processed() < static_cast<long>(acquired.samples)) && std::chrono::steady_clock::now() < wait_until)
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
   contact.flush();
   std::this_thread::sleep_for(std::chrono::milliseconds(200));
-  std::printf("bus: %zu samples and %zu stiffness measurements published at 1 kHz over %.1f s\n", published, published, wall);
+  std::filesystem::remove_all(out);
+  if (!rig_error.empty()) {
+    std::fprintf(stderr, "bus: the fake rig failed: %s\n", rig_error.c_str());
+    return 3;
+  }
+  std::printf("bus: the fake rig published %llu samples (%llu gaps) and the publisher %zu stiffness measurements, at 1 kHz over %.1f s\n",
+              static_cast<unsigned long long>(acquired.samples), static_cast<unsigned long long>(acquired.gaps), published, wall);
   std::printf("bus: contact worker processed %ld, estimates received %ld\n", contact.processed(), contact_estimates.load());
   std::printf("bus: stiffness worker processed %zu, rejected %zu, estimates %zu (received %ld), worst backlog %zu measurements\n",
               stiffness.processed(), stiffness.rejected(), stiffness.estimates(), stiffness_estimates.load(), stiffness.max_backlog());
-  std::printf("bus: process CPU %.1f s = %.1f %% of one core (publisher, DDS, both workers); RSS %ld -> %ld KiB\n", cpu, 100.0 * cpu / wall,
-              rss0, rss_kib());
-  const bool kept_up = contact.processed() == static_cast<long>(n) && stiffness.processed() == n;
+  std::printf("bus: process CPU %.1f s = %.1f %% of one core (fake rig, rig service, publisher, DDS, both workers); RSS %ld -> %ld KiB\n",
+              cpu, 100.0 * cpu / wall, rss0, rss_kib());
+  const bool kept_up = acquired.samples > 0 && contact.processed() == static_cast<long>(acquired.samples) &&
+                       stiffness.processed() == published;
   std::printf("bus: %s\n", kept_up ? "every sample and measurement processed" : "SAMPLES MISSING");
   return kept_up ? 0 : 4;
 }
@@ -218,8 +252,7 @@ int main(int argc, char** argv) {
   }
   spdlog::set_level(spdlog::level::warn);
   const auto acu = cid::test::acu_run("2a", 1);
-  const auto& loop = acu.data;
   const Stiffness st;
   if (hour_s > 0) numerics(hour_s, acu, st);
-  return bus_s > 0 ? bus(bus_s, loop, st) : 0;
+  return bus_s > 0 ? bus(bus_s, st) : 0;
 }

@@ -97,8 +97,8 @@ RigDevices open_rig_devices(const AcquireOptions& o) {
   if (d.with_robot) d.robot_cfg = rig_service::robot_controller_config(rig);
   if (!o.play.empty()) {
     const auto played = format::load_run(o.play);
-    auto scenario = std::make_shared<const drivers::Scenario>(rig_service::scenario_from_run(played, d.T_world_base, false));
-    d.play_duration_s = scenario->duration_s() / o.play_speed;
+    auto scenario = std::make_shared<const drivers::Scenario>(rig_service::scenario_from_run(played, d.T_world_base, o.play_loop));
+    d.play_duration_s = o.play_loop ? 0.0 : scenario->duration_s() / o.play_speed;
     if (d.ft300()) {
       // The fake sensor on a pseudo-terminal; the driver opens its slave side.
       drivers::FakeFt300Config fc;

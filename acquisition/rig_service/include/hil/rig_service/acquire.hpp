@@ -31,6 +31,9 @@ struct AcquireOptions {
   int rt_priority = 0;  ///< SCHED_FIFO priority of the device threads (0: normal)
   std::string play;     ///< run folder for the in-process fake rig
   double play_speed = 1.0;
+  /// The played run starts again at its end (a soak): the acquisition then ends at duration_s or
+  /// on Ctrl-C, not at the run's end.
+  bool play_loop = false;
   bool play_over_socketcan = false;  ///< the fake plate talks on the SocketCAN interface instead of loopback
   drivers::CanFaults plate_faults;
   drivers::StreamFaults stream_faults;        ///< --play with an ati_netft_rdt or robotiq_ft300 plate (its stream)
