@@ -187,6 +187,29 @@ class Cli(unittest.TestCase):
             intruder.wait()
             shutil.rmtree(out)
 
+    def test_acquire_play_loop_plays_the_run_again(self):
+        # press_slide slides 20 mm in x over 6.48 s; at 4x with --play-loop and --duration 4 the rig
+        # plays 16 s of it: the slide starts over twice (without the loop it would end after 1.6 s).
+        import csv
+        out = tempfile.mkdtemp()
+        try:
+            run = os.path.join(out, "run")
+            r = hil("acquire", "--rig", EXAMPLE_RIG, "--out", run, "--play", EXAMPLE_RUN, "--play-speed", "4", "--play-loop",
+                    "--duration", "4")
+            self.assertEqual(r.returncode, 0, r.stdout + r.stderr)
+            with open(os.path.join(run, "samples.csv")) as f:
+                rows = [row for row in csv.DictReader(line for line in f if not line.startswith("#"))]
+            t = [float(row["t"]) for row in rows]
+            px = [float(row["px"]) for row in rows]
+            self.assertGreater(t[-1] - t[0], 3.5)
+            starts_over = sum(1 for a, b in zip(px, px[1:]) if a - b > 0.01)
+            self.assertEqual(starts_over, 2, (min(px), max(px)))
+        finally:
+            shutil.rmtree(out)
+        r = hil("acquire", "--rig", EXAMPLE_RIG, "--out", os.path.join(out, "x"), "--play-loop")
+        self.assertEqual(r.returncode, 2)
+        self.assertIn("--play-loop requires --play", r.stderr)
+
     def test_acquire_check_reads_each_device_once(self):
         import re
         r = hil("acquire", "--rig", EXAMPLE_RIG, "--play", EXAMPLE_RUN, "--check")
@@ -456,4 +479,4 @@ class BadInput(unittest.TestCase):
 
 
 if __name__ == "__main__":
-    unittest.main(argv=[sys.argv[0], "-v"])
+    unittest.main(argv=[sys.argv[0], "-v"] + sys.argv[3:])

@@ -50,13 +50,16 @@ void add_acquire(CLI::App& app) {
       ->capture_default_str()
       ->each([](const std::string& v) { o.sensor_best_effort = v == "best-effort"; });
   cmd->add_flag("!--no-tf", o.tf, "do not publish the moving robot base -> ee transform on rt/tf (nor /tf in run.mcap)");
-  cmd->add_option("--play", o.play, "start the fake rig in-process playing this run (no hardware, no SocketCAN)")
-      ->check(CLI::ExistingDirectory);
+  auto* play = cmd->add_option("--play", o.play, "start the fake rig in-process playing this run (no hardware, no SocketCAN)")
+                   ->check(CLI::ExistingDirectory);
   cmd->add_flag("--mcap", o.mcap, "also record run.mcap in the run folder (ROS 2 channels, docs/mcap.md)");
   cmd->add_option("--mcap-compression", o.mcap_compression, "chunk compression of run.mcap: none, zstd or lz4")
       ->check(CLI::IsMember({"none", "zstd", "lz4"}))
       ->capture_default_str();
   cmd->add_option("--play-speed", o.play_speed, "playback speed of --play")->capture_default_str();
+  cmd->add_flag("--play-loop", o.play_loop,
+                "with --play: start the run again at its end (a soak); the acquisition ends at --duration or Ctrl-C")
+      ->needs(play);
   cmd->add_flag("--play-on-can", o.play_over_socketcan,
                 "with --play: the fake plate answers on the SocketCAN interface (e.g. vcan0) instead of an in-process bus");
   cmd->callback([] {
