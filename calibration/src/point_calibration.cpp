@@ -755,6 +755,12 @@ bool needs_inertials(PointCandidate c) {
 }
 
 namespace {
+/// Candidates whose parameters are physical only when ≥ 0 (compliances, 1/EI, half-plays).
+bool signed_candidate(PointCandidate c) {
+  return c == PointCandidate::joint_compliance || c == PointCandidate::backlash || c == PointCandidate::link_bending ||
+         c == PointCandidate::base_compliance;
+}
+
 std::vector<int> bending_bodies(const SerialRobot& robot, const std::vector<PointObservation>& obs, const PointFitOptions& opt) {
   const int n = robot.dof();
   if (!opt.bending_bodies.empty()) {
@@ -1143,12 +1149,7 @@ PointComparison compare_point_candidates(const SerialRobot& robot, const std::ve
   // The fits the checks below need, side by side: the rigid model's (the noise test) and each
   // model that passes the rules and has a signed part (physical validity).
   const auto passes = [&](const PointComparison::Row& r) { return r.gain >= kMinGain && r.z >= kMinZ; };
-  const auto signed_model = [](const PointModel& m) {
-    return std::any_of(m.begin(), m.end(), [](PointCandidate k) {
-      return k == PointCandidate::joint_compliance || k == PointCandidate::backlash || k == PointCandidate::link_bending ||
-             k == PointCandidate::base_compliance;
-    });
-  };
+  const auto signed_model = [](const PointModel& m) { return std::any_of(m.begin(), m.end(), signed_candidate); };
   {
     std::vector<PointModel> need;
     for (const auto& r : c.rows)
@@ -1170,8 +1171,8 @@ PointComparison compare_point_candidates(const SerialRobot& robot, const std::ve
     if (!signed_model(m)) return true;
     const PointFit& f = fit(m);
     for (const auto& p : f.parameters) {
-      const bool positive = p.part == to_string(PointCandidate::joint_compliance) || p.part == to_string(PointCandidate::backlash) ||
-                            p.part == to_string(PointCandidate::link_bending) || p.part == to_string(PointCandidate::base_compliance);
+      const bool positive = std::any_of(m.begin(), m.end(),
+                                        [&](PointCandidate k) { return signed_candidate(k) && p.part == to_string(k); });
       if (!positive || !p.identifiable || !(p.value < -1.96 * p.std)) continue;
       std::ostringstream why;
       why.precision(3);
