@@ -2,6 +2,8 @@
 
 #include <cmath>
 #include <random>
+#include <tuple>
+#include <utility>
 #include <sstream>
 #include <stdexcept>
 
@@ -23,6 +25,9 @@ std::string law_problems(const ContactLaw& l) {
   if (!finite_positive(l.slip_regularisation_m_per_s))
     o << "law.slip_regularisation_m_per_s must be > 0 (got " << l.slip_regularisation_m_per_s << "); ";
   if (!finite_non_negative(l.viscous_n_s_per_m)) o << "law.viscous_n_s_per_m must be >= 0 (got " << l.viscous_n_s_per_m << "); ";
+  if (!finite_non_negative(l.mu_rest)) o << "law.mu_rest must be >= 0 (got " << l.mu_rest << "); ";
+  if (!finite_non_negative(l.stribeck_speed_m_per_s))
+    o << "law.stribeck_speed_m_per_s must be >= 0 (got " << l.stribeck_speed_m_per_s << "); ";
   return o.str();
 }
 
@@ -39,15 +44,48 @@ struct PlanarState {
   double yaw_rad = 0.0, yaw_rate_rad_per_s = 0.0;
 };
 
+// A tone of amplitude a and angular rate w: a sine, or the triangle wave of the same period and
+// amplitude (value and rate at t; the rate one-sided at the triangle's kinks).
+std::pair<double, double> tone(PlateTrajectory::Motion m, double a, double w, double t) {
+  if (a == 0.0) return {0.0, 0.0};
+  if (m == PlateTrajectory::Motion::sinusoidal) return {a * std::sin(w * t), a * w * std::cos(w * t)};
+  constexpr double two_over_pi = 0.6366197723675814;
+  return {a * two_over_pi * std::asin(std::sin(w * t)), a * two_over_pi * w * (std::cos(w * t) >= 0.0 ? 1.0 : -1.0)};
+}
+
+// The square path with stops: position and velocity in the plate plane, relative to the centre.
+std::pair<Eigen::Vector2d, Eigen::Vector2d> square_path(double r, double w, double dwell, double t) {
+  const Eigen::Vector2d corner[4] = {{r, r}, {-r, r}, {-r, -r}, {r, -r}};
+  const double side_s = 2.0 / std::abs(w);  // a side of 2r at the speed r|w|
+  const double leg = side_s + dwell, cycle = 4.0 * leg;
+  double m = std::fmod(t, cycle);
+  if (m < 0.0) m += cycle;
+  const int i = std::min(3, static_cast<int>(m / leg));
+  const double tau = m - i * leg;
+  const Eigen::Vector2d a = corner[i], b = corner[(i + 1) % 4];
+  if (tau >= side_s) return {b, Eigen::Vector2d::Zero()};
+  const Eigen::Vector2d v = (b - a) / side_s;
+  return {a + v * tau, v};
+}
+
 PlanarState planar(const PlateTrajectory& tr, double t) {
   PlanarState s;
-  const double w = tr.angular_rate_rad_per_s, wd = tr.depth_rate_rad_per_s, wy = tr.yaw_rate_rad_per_s;
-  s.p_plate_m = {tr.centre_x_m + tr.radius_m * std::cos(w * t), tr.centre_y_m + tr.radius_m * std::sin(w * t),
-                 -(tr.depth_m + tr.depth_amplitude_m * std::sin(wd * t))};
-  s.v_plate_m_per_s = {-tr.radius_m * w * std::sin(w * t), tr.radius_m * w * std::cos(w * t),
-                       -tr.depth_amplitude_m * wd * std::cos(wd * t)};
-  s.yaw_rad = tr.yaw_rad + tr.yaw_amplitude_rad * std::sin(wy * t);
-  s.yaw_rate_rad_per_s = tr.yaw_amplitude_rad * wy * std::cos(wy * t);
+  const auto m = tr.motion;
+  const auto d1 = tone(m, tr.depth_amplitude_m, tr.depth_rate_rad_per_s, t);
+  const auto d2 = tone(m, tr.depth_amplitude2_m, tr.depth_rate2_rad_per_s, t);
+  const auto yaw = tone(m, tr.yaw_amplitude_rad, tr.yaw_rate_rad_per_s, t);
+  Eigen::Vector2d p, v;
+  if (m == PlateTrajectory::Motion::sinusoidal) {
+    const double w = tr.angular_rate_rad_per_s;
+    p = {tr.radius_m * std::cos(w * t), tr.radius_m * std::sin(w * t)};
+    v = {-tr.radius_m * w * std::sin(w * t), tr.radius_m * w * std::cos(w * t)};
+  } else {
+    std::tie(p, v) = square_path(tr.radius_m, tr.angular_rate_rad_per_s, tr.dwell_s, t);
+  }
+  s.p_plate_m = {tr.centre_x_m + p.x(), tr.centre_y_m + p.y(), -(tr.depth_m + d1.first + d2.first)};
+  s.v_plate_m_per_s = {v.x(), v.y(), -(d1.second + d2.second)};
+  s.yaw_rad = tr.yaw_rad + yaw.first;
+  s.yaw_rate_rad_per_s = yaw.second;
   return s;
 }
 
@@ -103,7 +141,10 @@ Vector6d wrench_unchecked(const Eigen::Isometry3d& T_wp, const Tripod& tripod, c
       const double bound = law.friction_on_total_normal ? c.normal_n : (c.in_contact ? elastic : 0.0);
       const Vector3d u = v - n.dot(v) * n;
       const double eps = law.slip_regularisation_m_per_s;
-      if (c.in_contact) c.friction_world_n = -law.mu * bound * u / std::sqrt(u.squaredNorm() + eps * eps) - law.viscous_n_s_per_m * u;
+      double mu = law.mu;
+      if (law.stribeck_speed_m_per_s > 0.0)
+        mu += (law.mu_rest - law.mu) * std::exp(-u.squaredNorm() / std::pow(law.stribeck_speed_m_per_s, 2));
+      if (c.in_contact) c.friction_world_n = -mu * bound * u / std::sqrt(u.squaredNorm() + eps * eps) - law.viscous_n_s_per_m * u;
       // Newton's third law: the plate feels the opposite of what the foot feels.
       const Vector3d on_plate = -(c.normal_n * n + c.friction_world_n);
       force_w += on_plate;
@@ -150,17 +191,22 @@ std::string validate(const Scenario& s) {
   if (!(sen.gain.array() > -1.0).all() || !sen.gain.allFinite()) o << "sensor.gain must be finite and > -1 per component; ";
   if (!sen.bias.allFinite()) o << "sensor.bias is not finite; ";
   if (!sen.drift_per_s.allFinite()) o << "sensor.drift_per_s is not finite; ";
+  if (!sen.cross_coupling.allFinite() || !sen.cross_coupling.diagonal().isZero(0.0))
+    o << "sensor.cross_coupling must be finite with a zero diagonal (the gain is sensor.gain); ";
   if (!sen.noise_std.allFinite() || (sen.noise_std.array() < 0.0).any()) o << "sensor.noise_std must be finite and >= 0; ";
   if (!sen.resolution.allFinite() || (sen.resolution.array() < 0.0).any()) o << "sensor.resolution must be finite and >= 0; ";
   if (!finite_positive(s.duration_s)) o << "duration_s must be > 0 (got " << s.duration_s << "); ";
   else if (std::isfinite(sen.rate_hz) && s.duration_s * sen.rate_hz > 1e8) o << "duration_s * sensor.rate_hz exceeds 1e8 samples; ";
   const auto& tr = s.trajectory;
-  for (double v : {tr.centre_x_m, tr.centre_y_m, tr.radius_m, tr.angular_rate_rad_per_s, tr.depth_m, tr.depth_amplitude_m,
-                   tr.depth_rate_rad_per_s, tr.yaw_rad, tr.yaw_amplitude_rad, tr.yaw_rate_rad_per_s})
+  for (double v :
+       {tr.centre_x_m, tr.centre_y_m, tr.radius_m, tr.angular_rate_rad_per_s, tr.depth_m, tr.depth_amplitude_m, tr.depth_rate_rad_per_s,
+        tr.depth_amplitude2_m, tr.depth_rate2_rad_per_s, tr.yaw_rad, tr.yaw_amplitude_rad, tr.yaw_rate_rad_per_s, tr.dwell_s})
     if (!std::isfinite(v)) {
       o << "trajectory has a parameter that is not finite; ";
       break;
     }
+  if (tr.motion == PlateTrajectory::Motion::piecewise_linear && (!(tr.angular_rate_rad_per_s != 0.0) || !(tr.dwell_s >= 0.0)))
+    o << "trajectory: a piecewise-linear motion needs angular_rate_rad_per_s != 0 and dwell_s >= 0; ";
   if (!s.plate.origin_world_m.allFinite() || !std::isfinite(s.plate.yaw_rad) || !std::isfinite(s.plate.tilt_x_rad) ||
       !std::isfinite(s.plate.tilt_y_rad))
     o << "plate has a parameter that is not finite; ";
@@ -195,7 +241,8 @@ std::vector<Sample> simulate(const Scenario& s) {
       mean += wrench_unchecked(T_wp, s.tripod, s.law, true_state(s, t));
     }
     mean /= sen.adc_subsamples;
-    Vector6d w = (Vector6d::Ones() + sen.gain).cwiseProduct(mean) + sen.bias + sen.drift_per_s * o.t_s;
+    const Vector6d coupled = mean + sen.cross_coupling * mean;
+    Vector6d w = (Vector6d::Ones() + sen.gain).cwiseProduct(coupled) + sen.bias + sen.drift_per_s * o.t_s;
     for (int c = 0; c < 6; ++c) {
       if (sen.noise_std(c) > 0.0) w(c) += sen.noise_std(c) * gaussian(rng);
       if (sen.resolution(c) > 0.0) w(c) = sen.resolution(c) * std::round(w(c) / sen.resolution(c));

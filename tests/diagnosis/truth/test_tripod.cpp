@@ -122,6 +122,28 @@ TEST(TripodLaw, SlowSlidingFrictionIsRegularisedLinearInSpeed) {
   }
 }
 
+TEST(TripodLaw, StribeckFrictionFallsFromItsRestValueWithTheSlidingSpeed) {
+  const Plate plate;
+  const Tripod tri = one_foot();
+  ContactLaw law = coulomb(0.25, 1e-7);
+  law.mu_rest = 0.40;
+  law.stribeck_speed_m_per_s = 2e-3;
+  BodyState s = pressed(plate, 0.0, 0.0, 1e-4);
+  const double N = law.stiffness_n_per_m * 1e-4;
+  // μ(v) = 0.25 + 0.15 exp(-(v / 2 mm/s)²), worked out by hand at v = 0.1, 2 and 10 mm/s.
+  const std::vector<std::pair<double, double>> mu_at{{1e-4, 0.25 + 0.15 * std::exp(-0.0025)},
+                                                     {2e-3, 0.25 + 0.15 * std::exp(-1.0)},
+                                                     {1e-2, 0.25 + 0.15 * std::exp(-25.0)}};
+  for (const auto& [v, mu] : mu_at) {
+    s.v_world_m_per_s = {0.0, v, 0.0};
+    EXPECT_NEAR(plate_wrench(plate, tri, law, s)(1), mu * N, 1e-6 * N) << "v = " << v;
+  }
+  // Without a speed the rest value is not used.
+  law.stribeck_speed_m_per_s = 0.0;
+  s.v_world_m_per_s = {0.0, 1e-4, 0.0};
+  EXPECT_NEAR(plate_wrench(plate, tri, law, s)(1), 0.25 * N, 1e-6 * N);
+}
+
 TEST(TripodLaw, DampingAddsToTheNormalForceAndFrictionFollowsTheChosenBound) {
   const Plate plate;
   const Tripod tri = one_foot();
@@ -200,6 +222,63 @@ TEST(Trajectory, VelocitiesAreTheDerivativesOfThePoses) {
   }
 }
 
+TEST(Trajectory, PiecewiseLinearMotionHasConstantRatesBetweenKinksAndStopsAtTheCorners) {
+  Plate plate;
+  plate.yaw_rad = 0.4;
+  plate.tilt_x_rad = 0.01;
+  PlateTrajectory tr;
+  tr.motion = PlateTrajectory::Motion::piecewise_linear;
+  tr.centre_x_m = 0.001;
+  tr.radius_m = 4e-3;
+  tr.angular_rate_rad_per_s = 2.0;  // 8 mm/s along a side of 8 mm: 1 s per side
+  tr.dwell_s = 0.25;
+  tr.depth_m = 1e-4;
+  tr.depth_amplitude_m = 4e-5;
+  tr.depth_rate_rad_per_s = M_PI;  // a triangle of period 2 s: 4e-5 m per 0.5 s = 8e-5 m/s
+  tr.depth_amplitude2_m = 1e-5;
+  tr.depth_rate2_rad_per_s = 2 * M_PI;  // period 1 s: 1e-5 m per 0.25 s = 4e-5 m/s
+  tr.yaw_amplitude_rad = 0.02;
+  tr.yaw_rate_rad_per_s = M_PI / 2;  // period 4 s: 0.02 rad per s
+  const Eigen::Matrix3d R = plate.T_world_plate().linear();
+  auto in_plate = [&](const Vector3d& v_world) -> Vector3d { return R.transpose() * v_world; };
+  // t = 0.1: first side, from (r, r) towards (-r, r) at 8 mm/s; both tones rising.
+  Vector3d v = in_plate(tr.at(plate, 0.1).v_world_m_per_s);
+  EXPECT_NEAR(v.x(), -8e-3, 1e-12);
+  EXPECT_NEAR(v.y(), 0.0, 1e-12);
+  EXPECT_NEAR(v.z(), -(8e-5 + 4e-5), 1e-12);
+  EXPECT_NEAR((R.transpose() * tr.at(plate, 0.1).w_world_rad_per_s).z(), 0.02, 1e-12);
+  // t = 1.1: stopped at (-r, r) in the plane; the slow tone falling (0.5-1.5 s), the fast one
+  // rising (0.75-1.25 s): the depth falls at 4e-5 m/s, the body rises.
+  const BodyState stop = tr.at(plate, 1.1);
+  v = in_plate(stop.v_world_m_per_s);
+  EXPECT_NEAR(v.head<2>().norm(), 0.0, 1e-15);
+  EXPECT_NEAR(v.z(), -(-8e-5 + 4e-5), 1e-12);
+  const Vector3d p = R.transpose() * (stop.T_world_body.translation() - plate.origin_world_m);
+  EXPECT_NEAR(p.x(), 0.001 - 4e-3, 1e-12);
+  EXPECT_NEAR(p.y(), 4e-3, 1e-12);
+  // t = 1.3: second side, towards (-r, -r).
+  v = in_plate(tr.at(plate, 1.3).v_world_m_per_s);
+  EXPECT_NEAR(v.y(), -8e-3, 1e-12);
+  // Between kinks the velocities are the derivatives of the poses.
+  const double h = 1e-6;
+  for (double t : {0.3, 1.6, 3.7, 6.05}) {
+    const BodyState a = tr.at(plate, t - h), b = tr.at(plate, t + h), s = tr.at(plate, t);
+    EXPECT_LT(((b.T_world_body.translation() - a.T_world_body.translation()) / (2 * h) - s.v_world_m_per_s).norm(), 1e-8) << t;
+    const Eigen::AngleAxisd d(b.T_world_body.linear() * a.T_world_body.linear().transpose());
+    EXPECT_LT((d.angle() * d.axis() / (2 * h) - s.w_world_rad_per_s).norm(), 1e-6) << t;
+  }
+  // The depth's extremes: d1 tri(πt) + d2 tri(2πt) peaks at t = 0.5 + 2j (4e-5 + 0) and is
+  // lowest at t = 1.5 + 2j (-4e-5 + 0); at the fast tone's peaks the slow one is at ±1/2 (3e-5).
+  double lo = 1.0, hi = -1.0;
+  for (double t = 0.0; t < 8.0; t += 0.01) {
+    const double z = (R.transpose() * (tr.at(plate, t).T_world_body.translation() - plate.origin_world_m)).z();
+    lo = std::min(lo, z);
+    hi = std::max(hi, z);
+  }
+  EXPECT_NEAR(lo, -1.4e-4, 1e-12);
+  EXPECT_NEAR(hi, -0.6e-4, 1e-12);
+}
+
 Scenario quiet_scenario() {
   Scenario sc;
   sc.duration_s = 5.0;
@@ -261,6 +340,22 @@ TEST(SensorChain, GainBiasDriftThenQuantisation) {
       EXPECT_NEAR(s.wrench_measured(c), expected(c), step / 2 + 1e-12) << "component " << c;
       EXPECT_NEAR(s.wrench_measured(c) / step, std::round(s.wrench_measured(c) / step), 1e-9);
     }
+  }
+}
+
+TEST(SensorChain, CrossCouplingLeaksOneTrueComponentIntoAnotherBeforeTheGain) {
+  Scenario sc = quiet_scenario();
+  sc.trajectory.radius_m = 5e-3;  // sliding: fx and fy are non-zero
+  sc.sensor.cross_coupling(1, 0) = 0.04;
+  sc.sensor.cross_coupling(5, 2) = -0.002;
+  sc.sensor.gain(1) = 0.1;
+  const auto samples = simulate(sc);
+  for (std::size_t k : {std::size_t{37}, std::size_t{311}}) {
+    const Vector6d t = samples[k].wrench_true, m = samples[k].wrench_measured;
+    ASSERT_GT(std::abs(t(0)), 1e-3);
+    EXPECT_NEAR(m(1), 1.1 * (t(1) + 0.04 * t(0)), 1e-9);
+    EXPECT_NEAR(m(5), t(5) - 0.002 * t(2), 1e-9);
+    EXPECT_NEAR(m(0), t(0), 1e-12);
   }
 }
 
@@ -348,6 +443,14 @@ TEST(BadInput, EveryProblemIsNamed) {
       {"exceeds 1e8 samples", [](Scenario& x) { x.duration_s = 1e7; }},
       {"trajectory", [](Scenario& x) { x.trajectory.radius_m = std::nan(""); }},
       {"plate", [](Scenario& x) { x.plate.tilt_y_rad = std::nan(""); }},
+      {"law.mu_rest", [](Scenario& x) { x.law.mu_rest = -0.1; }},
+      {"law.stribeck_speed_m_per_s", [](Scenario& x) { x.law.stribeck_speed_m_per_s = std::nan(""); }},
+      {"sensor.cross_coupling", [](Scenario& x) { x.sensor.cross_coupling(2, 2) = 0.01; }},
+      {"piecewise-linear motion",
+       [](Scenario& x) {
+         x.trajectory.motion = PlateTrajectory::Motion::piecewise_linear;
+         x.trajectory.dwell_s = -1.0;
+       }},
   };
   for (const auto& [field, spoil] : one_each) {
     Scenario x;

@@ -11,7 +11,8 @@
 ///   penetration   δ_i  = max(0, -n·(p_i - o_P))                        (m)
 ///   its rate      δ̇_i  = -n·v_i, v_i = v_B + ω_B × (p_i - o_B)          (m/s)
 ///   normal force  N_i  = max(0, K δ_ref (δ_i/δ_ref)^p + D δ̇_i)  while δ_i > 0   (N)
-///   friction      F_i  = -μ N'_i u_i / sqrt(|u_i|² + ε²) - c_v u_i,  u_i the tangential velocity
+///   friction      F_i  = -μ(|u_i|) N'_i u_i / sqrt(|u_i|² + ε²) - c_v u_i,  u_i the tangential velocity,
+///                 μ(s) = μ + (μ_rest - μ) exp(-(s / v_s)²) (Stribeck; μ alone without a speed v_s)
 ///                 N'_i = N_i (friction on the total normal force, Kelvin-Voigt / Hunt-Crossley)
 ///                      or max(0, K δ_ref (δ_i/δ_ref)^p) (friction on the elastic force only)
 /// The plate feels -(N_i n + F_i) at p_i; the reported wrench is that sum's force and moment about
@@ -58,6 +59,10 @@ struct ContactLaw {
   double mu = 0.3;                            ///< Coulomb coefficient
   double slip_regularisation_m_per_s = 1e-4;  ///< ε: below it friction grows linearly with speed
   double viscous_n_s_per_m = 0.0;             ///< c_v
+  /// Friction that falls with the sliding speed (Stribeck): μ_rest at rest, μ well above
+  /// stribeck_speed_m_per_s. Off when that speed is 0.
+  double mu_rest = 0.0;
+  double stribeck_speed_m_per_s = 0.0;  ///< v_s
 };
 
 /// The tripod's true motion at one instant (all in W).
@@ -81,21 +86,32 @@ struct FootContact {
 Vector6d plate_wrench(const Plate& plate, const Tripod& tripod, const ContactLaw& law, const BodyState& s,
                       std::vector<FootContact>* feet = nullptr);
 
-/// A closed-form trajectory relative to the plate: the body origin circles in the plate plane,
-/// presses in and out, and turns about the plate normal. In P:
-///   x = cx + r cos(ω t), y = cy + r sin(ω t), z = -(d0 + d1 sin(ω_d t)) (d > 0: the feet penetrate),
-///   yaw ψ = ψ0 + ψ1 sin(ω_ψ t); the body's z stays along the plate normal.
+/// A closed-form trajectory relative to the plate, of one of two motion families. In P:
+///  * sinusoidal: the body origin circles, x = cx + r cos(ω t), y = cy + r sin(ω t); the depth
+///    z = -(d0 + d1 sin(ω_d t) + d2 sin(ω_d2 t)) (d > 0: the feet penetrate); the yaw
+///    ψ = ψ0 + ψ1 sin(ω_ψ t);
+///  * piecewise_linear (what a robot's point-to-point moves give): the body origin goes round the
+///    square of half-side r about (cx, cy) at the speed r ω along each side, and stops `dwell_s` at
+///    each corner; the depth and the yaw are the same sums with each sine replaced by the triangle
+///    wave of the same period and amplitude, tri(θ) = (2/π) asin(sin θ), so the normal motion
+///    has kinks and constant rates.
+/// The body's z stays along the plate normal.
 struct PlateTrajectory {
+  enum class Motion { sinusoidal, piecewise_linear };
+  Motion motion = Motion::sinusoidal;
   double centre_x_m = 0.0, centre_y_m = 0.0;
   double radius_m = 5e-3;
   double angular_rate_rad_per_s = 0.5;  ///< ω
   double depth_m = 1e-4;                ///< d0
   double depth_amplitude_m = 5e-5;      ///< d1
   double depth_rate_rad_per_s = 1.3;    ///< ω_d
+  double depth_amplitude2_m = 0.0;      ///< d2 (a second tone of the normal motion)
+  double depth_rate2_rad_per_s = 0.0;   ///< ω_d2
   double yaw_rad = 0.0;                 ///< ψ0
   double yaw_amplitude_rad = 0.05;      ///< ψ1
   double yaw_rate_rad_per_s = 0.7;      ///< ω_ψ
-  /// The body state at time t (W), with its analytic velocities.
+  double dwell_s = 0.5;                 ///< piecewise_linear: the stop at each corner
+  /// The body state at time t (W), with its analytic velocities (one-sided at a kink).
   BodyState at(const Plate& plate, double t_s) const;
 };
 
@@ -115,8 +131,11 @@ struct SensorChain {
   Vector6d gain = Vector6d::Zero();         ///< γ: relative gain error per component
   Vector6d bias = Vector6d::Zero();         ///< b: constant offset (N, N m)
   Vector6d drift_per_s = Vector6d::Zero();  ///< ḃ: slowly drifting offset (N/s, N m/s)
-  Vector6d noise_std = Vector6d::Zero();    ///< std of e (N, N m)
-  Vector6d resolution = Vector6d::Zero();   ///< quantisation step (0: none)
+  /// X: cross-coupling, row = measured component, column = true component (e.g. X(1, 0) = 0.04:
+  /// 4 % of fx leaks into fy). Its diagonal must be zero (the gain is γ).
+  Eigen::Matrix<double, 6, 6> cross_coupling = Eigen::Matrix<double, 6, 6>::Zero();
+  Vector6d noise_std = Vector6d::Zero();   ///< std of e (N, N m)
+  Vector6d resolution = Vector6d::Zero();  ///< quantisation step (0: none)
   unsigned seed = 1;
 };
 
