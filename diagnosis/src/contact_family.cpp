@@ -547,6 +547,43 @@ bool ContactFamily::sample_contacts(std::size_t k, const cid::Kinematics& kin, c
   return true;
 }
 
+Context contact_context(const ContactData& d) {
+  Context ctx;
+  const std::size_t n = d.obs.size();
+  auto& s = ctx.signals;
+  for (const char* k :
+       {"speed", "acceleration", "interference", "penetration_rate", "slip_speed", "load", "time", "px", "py", "pz", "vx", "vy", "vz"})
+    s[k].resize(n);
+  for (std::size_t k = 0; k < n; ++k) {
+    const auto& kin = d.kin[k];
+    const auto& cs = d.contacts[k];
+    double delta = 0, rate = 0, slip = 0;
+    bool sliding = false;
+    for (const auto& c : cs) {
+      delta += c.delta;
+      rate += -cid::relative_velocity(d.scene, kin, c.point).dot(c.normal);
+      slip = std::max(slip, c.slip_speed);
+      sliding = sliding || !c.tangent.isZero();
+    }
+    ctx.state.push_back(cs.empty()
+                            ? "no contact"
+                            : fmt::format("{} contact{}, {}", cs.size(), cs.size() > 1 ? "s" : "", sliding ? "sliding" : "sticking"));
+    s["speed"][k] = kin.v_world_ee.norm();
+    const std::size_t a = k > 0 ? k - 1 : 0, b = k + 1 < n ? k + 1 : n - 1;
+    s["acceleration"][k] = b > a ? (d.kin[b].v_world_ee - d.kin[a].v_world_ee).norm() / (d.obs.t_s[b] - d.obs.t_s[a]) : 0.0;
+    s["interference"][k] = delta;
+    s["penetration_rate"][k] = rate;
+    s["slip_speed"][k] = slip;
+    s["load"][k] = d.obs.y.row(static_cast<Eigen::Index>(k)).head<3>().norm();
+    s["time"][k] = d.obs.t_s[k];
+    for (int i = 0; i < 3; ++i) {
+      s[std::string("p") + "xyz"[i]][k] = kin.T_world_ee.translation()[i];
+      s[std::string("v") + "xyz"[i]][k] = kin.v_world_ee[i];
+    }
+  }
+  return ctx;
+}
+
 std::unique_ptr<FamilyData> ContactFamily::make_data() const { return std::make_unique<Data>(); }
 
 void ContactFamily::design(const Eigen::VectorXd& phi, Eigen::MatrixXd& A, FamilyData& data) const {

@@ -83,7 +83,94 @@ double paired_z(const Observations& obs, const Score& reference, const Score& ca
   return newey_west_z(held_out_norm(obs, reference) - held_out_norm(obs, candidate));
 }
 
-ResidualAnalysis analyse_residuals(const Observations& obs, const Eigen::MatrixXd& pred, const Context& ctx) {
+namespace {
+
+/// ResidualAnalysis' structure (issue 32, item 3): per component the residual's white noise by von
+/// Neumann's first differences, the variance beyond it, the trend with time, and the findings above
+/// the thresholds. `r` is the residual in physical units, a.correlations already computed.
+void structure(const Observations& obs, const Eigen::MatrixXd& r, ResidualAnalysis& a, const StructureOptions& so) {
+  const Eigen::Index n = r.rows();
+  if (n < 3) return;
+  const double root_n = std::sqrt(static_cast<double>(n));
+  Eigen::Matrix<double, 6, 1> noise2, centred2;
+  double pooled_mse = 0.0, pooled_noise = 0.0;
+  for (int c = 0; c < 6; ++c) {
+    const Eigen::VectorXd rc = r.col(c);
+    const double mse = rc.squaredNorm() / static_cast<double>(n);  // a constant offset is structure too
+    noise2(c) = (rc.tail(n - 1) - rc.head(n - 1)).squaredNorm() / (2.0 * static_cast<double>(n - 1));
+    centred2(c) = (rc.array() - rc.mean()).matrix().squaredNorm() / static_cast<double>(n);
+    a.excess(c) = noise2(c) > 0 ? mse / noise2(c) - 1.0 : 0.0;
+    const double w2 = obs.weight(c) * obs.weight(c);
+    pooled_mse += w2 * mse;
+    pooled_noise += w2 * noise2(c);
+  }
+  a.excess_variance = pooled_noise > 0 ? pooled_mse / pooled_noise - 1.0 : 0.0;
+  auto explained = [&](int c, double rho) { return noise2(c) > 0 ? rho * rho * centred2(c) / noise2(c) : 0.0; };
+  auto index = [&](const std::string& name) {
+    for (int c = 0; c < 6; ++c)
+      if (obs.component[static_cast<std::size_t>(c)] == name) return c;
+    return 0;
+  };
+  for (auto& k : a.correlations) k.explained = explained(index(k.component), k.correlation);
+  // Trends: each component against time, lag 0.
+  Eigen::VectorXd t(n);
+  for (Eigen::Index k = 0; k < n; ++k) t(k) = obs.t_s[static_cast<std::size_t>(k)];
+  for (int c = 0; c < 6; ++c) {
+    const double rho = corr(r.col(c), t);
+    a.trends.push_back({"time", obs.component[static_cast<std::size_t>(c)], rho, 0, explained(c, rho)});
+  }
+  std::sort(a.trends.begin(), a.trends.end(), [](const auto& x, const auto& y) { return x.explained > y.explained; });
+
+  auto& out = a.structure;
+  if (a.excess_variance >= so.max_excess && a.excess_variance * root_n >= so.min_z) {
+    std::vector<std::pair<double, int>> worst;
+    for (int c = 0; c < 6; ++c) worst.push_back({a.excess(c), c});
+    std::sort(worst.rbegin(), worst.rend());
+    std::vector<std::string> parts;
+    for (std::size_t i = 0; i < 2; ++i)
+      parts.push_back(fmt::format("{} {:.2f}", obs.component[static_cast<std::size_t>(worst[i].second)], worst[i].first));
+    out.push_back({"not white",
+                   fmt::format("not white: {:.2f} noise variances beyond its white noise ({}; Ljung-Box Q {:.0f}, bound {:.0f})",
+                               a.excess_variance, fmt::join(parts, ", "), a.ljung_box_q, a.ljung_box_bound),
+                   a.excess_variance});
+  }
+  auto significant = [&](const ResidualAnalysis::Correlation& k) {
+    return k.explained >= so.max_explained && std::abs(k.correlation) * root_n >= so.min_z;
+  };
+  // The strongest correlation of each signal (a signal correlating with several components is
+  // named once, by its largest share), the four largest.
+  std::vector<ResidualAnalysis::Correlation> best;
+  for (const auto& k : a.correlations) {
+    if (!significant(k)) continue;
+    auto it = std::find_if(best.begin(), best.end(), [&](const auto& b) { return b.signal == k.signal; });
+    if (it == best.end()) best.push_back(k);
+    else if (k.explained > it->explained) *it = k;
+  }
+  std::sort(best.begin(), best.end(), [](const auto& x, const auto& y) { return x.explained > y.explained; });
+  if (best.size() > 4) best.resize(4);
+  for (const auto& k : best)
+    out.push_back({"correlates",
+                   fmt::format("{} correlates with {} (r = {:.2f}, lag {}): {:.2f} noise variances of {}", k.component, k.signal,
+                               k.correlation, k.lag, k.explained, k.component),
+                   k.explained});
+  for (const auto& k : a.trends)
+    if (significant(k))
+      out.push_back({"trend",
+                     fmt::format("{} trends with time (r = {:.2f}): {:.2f} noise variances of {}; a drift?", k.component, k.correlation,
+                                 k.explained, k.component),
+                     k.explained});
+  std::stable_sort(out.begin(), out.end(), [](const auto& x, const auto& y) { return x.size > y.size; });
+}
+
+}  // namespace
+
+std::string ResidualAnalysis::structure_text() const {
+  std::vector<std::string> parts;
+  for (const auto& f : structure) parts.push_back(f.text);
+  return fmt::format("{}", fmt::join(parts, "; "));
+}
+
+ResidualAnalysis analyse_residuals(const Observations& obs, const Eigen::MatrixXd& pred, const Context& ctx, const StructureOptions& so) {
   ResidualAnalysis a;
   const Eigen::Index n = static_cast<Eigen::Index>(obs.size());
   const Eigen::MatrixXd r = obs.y - pred;
@@ -130,7 +217,7 @@ ResidualAnalysis analyse_residuals(const Observations& obs, const Eigen::MatrixX
   a.white = a.ljung_box_q < a.ljung_box_bound;
   // Cross-correlation with the candidate signals and with the other stream's components.
   for (const auto& [name, s] : ctx.signals) {
-    if (s.size() != obs.size()) continue;
+    if (s.size() != obs.size() || name == "time") continue;  // time: a trend, measured in structure()
     const Eigen::Map<const Eigen::VectorXd> sig(s.data(), n);
     if (!sig.allFinite()) continue;
     for (int c = 0; c < 6; ++c) {
@@ -151,6 +238,7 @@ ResidualAnalysis analyse_residuals(const Observations& obs, const Eigen::MatrixX
   }
   std::sort(a.correlations.begin(), a.correlations.end(),
             [](const auto& x, const auto& y) { return std::abs(x.correlation) > std::abs(y.correlation); });
+  structure(obs, r, a, so);
   return a;
 }
 
@@ -349,7 +437,7 @@ Diagnosis diagnose(const ModelFactory& make, const std::vector<std::string>& can
     });
   };
   run_steps(0, {"nominal"}, [&](std::size_t, const CvOptions& cv) { d.nominal = score(*make({}), obs, cv); });
-  d.nominal_residuals = analyse_residuals(obs, d.nominal.cv_prediction, ctx);
+  d.nominal_residuals = analyse_residuals(obs, d.nominal.cv_prediction, ctx, o.structure);
   d.noise_relative = noise_level(obs, d.nominal.cv_prediction);
   // A candidate whose full fit already fails a criterion that needs no held-out data is not scored
   // on held-out data: the folds cost most of a fit's time and could not change its verdict.
@@ -417,7 +505,9 @@ Diagnosis diagnose(const ModelFactory& make, const std::vector<std::string>& can
   if (progress && step < total) progress(total, total, "done");
   const auto& ext = d.extended ? *d.extended : d.nominal;
   d.gain_percent = d.nominal.cv_error > 0 ? 100.0 * (1.0 - ext.cv_error / d.nominal.cv_error) : 0.0;
-  d.extended_residuals = analyse_residuals(obs, ext.cv_prediction, ctx);
+  d.extended_residuals = analyse_residuals(obs, ext.cv_prediction, ctx, o.structure);
+  // Nothing named, yet the nominal residual has structure: not `none` (issue 32, item 3).
+  if (!d.extended && d.nominal_residuals.structured()) d.cause = "unexplained";
   d.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return d;
 }

@@ -20,6 +20,7 @@
 #include <hil/contact_id/identification.hpp>
 #include <hil/contact_id/model.hpp>
 #include <hil/diagnose/contact_effect.hpp>
+#include <hil/diagnose/diagnose.hpp>
 #include <hil/diagnose/effect.hpp>
 #include <hil/diagnose/engine.hpp>
 
@@ -106,6 +107,11 @@ RateChoice choose_rate(const std::vector<double>& t_s, const std::vector<double>
 /// \throws std::runtime_error if no sample brings the objects into contact.
 ContactData make_contact_data(const cid::Scene& scene, double v_tm, const std::vector<cid::Measurement>& m, double force_scale_n = 0.0,
                               double moment_scale_nm = 0.0, RateSource rates = RateSource::automatic);
+
+/// The run's signals the residual analysis looks for structure against (per sample: speed,
+/// acceleration, interference, penetration_rate, slip_speed, load, time, px py pz, vx vy vz in W)
+/// and each sample's contact state ("2 contacts, sliding", "no contact").
+Context contact_context(const ContactData& d);
 
 /// The nominal contact model with a set of extensions. Immutable once built and shared by every
 /// thread: when the contacts depend on φ (geometric_offset, robot_compliance, time_offset), the

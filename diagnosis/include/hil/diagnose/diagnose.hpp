@@ -3,7 +3,8 @@
 /// (blocked cross-validation over time), by an information criterion (BIC) and by practical
 /// identifiability (parameter-to-noise ratio >= 5, the stiffness paper's G1+). The named cause is
 /// the best-supported extension; greedy forward selection then names a second cause when one
-/// remains; `none` when no extension beats the nominal model beyond the noise.
+/// remains. When no extension beats the nominal model beyond the noise: `none` if its residual is
+/// unstructured, `unexplained` (with the structure named) if it is not.
 #include <functional>
 #include <limits>
 #include <map>
@@ -16,6 +17,23 @@
 #include <hil/diagnose/engine.hpp>
 
 namespace hil::diagnose {
+
+/// What a `none` must not hide (issue 32): the thresholds above which a residual's structure is
+/// reported. Calibrated on clean runs of several motion families before any run with an effect
+/// outside the library was diagnosed (docs/diagnosis.md, "Structure left in the residual").
+struct StructureOptions {
+  /// Not white: the residual's variance beyond its white noise's (von Neumann's first-difference
+  /// estimate, which slow structure hardly reaches), in noise variances, pooled over the weighted
+  /// components.
+  double max_excess = 0.25;
+  /// A correlation with a run signal (the best lag within ±10 samples) or with time (a trend, lag
+  /// 0): the part of one component's residual variance it explains linearly, r² var / noise², in
+  /// that component's noise variances ...
+  double max_explained = 0.1;
+  /// ... and significant: |r| √n at least this (white noise's largest of the few hundred
+  /// correlations looked at stays below about 4).
+  double min_z = 5.0;
+};
 
 /// Where and how the nominal model's residuals concentrate.
 struct ResidualAnalysis {
@@ -40,9 +58,27 @@ struct ResidualAnalysis {
   struct Correlation {
     std::string signal, component;
     double correlation = 0.0;
-    int lag = 0;  ///< samples; positive: the residual follows the signal
+    int lag = 0;             ///< samples; positive: the residual follows the signal
+    double explained = 0.0;  ///< r² var / noise² of the component, in its noise variances
   };
   std::vector<Correlation> correlations;  ///< sorted by |correlation|, strongest first
+  /// Per component: the residual's variance over its white noise's (von Neumann), minus 1; and
+  /// pooled over the weighted components.
+  Eigen::Matrix<double, 6, 1> excess = Eigen::Matrix<double, 6, 1>::Zero();
+  double excess_variance = 0.0;
+  /// Per component: the correlation with time (lag 0), a trend or a drift.
+  std::vector<Correlation> trends;
+  /// The structure found above StructureOptions' thresholds, strongest first; empty: the residual
+  /// is unstructured (white, uncorrelated with the run's signals, without trend).
+  struct Finding {
+    std::string kind;   ///< "not white", "correlates", "trend"
+    std::string text;   ///< e.g. "fy correlates with vx (r = 0.66, lag 0): 1.3 noise variances of fy"
+    double size = 0.0;  ///< in noise variances
+  };
+  std::vector<Finding> structure;
+  bool structured() const { return !structure.empty(); }
+  /// The findings as one line ("" when unstructured).
+  std::string structure_text() const;
 };
 
 /// Per-sample context for the analysis: state labels and candidate signals.
@@ -51,7 +87,8 @@ struct Context {
   std::map<std::string, std::vector<double>> signals;  ///< per sample
 };
 
-ResidualAnalysis analyse_residuals(const Observations& obs, const Eigen::MatrixXd& prediction, const Context& ctx);
+ResidualAnalysis analyse_residuals(const Observations& obs, const Eigen::MatrixXd& prediction, const Context& ctx,
+                                   const StructureOptions& so = {});
 
 struct DiagnoseOptions {
   CvOptions cv;
@@ -68,7 +105,8 @@ struct DiagnoseOptions {
   /// damping force looks to the normal force like a lead, which the fitted delay absorbs) shows
   /// only the part of its size the first cannot mimic as a held-out reduction.
   double min_noise_fraction = 0.25;
-  int second_candidates = 8;  ///< greedy second step: the best single candidates tried with the cause
+  StructureOptions structure;  ///< `none` only on an unstructured residual, else `unexplained`
+  int second_candidates = 8;   ///< greedy second step: the best single candidates tried with the cause
   /// Models scored side by side (the candidates of a step; 1: one after another), each with its
   /// folds on CvOptions::threads. Two by default: a model's full fit runs on one thread, and while
   /// it does, the other model's folds use the remaining cores; more would multiply the threads and
@@ -103,6 +141,10 @@ struct Diagnosis {
   Score nominal;
   double noise_relative = 0.0;              ///< the measurement noise (weighted rms) estimated from the residual's differences
   std::vector<CandidateResult> candidates;  ///< ranked: supported first, then by held-out error
+  /// The named cause; "none" when no extension is supported and the nominal residual is
+  /// unstructured; "unexplained" when none is supported but structure remains (named in
+  /// nominal_residuals.structure). After a named cause, extended_residuals.structure says what
+  /// its model still leaves.
   std::string cause = "none";
   std::string second_cause;  ///< empty: none
   std::vector<CandidateResult> second_step;

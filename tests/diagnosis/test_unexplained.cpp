@@ -1,0 +1,329 @@
+// `none` means none (issue 32, item 3): the diagnosis calls a run `none` only when the nominal
+// model's residual is unstructured, and `unexplained`, naming the structure, when no candidate
+// explains what is left. On runs of the independent truth (hil::contact_truth), converted as the
+// rig would record them (tripod_scene.hpp), never from the candidates' code.
+//
+// Blind draws (below): the rules were committed before any of their draws ran.
+//
+// CleanRuns: no effect, several motion families (the blind suite's circle, a two-tone normal
+// motion, piecewise-linear moves with stops at two speeds), both velocity resolutions. These runs
+// calibrated StructureOptions' thresholds (docs/diagnosis.md, "Structure left in the residual");
+// they must all say `none`, with no structure.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <random>
+#include <functional>
+#include <iomanip>
+#include <iostream>
+#include <sstream>
+
+#include <hil/diagnose/contact_family.hpp>
+#include <hil/diagnose/diagnose.hpp>
+#include "tripod_scene.hpp"
+
+namespace hil::diagnose::test {
+namespace {
+
+constexpr double kDuration_s = 15.0;
+// "Clean" is the nominal model's own physics plus the sensor: Coulomb friction at every slip speed
+// the rig resolves (the truth's regularisation at 1 µm/s, not pressing_and_sliding's 0.1 mm/s),
+// and a sticking threshold declared below the slowest slip (a yawing foot at a stop slides at
+// about 0.7 mm/s; the blind suite's 1 mm/s would call it sticking). Found on the calibration runs:
+// with 0.1 mm/s regularisation the truth's friction is 1 % short at 0.7 mm/s, about one noise std
+// of fx, and the check rightly reports fx correlating with vx; with 1 mm/s declared, mz misfits
+// by 39 noise variances at the stops.
+constexpr double kSlipRegularisation_m_per_s = 1e-6;
+constexpr double kStickBelow_m_per_s = 1e-4;
+
+ct::Scenario clean_scenario() {
+  ct::Scenario sc = pressing_and_sliding(kDuration_s);
+  sc.law.slip_regularisation_m_per_s = kSlipRegularisation_m_per_s;
+  return sc;
+}
+
+/// A motion family: changes to the blind suite's scenario (pressing_and_sliding).
+struct Motion {
+  std::string name;
+  std::function<void(ct::Scenario&)> apply;
+};
+
+// The blind suite's own: a 5 mm/s circle, one normal tone, a slow yaw.
+const Motion kCircle{"circle", [](ct::Scenario&) {}};
+// Two normal tones (0.7 and 2.3 Hz), the circle slower (3 mm/s).
+const Motion kTwoTone{"two_tone", [](ct::Scenario& s) {
+                        auto& t = s.trajectory;
+                        t.angular_rate_rad_per_s = 0.6;
+                        t.depth_m = 7e-5;
+                        t.depth_amplitude_m = 6e-5;
+                        t.depth_rate_rad_per_s = 2 * M_PI * 0.7;
+                        t.depth_amplitude2_m = 3e-5;
+                        t.depth_rate2_rad_per_s = 2 * M_PI * 2.3;
+                      }};
+// A robot's point-to-point moves: a square at 10 mm/s with 0.4 s stops, triangle-wave normal
+// motion (0.4 and 1.3 Hz), triangle yaw.
+const Motion kMoves{"moves", [](ct::Scenario& s) {
+                      auto& t = s.trajectory;
+                      t.motion = ct::PlateTrajectory::Motion::piecewise_linear;
+                      t.angular_rate_rad_per_s = 2.0;
+                      t.dwell_s = 0.4;
+                      t.depth_m = 7e-5;
+                      t.depth_amplitude_m = 6e-5;
+                      t.depth_rate_rad_per_s = 2 * M_PI * 0.4;
+                      t.depth_amplitude2_m = 2e-5;
+                      t.depth_rate2_rad_per_s = 2 * M_PI * 1.3;
+                    }};
+// Slower moves: 4 mm/s sides, 1 s stops, one triangle tone.
+const Motion kSlowMoves{"slow_moves", [](ct::Scenario& s) {
+                          auto& t = s.trajectory;
+                          t.motion = ct::PlateTrajectory::Motion::piecewise_linear;
+                          t.radius_m = 4e-3;
+                          t.angular_rate_rad_per_s = 1.0;
+                          t.dwell_s = 1.0;
+                        }};
+
+struct Resolution {
+  std::string name;
+  double velocity_m_per_s;
+};
+const Resolution kPaper{"paper", 2e-4};
+const Resolution kFine{"fine", 2e-5};
+
+struct Diagnosed {
+  Diagnosis d;
+  std::string line;  ///< one line of statistics for the report
+};
+
+/// Diagnoses the scenario as the CLI does (the same context signals).
+Diagnosed diagnose_scenario(const ct::Scenario& sc, const TripodRigOptions& rig, const Resolution& r) {
+  const cid::Scene scene = tripod_scene(sc.plate, sc.tripod, rig);
+  const auto data = make_contact_data(scene, kStickBelow_m_per_s, to_measurements(ct::simulate(sc), {2e-6, r.velocity_m_per_s}));
+  const ModelFactory make = [&data](const std::set<std::string>& x) { return std::make_unique<ContactFamily>(data, x); };
+  Diagnosed run{diagnose(make, contact_extensions(), data.obs, contact_context(data)), ""};
+  const auto& d = run.d;
+  const auto& a = d.nominal_residuals;
+  std::ostringstream o;
+  o << std::setprecision(3) << "cause " << d.cause << (d.second_cause.empty() ? "" : " + " + d.second_cause) << ", nominal "
+    << 100 * d.nominal.cv_error << " %, noise " << 100 * d.noise_relative << " %, excess " << a.excess_variance << " [";
+  for (int c = 0; c < 6; ++c) o << (c ? " " : "") << a.excess(c);
+  o << "], Q " << a.ljung_box_q;
+  for (std::size_t i = 0; i < 2 && i < a.correlations.size(); ++i) {
+    const auto& k = a.correlations[i];
+    o << "; " << k.component << "~" << k.signal << " r " << k.correlation << " lag " << k.lag << " expl " << k.explained;
+  }
+  if (!a.trends.empty()) o << "; trend " << a.trends.front().component << " r " << a.trends.front().correlation << " expl " << a.trends.front().explained;
+  if (a.structured()) o << " | STRUCTURE: " << a.structure_text();
+  if (d.extended && d.extended_residuals.structured()) o << " | LEFT: " << d.extended_residuals.structure_text();
+  run.line = o.str();
+  return run;
+}
+
+struct CleanCase {
+  Motion motion;
+  Resolution resolution;
+  unsigned seed;
+};
+std::string clean_name(const ::testing::TestParamInfo<CleanCase>& i) {
+  return i.param.motion.name + "_" + i.param.resolution.name + "_seed" + std::to_string(i.param.seed);
+}
+void PrintTo(const CleanCase& c, std::ostream* os) { *os << clean_name({c, 0}); }
+
+class CleanRuns : public ::testing::TestWithParam<CleanCase> {};
+
+TEST_P(CleanRuns, SayNoneWithNoStructure) {
+  const auto& c = GetParam();
+  ct::Scenario sc = clean_scenario();
+  c.motion.apply(sc);
+  sc.sensor.seed = c.seed;
+  const Diagnosed run = diagnose_scenario(sc, {}, c.resolution);
+  std::cout << "CLEAN " << clean_name({c, 0}) << ": " << run.line << "\n";
+  EXPECT_EQ(run.d.cause, "none") << run.line;
+  EXPECT_FALSE(run.d.nominal_residuals.structured()) << run.d.nominal_residuals.structure_text();
+}
+
+std::vector<CleanCase> clean_cases() {
+  std::vector<CleanCase> out;
+  // HIL_CLEAN_SEEDS=N: the calibration's draw (seeds 1..N); CI runs seed 1.
+  const unsigned seeds = std::getenv("HIL_CLEAN_SEEDS") ? static_cast<unsigned>(std::stoul(std::getenv("HIL_CLEAN_SEEDS"))) : 1u;
+  // Straight moves at the paper's twist resolution are not clean (QuantisedTwist below).
+  for (const Motion* m : {&kCircle, &kTwoTone, &kMoves, &kSlowMoves})
+    for (const Resolution* r : {&kPaper, &kFine})
+      for (unsigned s = 1; s <= seeds; ++s)
+        if (r == &kFine || m == &kCircle || m == &kTwoTone) out.push_back({*m, *r, s});
+  return out;
+}
+
+INSTANTIATE_TEST_SUITE_P(Calibration, CleanRuns, ::testing::ValuesIn(clean_cases()), clean_name);
+
+// Found while calibrating: the rig reports the twist quantised per world component (0.2 mm/s at the
+// paper's resolution). On a yawed, tilted plate a straight move at 4 mm/s then has a slip direction
+// off by a constant angle along each side, so the friction leaks into the other in-plane component
+// as long as the side lasts: structure, which the check names. The same run on a level, unyawed
+// plate (the sides along the quantisation's axes) is clean.
+TEST(QuantisedTwist, StraightMovesOnAYawedPlateLeaveFrictionAcrossTheMotion) {
+  ct::Scenario sc = clean_scenario();
+  kSlowMoves.apply(sc);
+  const Diagnosed yawed = diagnose_scenario(sc, {}, kPaper);
+  std::cout << "YAWED " << yawed.line << "\n";
+  EXPECT_EQ(yawed.d.cause, "unexplained") << yawed.line;
+  bool across = false;
+  for (const auto& f : yawed.d.nominal_residuals.structure)
+    across = across || f.text.rfind("fy correlates with vx", 0) == 0 || f.text.rfind("fx correlates with vy", 0) == 0;
+  EXPECT_TRUE(across) << yawed.d.nominal_residuals.structure_text();
+  sc.plate.yaw_rad = sc.plate.tilt_x_rad = sc.plate.tilt_y_rad = 0.0;
+  const Diagnosed level = diagnose_scenario(sc, {}, kPaper);
+  std::cout << "LEVEL " << level.line << "\n";
+  EXPECT_EQ(level.d.cause, "none") << level.line;
+}
+
+
+// ---------------------------------------------------------------------------------------------
+// Blind draws (issue 32, items 3 and 4). These rules were written and committed before any draw
+// below ran; the thresholds (StructureOptions' defaults) were fixed before, on CleanRuns.
+//  * Seeds 32,100,000 + 1000 e + i (e the effect, i the draw), never used before. Each draw's
+//    motion family, its speed, stops, amplitudes and yaw, the effect's magnitudes and the noise
+//    come from its seed.
+//  * Resolution: fine; the paper's on the circle and two-tone families for odd i / 4 (straight
+//    moves at the paper's resolution carry structure of their own: QuantisedTwist).
+//  * Clean: the verdict is `none`, no second cause.
+//  * Effects outside the library: Stribeck friction (on moves with stops: the feet must slow down
+//    for it to show), a drifting offset, a plate's fx -> fy cross-coupling. A draw passes when
+//     - the report is not silent: `unexplained`, or a named cause whose residual still shows
+//       structure;
+//     - the structure named is the effect's kind: a trend for the drift; a correlation with a
+//       velocity signal (speed, slip_speed, vx, vy, acceleration) for the friction; a finding on
+//       fy for the cross-coupling (in the nominal residual when `unexplained`, else the extended);
+//     - no wrong name: for the drift a named cause can only be sensor_bias (a drift's constant
+//       part), with the trend left in its residual; for the others a named cause explains less
+//       than half of the misfit (held-out gain < 50 %).
+//  * Pass rate: at most ceil(10 %) of an effect's draws fail. CI draws 8 per effect (1 may
+//    fail); HIL_UNEXPLAINED_DRAWS=50 is the full draw (5 may fail), docs/diagnosis.md.
+
+enum class Hidden { none, stribeck, drift, coupling };
+
+struct Draws {
+  std::mt19937_64 rng;
+  explicit Draws(unsigned seed) : rng(seed) {}
+  double uniform(double a, double b) { return a + (b - a) * static_cast<double>(rng() >> 11) * 0x1.0p-53; }
+  double sign() { return (rng() >> 63) ? 1.0 : -1.0; }
+};
+
+struct Drawn {
+  ct::Scenario scenario;
+  Resolution resolution;
+  std::string label;
+};
+
+Drawn draw(Hidden h, unsigned i) {
+  const unsigned seed = 32'100'000u + 1000u * static_cast<unsigned>(h) + i;
+  Draws r(seed);
+  Drawn d{clean_scenario(), kFine, ""};
+  ct::Scenario& sc = d.scenario;
+  const Motion* families[] = {&kCircle, &kTwoTone, &kMoves, &kSlowMoves};
+  const unsigned f = h == Hidden::stribeck ? 2 + i % 2 : i % 4;
+  families[f]->apply(sc);
+  auto& t = sc.trajectory;
+  if (f < 2) {
+    t.angular_rate_rad_per_s *= r.uniform(0.7, 1.3);
+    if ((i / 4) % 2 == 1) d.resolution = kPaper;
+  } else {
+    t.angular_rate_rad_per_s = r.uniform(4e-3, 12e-3) / t.radius_m;
+    t.dwell_s = r.uniform(0.3, 1.0);
+  }
+  t.depth_amplitude_m *= r.uniform(0.8, 1.2);
+  t.depth_amplitude2_m *= r.uniform(0.5, 1.5);
+  t.yaw_amplitude_rad = r.uniform(0.02, 0.04);
+  sc.sensor.seed = seed;
+  std::ostringstream o;
+  o << std::setprecision(3) << "seed " << seed << " " << families[f]->name << " " << d.resolution.name;
+  switch (h) {
+    case Hidden::none:
+      break;
+    case Hidden::stribeck:
+      sc.law.mu_rest = sc.law.mu * r.uniform(1.3, 1.7);
+      sc.law.stribeck_speed_m_per_s = r.uniform(1.5e-3, 3e-3);
+      o << ", mu " << sc.law.mu_rest << " at rest -> " << sc.law.mu << " above " << 1e3 * sc.law.stribeck_speed_m_per_s << " mm/s";
+      break;
+    case Hidden::drift: {
+      const double T = sc.duration_s;
+      sc.sensor.drift_per_s << r.sign() * r.uniform(0.5, 1.5) / T, r.sign() * r.uniform(0.5, 1.5) / T, r.sign() * r.uniform(2.0, 6.0) / T,
+          0.0, 0.0, 0.0;
+      o << ", drift over the run (N) " << T * sc.sensor.drift_per_s.head<3>().transpose();
+      break;
+    }
+    case Hidden::coupling:
+      sc.sensor.cross_coupling(1, 0) = r.sign() * r.uniform(0.03, 0.06);
+      o << ", fx -> fy " << 100 * sc.sensor.cross_coupling(1, 0) << " %";
+      break;
+  }
+  d.label = o.str();
+  return d;
+}
+
+/// Why a draw fails its rule (empty: it passes).
+std::string judge(Hidden h, const Diagnosis& d) {
+  if (h == Hidden::none) {
+    if (d.cause != "none") return "cause " + d.cause + " on a clean run: " + d.nominal_residuals.structure_text();
+    return "";
+  }
+  const bool unexplained = d.cause == "unexplained";
+  const ResidualAnalysis& res = unexplained ? d.nominal_residuals : d.extended_residuals;
+  if (!unexplained && !d.extended_residuals.structured())
+    return "silent: " + d.cause + " named and its residual called unstructured";
+  bool kind = false;
+  for (const auto& f : res.structure) {
+    if (h == Hidden::drift) kind = kind || f.kind == "trend";
+    if (h == Hidden::stribeck)
+      for (const char* sig : {"speed", "slip_speed", "vx", "vy", "acceleration"})
+        kind = kind || (f.kind == "correlates" && f.text.find(std::string("correlates with ") + sig + " (") != std::string::npos);
+    if (h == Hidden::coupling) kind = kind || f.text.rfind("fy ", 0) == 0 || f.text.find("(fy ") != std::string::npos;
+  }
+  if (!kind) return "the structure named is not the effect's kind: " + res.structure_text();
+  if (!unexplained) {
+    if (h == Hidden::drift && (d.cause != "sensor_bias" || !d.second_cause.empty()))
+      return "a drift named " + d.cause + (d.second_cause.empty() ? "" : " + " + d.second_cause);
+    if (h != Hidden::drift && d.gain_percent >= 50.0)
+      return "named " + d.cause + " with a held-out gain of " + std::to_string(d.gain_percent) + " %";
+  }
+  return "";
+}
+
+class BlindDraws : public ::testing::TestWithParam<Hidden> {};
+
+TEST_P(BlindDraws, MeetTheirRule) {
+  const Hidden h = GetParam();
+  const unsigned n = std::getenv("HIL_UNEXPLAINED_DRAWS") ? static_cast<unsigned>(std::stoul(std::getenv("HIL_UNEXPLAINED_DRAWS"))) : 8u;
+  const unsigned allowed = (n + 9) / 10;  // ceil(10 %)
+  unsigned failed = 0;
+  for (unsigned i = 0; i < n; ++i) {
+    const Drawn x = draw(h, i);
+    const Diagnosed run = diagnose_scenario(x.scenario, {}, x.resolution);
+    const std::string why = judge(h, run.d);
+    failed += why.empty() ? 0 : 1;
+    std::cout << "DRAW " << x.label << ": " << (why.empty() ? "pass" : "FAIL (" + why + ")") << " | " << run.line << "\n";
+  }
+  std::cout << "SUMMARY " << ::testing::UnitTest::GetInstance()->current_test_info()->name() << ": " << n - failed << " of " << n
+            << " pass (at most " << allowed << " may fail)\n";
+  EXPECT_LE(failed, allowed);
+}
+
+std::string hidden_name(const ::testing::TestParamInfo<Hidden>& i) {
+  switch (i.param) {
+    case Hidden::none:
+      return "clean";
+    case Hidden::stribeck:
+      return "stribeck_friction";
+    case Hidden::drift:
+      return "drifting_offset";
+    case Hidden::coupling:
+      return "cross_coupling";
+  }
+  return "?";
+}
+
+INSTANTIATE_TEST_SUITE_P(Issue32, BlindDraws, ::testing::Values(Hidden::none, Hidden::stribeck, Hidden::drift, Hidden::coupling),
+                         hidden_name);
+
+}  // namespace
+}  // namespace hil::diagnose::test
