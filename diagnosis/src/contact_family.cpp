@@ -46,6 +46,9 @@ const std::vector<std::string>& contact_extensions() { return effect_names(Famil
 
 std::string describe_extension(const std::string& n) {
   if (n == "none") return "no extension predicts held-out data better than the nominal model beyond the noise";
+  if (n == "unexplained")
+    return "no extension predicts held-out data better than the nominal model beyond the noise, yet its residual has structure (listed): "
+           "an effect outside the library?";
   const Effect* e = find_effect(n);
   return e ? e->description() : "";
 }

@@ -85,6 +85,28 @@ double paired_z(const Observations& obs, const Score& reference, const Score& ca
 
 namespace {
 
+/// The step a component's values are quantised to (0: not quantised): the smallest gap between its
+/// distinct values, when the values repeat (fewer distinct values than half the samples) and every
+/// value is a multiple of it.
+double quantisation_step(const Eigen::VectorXd& y) {
+  std::vector<double> v(y.data(), y.data() + y.size());
+  std::sort(v.begin(), v.end());
+  const double scale = std::max(std::abs(v.front()), std::abs(v.back()));
+  if (!(scale > 0) || !std::isfinite(scale)) return 0.0;
+  const double same = 1e-9 * scale;
+  double step = std::numeric_limits<double>::infinity();
+  std::size_t distinct = 1;
+  for (std::size_t i = 1; i < v.size(); ++i)
+    if (v[i] - v[i - 1] > same) {
+      ++distinct;
+      step = std::min(step, v[i] - v[i - 1]);
+    }
+  if (!std::isfinite(step) || 2 * distinct > v.size()) return 0.0;
+  for (double x : v)
+    if (std::abs(x / step - std::round(x / step)) > 1e-6) return 0.0;
+  return step;
+}
+
 /// ResidualAnalysis' structure (issue 32, item 3): per component the residual's white noise by von
 /// Neumann's first differences, the variance beyond it, the trend with time, and the findings above
 /// the thresholds. `r` is the residual in physical units, a.correlations already computed.
@@ -97,7 +119,12 @@ void structure(const Observations& obs, const Eigen::MatrixXd& r, ResidualAnalys
   for (int c = 0; c < 6; ++c) {
     const Eigen::VectorXd rc = r.col(c);
     const double mse = rc.squaredNorm() / static_cast<double>(n);  // a constant offset is structure too
-    noise2(c) = (rc.tail(n - 1) - rc.head(n - 1)).squaredNorm() / (2.0 * static_cast<double>(n - 1));
+    // The white floor: the first differences' noise, plus the quantisation's q²/12. A step much
+    // coarser than the noise (the ACU plate's 1.5 N against 0.3 N) makes an error that follows the
+    // signal slowly, which the differences do not see: structure of the sensor, not of the model.
+    a.quantisation(c) = quantisation_step(obs.y.col(c));
+    noise2(c) = (rc.tail(n - 1) - rc.head(n - 1)).squaredNorm() / (2.0 * static_cast<double>(n - 1)) +
+                a.quantisation(c) * a.quantisation(c) / 12.0;
     centred2(c) = (rc.array() - rc.mean()).matrix().squaredNorm() / static_cast<double>(n);
     a.excess(c) = noise2(c) > 0 ? mse / noise2(c) - 1.0 : 0.0;
     const double w2 = obs.weight(c) * obs.weight(c);

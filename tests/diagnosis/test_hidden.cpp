@@ -46,7 +46,8 @@ TEST_P(HiddenEffect, IsNamedWithItsMagnitudeAndAGain) {
              "\n";
   for (const auto& k : d.second_step) table += "  + " + k.name + ": " + k.verdict + "\n";
   SCOPED_TRACE("nominal " + std::to_string(100 * d.nominal.cv_error) + " %, noise " + std::to_string(100 * d.noise_relative) +
-               " %, candidates:\n" + table);
+               " %, excess " + std::to_string(d.nominal_residuals.excess_variance) +
+               ", structure: " + d.nominal_residuals.structure_text() + ", candidates:\n" + table);
 
   if (c.effects.empty()) {
     EXPECT_EQ(d.cause, "none");

@@ -64,10 +64,13 @@ std::string unidentifiable_text(const dg::Fit& f) {
   return fmt::format("{}", fmt::join(v, ", "));
 }
 
+/// Whether a verdict names a candidate (not "none", not "unexplained").
+bool names_a_cause(const std::string& cause) { return cause != "none" && cause != "unexplained"; }
+
 /// The extensions of the extended model (the cause and the second cause).
 std::set<std::string> extended_set(const RunDiagnosis& r) {
   std::set<std::string> e;
-  if (r.result.cause != "none") e.insert(r.result.cause);
+  if (names_a_cause(r.result.cause)) e.insert(r.result.cause);
   if (!r.result.second_cause.empty()) e.insert(r.result.second_cause);
   return e;
 }
@@ -126,6 +129,8 @@ void print_summary(std::ostream& out, const RunDiagnosis& r) {
                        nr.correlations.front().component);
   out << "\n";
   out << fmt::format("  cause:           {}{}\n", d.cause, d.cause == "none" ? "" : " — " + dg::describe_extension(d.cause));
+  if (d.cause == "unexplained")
+    for (const auto& f : nr.structure) out << "    structure:     " << f.text << "\n";
   if (!d.second_cause.empty()) out << fmt::format("  second cause:    {} — {}\n", d.second_cause, dg::describe_extension(d.second_cause));
   if (d.extended) {
     out << "    (value ± 95 % interval, i.e. 1.96 std, the wider of the asymptotic and the folds' spread,\n"
@@ -139,6 +144,9 @@ void print_summary(std::ostream& out, const RunDiagnosis& r) {
       out << fmt::format("    {:<28} {:.2f} s  (located between {:.2f} and {:.2f} s)\n", e.name, e.t_s, e.lower_s, e.upper_s);
     out << fmt::format("  extended model:  held-out relative {} error {:.2f} %  (gain {:.1f} %)\n", what, 100 * ext.cv_error,
                        d.gain_percent);
+    // The same check on what the named model leaves (issue 32): a cause may stand in for part of
+    // an effect outside the library.
+    for (const auto& f : d.extended_residuals.structure) out << "    left unexplained: " << f.text << "\n";
   }
   for (const auto& q : ext.full.reported)
     if (!q.extension && (q.name == "K" || q.name == "mu")) out << fmt::format("    {:<28} {}\n", q.name, fmt_value(q.value, q.std, q.unit));
@@ -158,7 +166,7 @@ void print_summary(std::ostream& out, const RunDiagnosis& r) {
     for (const auto& w : r.windows) {
       out << fmt::format("    {:>7.1f} - {:<7.1f} s {:>6} samples  ", w.start_s, w.end_s, w.samples);
       if (!w.error.empty()) out << "not diagnosed: " << w.error << "\n";
-      else if (w.cause == "none") out << fmt::format("{:<22} {:.2f} %\n", "none", 100 * w.nominal_error);
+      else if (!names_a_cause(w.cause)) out << fmt::format("{:<22} {:.2f} %\n", w.cause, 100 * w.nominal_error);
       else
         out << fmt::format("{:<22} {:.2f} % -> {:.2f} % (gain {:.1f} %)\n", w.cause + (w.second_cause.empty() ? "" : "+" + w.second_cause),
                            100 * w.nominal_error, 100 * w.extended_error, w.gain_percent);
@@ -197,13 +205,22 @@ nlohmann::json to_json(const RunDiagnosis& r) {
     x["correlations"] = nlohmann::json::array();
     for (std::size_t i = 0; i < a.correlations.size() && i < 12; ++i) {
       const auto& c = a.correlations[i];
-      x["correlations"].push_back({{"signal", c.signal}, {"component", c.component}, {"correlation", c.correlation}, {"lag", c.lag}});
+      x["correlations"].push_back(
+          {{"signal", c.signal}, {"component", c.component}, {"correlation", c.correlation}, {"lag", c.lag}, {"explained", c.explained}});
     }
+    x["excess_variance"] = a.excess_variance;
+    x["trends"] = nlohmann::json::array();
+    for (const auto& c : a.trends)
+      x["trends"].push_back({{"component", c.component}, {"correlation", c.correlation}, {"explained", c.explained}});
+    x["structure"] = nlohmann::json::array();
+    for (const auto& f : a.structure) x["structure"].push_back({{"kind", f.kind}, {"text", f.text}, {"size", f.size}});
     return x;
   };
   j["nominal"]["residuals"] = res(d.nominal_residuals);
   if (d.cause == "none") {
     j["cause"] = {{"name", "none"}, {"parameters", nlohmann::json::object()}};
+  } else if (d.cause == "unexplained") {
+    j["cause"] = {{"name", "unexplained"}, {"description", dg::describe_extension(d.cause)}, {"parameters", nlohmann::json::object()}};
   } else {
     const auto& first = *std::find_if(d.candidates.begin(), d.candidates.end(), [&](const auto& c) { return c.name == d.cause; });
     j["cause"] = {{"name", d.cause}, {"description", dg::describe_extension(d.cause)}, {"parameters", params_json(first.score.full, true)}};
@@ -367,7 +384,7 @@ std::string windows_text(const std::vector<WindowVerdict>& windows) {
   std::vector<std::string> parts;
   for (const auto& l : order) {
     const auto [t, k] = seen[l];
-    if (l == "none" || l == "not diagnosed") parts.push_back(fmt::format("{} in {}", l, k));
+    if (l == "none" || l == "unexplained" || l == "not diagnosed") parts.push_back(fmt::format("{} in {}", l, k));
     else parts.push_back(fmt::format("{} from {:.1f} s ({} of {} windows)", l, t, k, windows.size()));
   }
   return fmt::format("{}", fmt::join(parts, "; "));
@@ -381,19 +398,14 @@ report::Verdict make_verdict(const RunDiagnosis& r) {
   const std::string what = r.mode == "contact" ? "wrench" : "deflection";
   report::Verdict v;
   const auto& nr = d.nominal_residuals;
-  const std::string follows = nr.correlations.empty() ? std::string()
-                                                      : fmt::format("{} (r = {:+.2f} on {}, lag {})", nr.correlations.front().signal,
-                                                                    nr.correlations.front().correlation, nr.correlations.front().component,
-                                                                    nr.correlations.front().lag);
-  if (d.cause != "none") {
+  if (names_a_cause(d.cause)) {
     v.kind = "cause";
     v.headline = "Named cause: " + d.cause + " — " + dg::describe_extension(d.cause) +
                  (d.second_cause.empty() ? "" : "; second cause: " + d.second_cause + " — " + dg::describe_extension(d.second_cause));
-  } else if (!nr.white) {
+  } else if (d.cause == "unexplained") {
     v.kind = "unexplained";
-    v.headline = fmt::format("No candidate explains it, yet the nominal residual is not white (Ljung-Box Q {:.0f} against {:.0f}): "
-                             "structure is left that the candidates tried do not name",
-                             nr.ljung_box_q, nr.ljung_box_bound);
+    v.headline = "Unexplained: no candidate explains it, yet the nominal residual has structure that the candidates tried do not name — " +
+                 nr.structure_text();
   } else {
     v.kind = "none";
     v.headline = "No cause: the nominal model is within the measurement noise on this run";
@@ -433,6 +445,7 @@ report::Verdict make_verdict(const RunDiagnosis& r) {
                                        ? std::string()
                                        : fmt::format("; follows {} most (r = {:+.2f})", after.correlations.front().signal,
                                                      after.correlations.front().correlation)));
+  if (after.structured()) v.facts.emplace_back(d.extended ? "left unexplained" : "structure", after.structure_text());
   if (!ext.full.unidentifiable.empty()) v.facts.emplace_back("not identifiable", unidentifiable_text(ext.full));
   if (!r.windows.empty()) v.facts.emplace_back("over time", windows_text(r.windows));
   // What to do next.
@@ -455,20 +468,20 @@ report::Verdict make_verdict(const RunDiagnosis& r) {
     else
       v.next = fmt::format("re-identify with the nominal model extended by {} (its parameters below), or remove the cause at the rig, "
                            "then diagnose again{}.",
-                           d.cause, d.extended_residuals.white ? ": the residual should stay white" : "");
-    if (!d.extended_residuals.white && !d.extended_residuals.correlations.empty())
-      v.next += fmt::format(" The extended model's residual is still not white and follows {}: a further effect may be tied to it.",
-                            d.extended_residuals.correlations.front().signal);
+                           d.cause, d.extended_residuals.structured() ? "" : ": the residual should stay unstructured");
+    if (d.extended_residuals.structured())
+      v.next += " The extended model leaves structure (" + d.extended_residuals.structure_text() +
+                "): the cause may stand in for part of an effect outside the library; look there before acting on it.";
   } else if (const auto w = std::find_if(r.windows.begin(), r.windows.end(),
-                                         [](const WindowVerdict& x) { return x.error.empty() && x.cause != "none"; });
+                                         [](const WindowVerdict& x) { return x.error.empty() && names_a_cause(x.cause); });
              w != r.windows.end()) {
     v.next = fmt::format("the windows name {} from {:.1f} s: a cause that appears during the run, which a model for the whole run "
                          "cannot hold — find what changed there, then diagnose the parts before and after it apart.",
                          w->cause, w->start_s);
   } else if (v.kind == "unexplained") {
-    v.next = follows.empty()
-                 ? "look for an effect outside the candidates tried, or record a run that excites one effect at a time."
-                 : "look for an effect that follows " + follows + ", outside the candidates tried, or record a run that excites it alone.";
+    v.next = nr.structure.empty() ? "look for an effect outside the candidates tried, or record a run that excites one effect at a time."
+                                  : "look for an effect outside the candidates tried behind the strongest structure (" +
+                                        nr.structure.front().text + "), or record a run that excites it alone.";
   } else {
     v.next = "nothing to change: keep the nominal model for this rig.";
   }
@@ -507,14 +520,14 @@ void write_report(const std::string& dir, const RunDiagnosis& r, const TruthValu
       const bool ok = w.error.empty();
       const std::string label = ok ? w.cause + (w.second_cause.empty() ? "" : "+" + w.second_cause) : "not diagnosed";
       spans.push_back({w.start_s, w.end_s, label,
-                       !ok                 ? w.error
-                       : w.cause == "none" ? fmt::format("{:.2f} %", 100 * w.nominal_error)
-                                           : fmt::format("gain {:.0f} %", w.gain_percent)});
+                       !ok                       ? w.error
+                       : !names_a_cause(w.cause) ? fmt::format("{:.2f} %", 100 * w.nominal_error)
+                                                 : fmt::format("gain {:.0f} %", w.gain_percent)});
       mid.push_back(0.5 * (w.start_s + w.end_s));
       en.push_back(100 * w.nominal_error), ee.push_back(100 * w.extended_error);
       rows.push_back({fmt::format("{:.1f} – {:.1f}", w.start_s, w.end_s), std::to_string(w.samples), label,
                       ok ? fmt::format("{:.3f} %", 100 * w.nominal_error) : "-", ok ? fmt::format("{:.3f} %", 100 * w.extended_error) : "-",
-                      ok && w.cause != "none" ? fmt::format("{:+.1f} %", w.gain_percent) : "-",
+                      ok && names_a_cause(w.cause) ? fmt::format("{:+.1f} %", w.gain_percent) : "-",
                       ok ? (w.white ? "white" : "not white") : "-", w.error});
     }
     rp::PlotOptions to("Verdict per window", "t (s)", "");

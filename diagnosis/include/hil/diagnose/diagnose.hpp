@@ -22,9 +22,9 @@ namespace hil::diagnose {
 /// reported. Calibrated on clean runs of several motion families before any run with an effect
 /// outside the library was diagnosed (docs/diagnosis.md, "Structure left in the residual").
 struct StructureOptions {
-  /// Not white: the residual's variance beyond its white noise's (von Neumann's first-difference
-  /// estimate, which slow structure hardly reaches), in noise variances, pooled over the weighted
-  /// components.
+  /// Not white: the residual's mean square beyond its white floor (von Neumann's first-difference
+  /// noise estimate, which slow structure hardly reaches, plus the quantisation's q²/12), in floor
+  /// variances, pooled over the weighted components.
   double max_excess = 0.25;
   /// A correlation with a run signal (the best lag within ±10 samples) or with time (a trend, lag
   /// 0): the part of one component's residual variance it explains linearly, r² var / noise², in
@@ -62,9 +62,11 @@ struct ResidualAnalysis {
     double explained = 0.0;  ///< r² var / noise² of the component, in its noise variances
   };
   std::vector<Correlation> correlations;  ///< sorted by |correlation|, strongest first
-  /// Per component: the residual's variance over its white noise's (von Neumann), minus 1; and
-  /// pooled over the weighted components.
+  /// Per component: the residual's mean square over its white floor, minus 1; and pooled over the
+  /// weighted components. The floor is the noise variance by von Neumann's first differences plus
+  /// q²/12 of the quantisation step q the measured values show (0 when they show none).
   Eigen::Matrix<double, 6, 1> excess = Eigen::Matrix<double, 6, 1>::Zero();
+  Eigen::Matrix<double, 6, 1> quantisation = Eigen::Matrix<double, 6, 1>::Zero();
   double excess_variance = 0.0;
   /// Per component: the correlation with time (lag 0), a trend or a drift.
   std::vector<Correlation> trends;
