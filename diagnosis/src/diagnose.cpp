@@ -14,6 +14,7 @@
 #include <Eigen/QR>
 #include <fmt/format.h>
 #include <fmt/ranges.h>
+#include <hil/diagnose/effect.hpp>
 #include <hil/parallel/run_tasks.hpp>
 
 namespace hil::diagnose {
@@ -389,6 +390,37 @@ void rank(std::vector<CandidateResult>& v) {
   });
 }
 
+/// The first step's candidates the cause cannot be told from (Diagnosis::confounded): scored on
+/// held-out data with a gain of their own, not the second cause, their held-out errors within the
+/// paired test's reach of the cause's, their effects on the prediction nearly collinear.
+std::vector<Confounded> confounded_with(const Diagnosis& d, const Observations& obs, const ConfoundingOptions& co) {
+  std::vector<Confounded> out;
+  const auto cause = std::find_if(d.candidates.begin(), d.candidates.end(), [&](const auto& c) { return c.name == d.cause; });
+  if (cause == d.candidates.end() || !cause->score.held_out()) return out;
+  const Eigen::VectorXd w = obs.weight;
+  auto effect = [&](const Score& s) { return ((s.cv_prediction - d.nominal.cv_prediction) * w.asDiagonal()).eval(); };
+  const Eigen::MatrixXd e_cause = effect(cause->score);
+  auto evidence = [](const CandidateResult& c) {
+    std::vector<std::string> params;
+    for (const auto& q : c.score.full.reported)
+      if (q.extension) params.push_back(fmt::format("{} {:.4g} ± {:.2g}", q.name, q.value, 1.96 * q.std));
+    return fmt::format("{}: gain {:.1f} %, z {:.1f}{}{}", c.name, c.gain_percent, c.z, params.empty() ? "" : ", ", fmt::join(params, ", "));
+  };
+  for (const auto& r : d.candidates) {
+    if (r.name == d.cause || r.name == d.second_cause || !r.applicable || !r.score.held_out() || !(r.gain_percent > 0.0)) continue;
+    const Eigen::MatrixXd e_rival = effect(r.score);
+    const double nn = e_cause.norm() * e_rival.norm();
+    const double cosine = nn > 0 ? (e_cause.array() * e_rival.array()).sum() / nn : 0.0;
+    const double z = paired_z(obs, r.score, cause->score);
+    if (std::abs(z) >= co.max_z || cosine < co.min_cosine) continue;
+    out.push_back({d.cause, r.name, cause->gain_percent, r.gain_percent, z, cosine,
+                   fmt::format("{}; {}; their held-out errors differ by z = {:.1f} and their effects are collinear (cosine {:.2f})",
+                               evidence(*cause), evidence(r), z, cosine),
+                   separating_experiment(d.cause, r.name)});
+  }
+  return out;
+}
+
 }  // namespace
 
 Diagnosis diagnose(const ModelFactory& make, const std::vector<std::string>& candidates, const Observations& obs, const Context& ctx,
@@ -529,6 +561,7 @@ Diagnosis diagnose(const ModelFactory& make, const std::vector<std::string>& can
       d.extended = d.second_step.front().score;
     }
   }
+  if (d.extended) d.confounded = confounded_with(d, obs, o.confounding);
   if (progress && step < total) progress(total, total, "done");
   const auto& ext = d.extended ? *d.extended : d.nominal;
   d.gain_percent = d.nominal.cv_error > 0 ? 100.0 * (1.0 - ext.cv_error / d.nominal.cv_error) : 0.0;

@@ -75,4 +75,11 @@ int default_cv_offsets(const std::vector<std::string>& candidates) {
   return offsets;
 }
 
+std::string separating_experiment(const std::string& a, const std::string& b) {
+  for (const auto& [x, y] : {std::pair{a, b}, std::pair{b, a}})
+    if (const Effect* e = find_effect(x))
+      if (auto s = e->separating_experiment(y); !s.empty()) return s;
+  return "a run whose motion excites " + a + " and " + b + " differently (other speeds, loads or directions than this one)";
+}
+
 }  // namespace hil::diagnose

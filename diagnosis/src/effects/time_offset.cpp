@@ -54,6 +54,18 @@ class TimeOffset : public ContactEffect {
     EffectDraw r(seed, name());
     return inject({{"time_offset_s", r.magnitude(0.015, 0.04)}});
   }
+  // To first order a damping force D δ̇ is the normal force D/K earlier: on a smooth normal motion
+  // (a sum of sines) the two differ only in second-order amplitude and in the tangential forces.
+  std::string separating_experiment(const std::string& other) const override {
+    if (other == "contact_damping")
+      return "a normal motion whose speed changes abruptly (piecewise-linear presses with stops): damping steps the force at each "
+             "kink of the penetration rate, a delay only shifts the kink; or lift-offs, where damping's pull is clipped and a delay's "
+             "is not";
+    if (other == "viscous_friction")
+      return "slides at constant speed in both directions with stops: viscous friction holds while sliding, a delay only shows where "
+             "the force changes";
+    return "";
+  }
   std::shared_ptr<const Injection> inject(const TruthValues& v) const override {
     check_truth_keys(name(), v, {"time_offset_s"});
     return std::make_shared<Delay>(truth_value(v, "time_offset_s"));

@@ -92,6 +92,24 @@ struct Context {
 ResidualAnalysis analyse_residuals(const Observations& obs, const Eigen::MatrixXd& prediction, const Context& ctx,
                                    const StructureOptions& so = {});
 
+/// Two candidates that explain the run about equally (issue 32, item 2): the cause and a rival
+/// whose held-out errors a paired test cannot tell apart and whose predicted effects are nearly
+/// collinear on this run's motion.
+struct Confounded {
+  std::string cause, rival;
+  double cause_gain_percent = 0.0, rival_gain_percent = 0.0;
+  double z = 0.0;          ///< paired z of the cause's held-out errors against the rival's (> 0: the cause predicts better)
+  double cosine = 0.0;     ///< of their held-out effects (prediction minus the nominal's), weighted
+  std::string evidence;    ///< each one's gain, consistency and parameters
+  std::string experiment;  ///< what run would separate them
+};
+
+/// When a rival counts as confounded with the cause (DiagnoseOptions::confounding).
+struct ConfoundingOptions {
+  double max_z = 2.0;       ///< |paired z| below this: the held-out errors are within their standard errors
+  double min_cosine = 0.8;  ///< effects at least this collinear
+};
+
 struct DiagnoseOptions {
   CvOptions cv;
   double min_gain = 0.02;  ///< relative held-out error reduction an extension must bring (2 %)
@@ -108,7 +126,8 @@ struct DiagnoseOptions {
   /// only the part of its size the first cannot mimic as a held-out reduction.
   double min_noise_fraction = 0.25;
   StructureOptions structure;  ///< `none` only on an unstructured residual, else `unexplained`
-  int second_candidates = 8;   ///< greedy second step: the best single candidates tried with the cause
+  ConfoundingOptions confounding;
+  int second_candidates = 8;  ///< greedy second step: the best single candidates tried with the cause
   /// Models scored side by side (the candidates of a step; 1: one after another), each with its
   /// folds on CvOptions::threads. Two by default: a model's full fit runs on one thread, and while
   /// it does, the other model's folds use the remaining cores; more would multiply the threads and
@@ -153,6 +172,9 @@ struct Diagnosis {
   std::optional<Score> extended;  ///< the nominal model with the cause (and second cause)
   double gain_percent = 0.0;      ///< held-out: 100 (1 - extended / nominal)
   ResidualAnalysis nominal_residuals, extended_residuals;
+  /// The rivals the cause cannot be told from on this run (empty: none); the verdict is then "the
+  /// cause or its rival", with the experiment that would separate them.
+  std::vector<Confounded> confounded;
   double seconds = 0.0;
 };
 
