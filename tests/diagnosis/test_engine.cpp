@@ -1260,6 +1260,53 @@ class ConfoundedFamily : public ModelFamily {
   std::set<std::string> ext_;
 };
 
+/// y = 0.7 + u - s w + noise (σ 0.5): with s = 0.5, "a" (α u) and "b" (β v, v = -u + w) each leave
+/// ±0.5 w and explain the run equally; with s = 0, "a" is exact and "b" leaves w.
+Observations confounded_data(double s, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> g(0, 0.5);
+  Observations o;
+  const int n = 2000;
+  o.y.resize(n, 6);
+  for (int k = 0; k < n; ++k) {
+    const double t = 0.01 * k;
+    o.t_s.push_back(t);
+    for (int c = 0; c < 6; ++c) o.y(k, c) = 0.7 + ConfoundedFamily::u(t, c) - s * ConfoundedFamily::w(t, c) + g(rng);
+  }
+  return o;
+}
+
+TEST(Diagnose, TwoCandidatesThatExplainTheRunEquallyAreSaidConfoundedWithTheEvidenceForEach) {
+  {
+    const Observations o = confounded_data(0.5, 23);
+    const ModelFactory make = [&o](const std::set<std::string>& x) { return std::make_unique<ConfoundedFamily>(o, x); };
+    const Diagnosis d = diagnose(make, {"a", "b"}, o, {});
+    ASSERT_TRUE(d.cause == "a" || d.cause == "b") << d.cause;
+    EXPECT_EQ(d.second_cause, "") << "the joint fit adds only 0.5 w, below the noise";
+    ASSERT_EQ(d.confounded.size(), 1u);
+    const Confounded& c = d.confounded.front();
+    EXPECT_EQ(std::set<std::string>({c.cause, c.rival}), std::set<std::string>({"a", "b"}));
+    EXPECT_LT(std::abs(c.z), 2.0);
+    EXPECT_GT(c.cosine, 0.9);
+    EXPECT_THAT(c.evidence, HasSubstr("alpha"));
+    EXPECT_THAT(c.evidence, HasSubstr("beta"));
+    EXPECT_THAT(c.experiment, HasSubstr("excites a and b differently"));  // neither toy effect knows one
+  }
+  {
+    // "a" is the truth's form: "b" predicts worse beyond the paired test's reach.
+    const Observations o = confounded_data(0.0, 23);
+    const ModelFactory make = [&o](const std::set<std::string>& x) { return std::make_unique<ConfoundedFamily>(o, x); };
+    const Diagnosis d = diagnose(make, {"a", "b"}, o, {});
+    EXPECT_EQ(d.cause, "a");
+    EXPECT_TRUE(d.confounded.empty()) << d.confounded.front().evidence;
+  }
+}
+
+TEST(Diagnose, DelayAndDampingNameTheExperimentThatSeparatesThem) {
+  EXPECT_THAT(separating_experiment("time_offset", "contact_damping"), HasSubstr("piecewise-linear"));
+  EXPECT_EQ(separating_experiment("contact_damping", "time_offset"), separating_experiment("time_offset", "contact_damping"));
+}
+
 TEST(Diagnose, ASecondCauseConfoundedWithTheFirstIsSizedByItsEffectInTheJointFit) {
   // Truth: α = 2, β = 1, i.e. y = 0.7 + u + w. "a" alone takes u (α = 1); "b" added to it moves α
   // to 2 and explains only w held out (0.12 noise variances, below the 0.25 a cause must explain),

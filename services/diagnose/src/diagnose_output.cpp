@@ -132,6 +132,8 @@ void print_summary(std::ostream& out, const RunDiagnosis& r) {
   if (d.cause == "unexplained")
     for (const auto& f : nr.structure) out << "    structure:     " << f.text << "\n";
   if (!d.second_cause.empty()) out << fmt::format("  second cause:    {} — {}\n", d.second_cause, dg::describe_extension(d.second_cause));
+  for (const auto& c : d.confounded)
+    out << fmt::format("  confounded:      {} or {}: {}\n    to separate them: {}\n", c.cause, c.rival, c.evidence, c.experiment);
   if (d.extended) {
     out << "    (value ± 95 % interval, i.e. 1.96 std, the wider of the asymptotic and the folds' spread,\n"
            "     with the model forms' shifts added; PNR = |value - nominal| / asymptotic std)\n";
@@ -241,6 +243,16 @@ nlohmann::json to_json(const RunDiagnosis& r) {
                    {"residuals", res(d.extended_residuals)}};
   add_events(j["extended"]["parameters"], located_events(r, extended_set(r)));
   j["gain_percent"] = d.gain_percent;
+  j["confounded"] = nlohmann::json::array();
+  for (const auto& c : d.confounded)
+    j["confounded"].push_back({{"cause", c.cause},
+                               {"rival", c.rival},
+                               {"cause_gain_percent", c.cause_gain_percent},
+                               {"rival_gain_percent", c.rival_gain_percent},
+                               {"z", c.z},
+                               {"cosine", c.cosine},
+                               {"evidence", c.evidence},
+                               {"experiment", c.experiment}});
   auto table = [&](const std::vector<dg::CandidateResult>& v, bool second) {
     nlohmann::json t = nlohmann::json::array();
     for (const auto& c : v) {
@@ -402,6 +414,7 @@ report::Verdict make_verdict(const RunDiagnosis& r) {
     v.kind = "cause";
     v.headline = "Named cause: " + d.cause + " — " + dg::describe_extension(d.cause) +
                  (d.second_cause.empty() ? "" : "; second cause: " + d.second_cause + " — " + dg::describe_extension(d.second_cause));
+    for (const auto& c : d.confounded) v.headline += "; confounded with " + c.rival + " on this run (either may be the cause)";
   } else if (d.cause == "unexplained") {
     v.kind = "unexplained";
     v.headline = "Unexplained: no candidate explains it, yet the nominal residual has structure that the candidates tried do not name — " +
@@ -461,7 +474,10 @@ report::Verdict make_verdict(const RunDiagnosis& r) {
         break;
       }
     }
-    if (!rival.empty())
+    if (!d.confounded.empty())
+      v.next = fmt::format("{} and {} explain this run about equally ({}): to separate them, record {} before acting on either.", d.cause,
+                           d.confounded.front().rival, d.confounded.front().evidence, d.confounded.front().experiment);
+    else if (!rival.empty())
       v.next = fmt::format("{} and {} explain this run about equally (their gains' intervals overlap): record a run whose motion "
                            "excites them differently before acting on {}.",
                            d.cause, rival, d.cause);
