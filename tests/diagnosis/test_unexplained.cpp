@@ -373,5 +373,50 @@ TEST(Confounded, DampingOnASinusoidalNormalMotionIsNeverAConfidentDelayAlone) {
   }
 }
 
+// Delay and damping on piecewise-linear motion with stops (issue 32's "Done when"). Rule committed
+// before its draws ran: on the moves families (alternating, speeds 4-12 mm/s, stops 0.3-1 s, from
+// the seed), fine resolution, seeds 32,300,000 + 100 e + k, k = 0..3, never used before: an 8 ms
+// delay must be named time_offset first, and a 4,000 N s/m damping (friction on the total normal
+// force) contact_damping first, in every draw; the named parameter inside ± 1.96 of its std of the
+// truth in at least 3 of the 4 draws.
+struct OnMoves {
+  std::string effect, parameter;
+  double truth;
+};
+
+class DelayAndDampingOnMoves : public ::testing::TestWithParam<OnMoves> {};
+
+TEST_P(DelayAndDampingOnMoves, AreNamedWithTheirMagnitude) {
+  const OnMoves& c = GetParam();
+  int inside = 0;
+  for (unsigned k = 0; k < 4; ++k) {
+    const unsigned seed = 32'300'000u + (c.effect == "time_offset" ? 0u : 100u) + k;
+    Draws r(seed);
+    ct::Scenario sc = clean_scenario();
+    (k % 2 ? kSlowMoves : kMoves).apply(sc);
+    auto& t = sc.trajectory;
+    t.angular_rate_rad_per_s = r.uniform(4e-3, 12e-3) / t.radius_m;
+    t.dwell_s = r.uniform(0.3, 1.0);
+    t.yaw_amplitude_rad = r.uniform(0.02, 0.04);
+    sc.sensor.seed = seed;
+    if (c.effect == "time_offset") sc.sensor.delay_s = c.truth;
+    else {
+      sc.law.damping_n_s_per_m = c.truth;
+      sc.law.friction_on_total_normal = true;
+    }
+    const Diagnosed run = diagnose_scenario(sc, {}, kFine);
+    std::cout << "MOVES " << c.effect << " seed " << seed << ": " << run.line << "\n";
+    EXPECT_EQ(run.d.cause, c.effect) << "seed " << seed << ": " << run.line;
+    if (run.d.cause != c.effect || !run.d.extended) continue;
+    for (const auto& q : run.d.extended->full.reported)
+      if (q.name == c.parameter) inside += std::abs(q.value - c.truth) <= 1.96 * q.std ? 1 : 0;
+  }
+  EXPECT_GE(inside, 3) << c.parameter << " inside its 95 % interval in " << inside << " of 4 draws";
+}
+
+INSTANTIATE_TEST_SUITE_P(Issue32, DelayAndDampingOnMoves,
+                         ::testing::Values(OnMoves{"time_offset", "time_offset_s", 0.008},
+                                           OnMoves{"contact_damping", "damping_n_s_per_m", 4000.0}),
+                         [](const ::testing::TestParamInfo<OnMoves>& i) { return i.param.effect; });
 }  // namespace
 }  // namespace hil::diagnose::test
