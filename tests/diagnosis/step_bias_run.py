@@ -34,8 +34,9 @@ def long_trajectory(src, out_csv):
     return t0
 
 
-def make(hil, src, out, seed, offset_n, t_step_s):
-    """The run in `out`: returns the trajectory's length (s)."""
+def make(hil, src, out, seed, offset_n, t_step_s, drift_n=0.0):
+    """The run in `out`: returns the trajectory's length (s). drift_n: an fz offset growing linearly
+    from 0 at the start to drift_n at the end (a plate whose zero drifts), on top of the step."""
     traj = out + ".trajectory.csv"
     length = long_trajectory(src, traj)
     r = subprocess.run([hil, "contact", "simulate", "--rig", os.path.join(src, "examples", "rigs", "press_bench.yaml"), "--trajectory",
@@ -49,10 +50,14 @@ def make(hil, src, out, seed, offset_n, t_step_s):
     head = lines[0].split(",")
     it, iz = head.index("t"), head.index("fz")
     rows = [lines[0]]
+    t_end = float(lines[-1].split(",")[it])
     for ln in lines[1:]:
         cells = ln.split(",")
-        if float(cells[it]) >= t_step_s:
-            cells[iz] = repr(float(cells[iz]) + offset_n)
+        t = float(cells[it])
+        fz = float(cells[iz]) + drift_n * t / t_end
+        if t >= t_step_s:
+            fz += offset_n
+        cells[iz] = repr(fz)
         rows.append(",".join(cells))
     with open(path, "w") as f:
         f.write("\n".join(rows) + "\n")

@@ -276,6 +276,30 @@ class Diagnose(unittest.TestCase):
         with open(os.path.join(SRC, "docs", "schemas", "hil.diagnosis.schema.json")) as f:
             jsonschema.validate(d, json.load(f))
 
+    def test_a_drifting_plate_is_not_called_none(self):
+        # Rule written before the run (issue 32): a plate whose fz zero drifts 0 -> 3 N over the
+        # 26 s run (no step) is not `none`: either `unexplained`, or a named cause whose model
+        # leaves the trend; either way a "trend" finding on fz, in the text and in the JSON, which
+        # validates against the schema.
+        sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+        import step_bias_run
+        run = os.path.join(self.dir, "drift")
+        step_bias_run.make(HIL, SRC, run, seed=53, offset_n=0.0, t_step_s=1e9, drift_n=3.0)
+        js = os.path.join(self.dir, "drift.json")
+        r = hil("diagnose", run, "--json", js)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        with open(js) as f:
+            d = json.load(f)
+        self.assertNotEqual(d["cause"]["name"], "none")
+        where = d["nominal"]["residuals"] if d["cause"]["name"] == "unexplained" else d["extended"]["residuals"]
+        trends = [s for s in where["structure"] if s["kind"] == "trend"]
+        self.assertTrue(trends and trends[0]["text"].startswith("fz trends with time"), where["structure"])
+        self.assertIn("fz trends with time", r.stdout)
+        self.assertIn("unexplained" if d["cause"]["name"] == "unexplained" else "left unexplained", r.stdout)
+        import jsonschema
+        with open(os.path.join(SRC, "docs", "schemas", "hil.diagnosis.schema.json")) as f:
+            jsonschema.validate(d, json.load(f))
+
     def test_windows_show_a_plate_offset_appearing_half_way(self):
         # Rule written before the run: with a 4 N fz offset from 13 s on, the windows of 6.5 s from
         # 13 s name sensor_bias (as the cause or the second cause) and those before do not.
