@@ -276,6 +276,48 @@ class Diagnose(unittest.TestCase):
         with open(os.path.join(SRC, "docs", "schemas", "hil.diagnosis.schema.json")) as f:
             jsonschema.validate(d, json.load(f))
 
+    def test_stability_across_cv_settings(self):
+        # A hidden bias on the press bench is named under every setting: stable.
+        run = self.simulate("bias_stable", "sensor_bias")
+        js = os.path.join(self.dir, "s.json")
+        r = hil("diagnose", run, "--json", js, "--quiet", "--stability-grid", "5:1,8:1,10:2")
+        self.assertEqual(r.returncode, 0, r.stderr)
+        with open(js) as f:
+            d = json.load(f)
+        self.assertEqual([(x["folds"], x["cv_offsets"]) for x in d["stability"]["rows"]], [(5, 1), (8, 1), (10, 2)])
+        self.assertTrue(all(x["cause"] == "sensor_bias" for x in d["stability"]["rows"]), d["stability"])
+        self.assertTrue(d["stability"]["stable"])
+        self.assertIn("verdict across cross-validation settings (stable: the same verdict under all 3 settings)", r.stdout)
+        import jsonschema
+        with open(os.path.join(SRC, "docs", "schemas", "hil.diagnosis.schema.json")) as f:
+            schema = json.load(f)
+        jsonschema.validate(d, schema)
+        # Without --stability the field is null; a bad grid is named.
+        r = hil("diagnose", run, "--json", js, "--quiet", "--candidates", "sensor_bias")
+        with open(js) as f:
+            self.assertIsNone(json.load(f)["stability"])
+        for bad in ("5", "5:0", "1:1", "5:1,x:2"):
+            r = hil("diagnose", run, "--quiet", "--stability-grid", bad)
+            self.assertEqual(r.returncode, 2, (bad, r.stderr))
+            self.assertIn("--stability-grid", r.stderr)
+        # TIAGo's verdict changes with the grid offsets (docs/case-study-tiago.md, per-offset
+        # table: the compliance alone on one grid, the slips first on two, both on eight).
+        if os.environ.get("HIL_SANITIZE") or not os.path.exists(TIAGO):
+            return
+        tiago = os.path.join(self.dir, "tiago_s")
+        r = hil("import", TIAGO, "--config", os.path.join(SRC, "examples", "import", "tiago_suspension.yaml"), "--out", tiago)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        r = hil("diagnose", tiago, "--rig", os.path.join(SRC, "examples", "import", "tiago_suspension_rig.yaml"), "--json", js,
+                "--quiet", "--stability-grid", "5:1,5:2,5:8", timeout=900)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        with open(js) as f:
+            d = json.load(f)
+        jsonschema.validate(d, schema)
+        self.assertFalse(d["stability"]["stable"], d["stability"])
+        self.assertIn("UNSTABLE, the verdict changes with them", r.stdout)
+        rows = {x["cv_offsets"]: x for x in d["stability"]["rows"]}
+        self.assertEqual({rows[8]["cause"], rows[8]["second_cause"]}, {d["cause"]["name"], d["second_cause"]["name"]})
+
     def test_a_drifting_plate_is_not_called_none(self):
         # Rule written before the run (issue 32): a plate whose fz zero drifts 0 -> 3 N over the
         # 26 s run (no step) is not `none`: either `unexplained`, or a named cause whose model

@@ -75,6 +75,20 @@ std::set<std::string> extended_set(const RunDiagnosis& r) {
   return e;
 }
 
+/// "stable: the same causes under all 9 settings" or "UNSTABLE: rest_change + ... under 4 of 9; ...".
+std::string stability_text(const RunDiagnosis& r) {
+  if (r.stable()) return fmt::format("stable: the same verdict under all {} settings", r.stability.size());
+  std::map<std::string, int> seen;
+  for (const auto& s : r.stability) {
+    std::set<std::string> named{s.cause, s.second_cause};
+    named.erase("");
+    ++seen[s.error.empty() ? fmt::format("{}", fmt::join(named, " + ")) : "not diagnosed"];
+  }
+  std::vector<std::string> parts;
+  for (const auto& [v, k] : seen) parts.push_back(fmt::format("{} under {} of {}", v, k, r.stability.size()));
+  return fmt::format("UNSTABLE, the verdict changes with them: {}", fmt::join(parts, "; "));
+}
+
 /// Whether an effect of `ext` locates events from the data (Effect::locates_events).
 bool locates_events(const std::set<std::string>& ext) {
   return std::any_of(ext.begin(), ext.end(), [](const std::string& e) {
@@ -174,6 +188,14 @@ void print_summary(std::ostream& out, const RunDiagnosis& r) {
                            100 * w.nominal_error, 100 * w.extended_error, w.gain_percent);
     }
   }
+  if (!r.stability.empty()) {
+    out << fmt::format("  verdict across cross-validation settings ({}):\n", stability_text(r));
+    out << "    folds  offsets  verdict                                   gain\n";
+    for (const auto& s : r.stability)
+      out << fmt::format("    {:>5}  {:>7}  {:<40}  {}\n", s.folds, s.cv_offsets,
+                         s.error.empty() ? s.cause + (s.second_cause.empty() ? "" : " + " + s.second_cause) : "not diagnosed: " + s.error,
+                         s.error.empty() && names_a_cause(s.cause) ? fmt::format("{:.1f} %", s.gain_percent) : "-");
+  }
   for (const auto& n : r.notes) out << "  note: " << n << "\n";
   out << fmt::format("  ({:.1f} s)\n", d.seconds);
 }
@@ -243,6 +265,19 @@ nlohmann::json to_json(const RunDiagnosis& r) {
                    {"residuals", res(d.extended_residuals)}};
   add_events(j["extended"]["parameters"], located_events(r, extended_set(r)));
   j["gain_percent"] = d.gain_percent;
+  if (r.stability.empty()) {
+    j["stability"] = nullptr;
+  } else {
+    nlohmann::json rows = nlohmann::json::array();
+    for (const auto& s : r.stability)
+      rows.push_back({{"folds", s.folds},
+                      {"cv_offsets", s.cv_offsets},
+                      {"cause", s.error.empty() ? nlohmann::json(s.cause) : nlohmann::json(nullptr)},
+                      {"second_cause", s.second_cause.empty() ? nlohmann::json(nullptr) : nlohmann::json(s.second_cause)},
+                      {"gain_percent", std::isfinite(s.gain_percent) ? nlohmann::json(s.gain_percent) : nlohmann::json(nullptr)},
+                      {"error", s.error.empty() ? nlohmann::json(nullptr) : nlohmann::json(s.error)}});
+    j["stability"] = {{"stable", r.stable()}, {"summary", stability_text(r)}, {"rows", rows}};
+  }
   j["confounded"] = nlohmann::json::array();
   for (const auto& c : d.confounded)
     j["confounded"].push_back({{"cause", c.cause},
@@ -461,6 +496,7 @@ report::Verdict make_verdict(const RunDiagnosis& r) {
   if (after.structured()) v.facts.emplace_back(d.extended ? "left unexplained" : "structure", after.structure_text());
   if (!ext.full.unidentifiable.empty()) v.facts.emplace_back("not identifiable", unidentifiable_text(ext.full));
   if (!r.windows.empty()) v.facts.emplace_back("over time", windows_text(r.windows));
+  if (!r.stability.empty()) v.facts.emplace_back("stability", stability_text(r));
   // What to do next.
   if (v.kind == "cause") {
     const auto cause = std::find_if(d.candidates.begin(), d.candidates.end(), [&](const auto& c) { return c.name == d.cause; });

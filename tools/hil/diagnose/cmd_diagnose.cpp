@@ -36,6 +36,8 @@ struct DiagnoseArgs {
   double window_s = 0.0;
   std::size_t max_samples = 10000;
   bool quiet = false;
+  bool stability = false;
+  std::string stability_grid;
 };
 
 int diagnose_cmd(const DiagnoseArgs& a) {
@@ -57,6 +59,15 @@ int diagnose_cmd(const DiagnoseArgs& a) {
   const bool table = std::filesystem::is_regular_file(a.run);
   if (table && a.window_s > 0)
     throw error::FormatError({"command line", 0, 0, "--window"}, "applies to a run folder (a stiffness table has no time)");
+  const bool stability = a.stability || !a.stability_grid.empty();
+  if (table && stability)
+    throw error::FormatError({"command line", 0, 0, "--stability"}, "applies to a run folder (a stiffness table has no time blocks)");
+  std::vector<std::pair<int, int>> grid;
+  try {
+    grid = a.stability_grid.empty() ? diagnose::default_stability_grid() : diagnose::parse_stability_grid(a.stability_grid);
+  } catch (const std::invalid_argument& e) {
+    throw error::FormatError({"command line", 0, 0, "--stability-grid"}, e.what());
+  }
   std::optional<format::Run> run;
   if (!table) run = format::load_run(a.run, a.rig);
   auto r = table ? diagnose::diagnose_table(a.run, a.rig, o) : diagnose::diagnose_run(*run, o);
@@ -69,6 +80,16 @@ int diagnose_cmd(const DiagnoseArgs& a) {
         else std::cerr << fmt::format("[diagnose window {}/{}] {}\n", step, total, what);
       };
     r.windows = diagnose::diagnose_windows(*run, a.window_s, wo);
+  }
+  if (stability) {
+    if (!a.quiet && tty) std::cerr << "\r" << std::string(100, ' ') << "\r";
+    auto so = o;
+    if (!a.quiet)
+      so.progress = [tty](int step, int total, const std::string& what) {
+        if (tty) std::cerr << fmt::format("\r[diagnose stability {}/{}] {:<50}", step, total, what) << std::flush;
+        else std::cerr << fmt::format("[diagnose stability {}/{}] {}\n", step, total, what);
+      };
+    r.stability = diagnose::verdict_stability(*run, so, grid);
   }
   if (!a.quiet && tty) std::cerr << "\r" << std::string(100, ' ') << "\r";
   auto& text = human(is_stdout(a.json));
@@ -139,6 +160,11 @@ void add_diagnose(CLI::App& app) {
                 "cost grows with the samples diagnosed, about 8 ms each on two cores)")
       ->capture_default_str()
       ->check(CLI::Range(std::size_t{0}, std::size_t{1'000'000'000}));
+  d->add_flag("--stability", da.stability,
+              "also diagnose the run under 5, 8 and 10 folds, each on 1, 2 and 8 grid offsets, and print the verdicts side by "
+              "side: a cause that changes with the cross-validation's settings is reported as unstable (9 diagnoses)");
+  d->add_option("--stability-grid", da.stability_grid,
+                "the settings --stability tries, as FOLDS:OFFSETS,... (implies --stability), e.g. 5:1,5:2,5:8");
   d->add_flag("--quiet", da.quiet, "no progress lines");
   d->callback([] { set_action([] { return diagnose_cmd(da); }); });
 }

@@ -6,6 +6,8 @@
 #include <memory>
 #include <ostream>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include <hil/diagnose/contact_family.hpp>
 #include <hil/diagnose/deflection_family.hpp>
@@ -51,6 +53,20 @@ struct WindowVerdict {
   std::string error;  ///< why the window was not diagnosed (e.g. no contact in it)
 };
 
+/// The verdict of the run under one cross-validation setting (verdict_stability).
+struct StabilityRow {
+  int folds = 5;
+  int cv_offsets = 1;
+  std::string cause;         ///< "none", "unexplained" or a candidate; empty when not diagnosed
+  std::string second_cause;  ///< empty: none
+  double gain_percent = std::numeric_limits<double>::quiet_NaN();
+  std::string error;  ///< why this setting could not be diagnosed
+};
+
+/// The (folds, cv offsets) settings `hil diagnose --stability` tries: 5, 8 and 10 blocks, each on
+/// one grid and pooled over 2 and 8 grid offsets.
+std::vector<std::pair<int, int>> default_stability_grid();
+
 struct RunDiagnosis {
   std::string run_name, mode;  ///< mode: "contact", "deflection" or "stiffness" (a stiffness table)
   int folds = 5;               ///< the cross-validation's blocks (Options::folds)
@@ -63,9 +79,12 @@ struct RunDiagnosis {
   hil::diagnose::ModelFactory make;
   hil::diagnose::Diagnosis result;
   std::vector<std::string> notes;
-  std::size_t samples_in_run = 0;      ///< the run's samples, before Options::max_samples
-  std::size_t every = 1;               ///< the diagnosis took every `every`-th of them
-  std::vector<WindowVerdict> windows;  ///< diagnose_windows' verdicts, when asked for
+  std::size_t samples_in_run = 0;       ///< the run's samples, before Options::max_samples
+  std::size_t every = 1;                ///< the diagnosis took every `every`-th of them
+  std::vector<WindowVerdict> windows;   ///< diagnose_windows' verdicts, when asked for
+  std::vector<StabilityRow> stability;  ///< verdict_stability's rows, when asked for
+  /// Every stability row names the same causes (cause and second cause, as a set) as `result`.
+  bool stable() const;
   const hil::diagnose::Observations& obs() const { return contact ? contact->obs : deflection ? deflection->obs : stiffness->obs; }
 };
 
@@ -79,6 +98,13 @@ format::Run every_nth(const format::Run& run, std::size_t every);
 /// too few samples) keeps why in WindowVerdict::error. \throws std::invalid_argument if
 /// window_s <= 0.
 std::vector<WindowVerdict> diagnose_windows(const format::Run& run, double window_s, const Options& o);
+/// The run diagnosed again under each (folds, cv offsets) of `grid`, every other option as in `o`
+/// (issue 32, item 5): a verdict that changes with the cross-validation's settings is not one to
+/// act on. A setting that cannot be diagnosed keeps why in StabilityRow::error.
+/// \throws std::invalid_argument on an empty grid or a setting with folds < 2 or offsets < 1.
+std::vector<StabilityRow> verdict_stability(const format::Run& run, const Options& o, const std::vector<std::pair<int, int>>& grid);
+/// "5:1,8:2" -> {(5, 1), (8, 2)}. \throws std::invalid_argument naming the bad item.
+std::vector<std::pair<int, int>> parse_stability_grid(const std::string& text);
 /// A stiffness-experiment table (docs/calibration.md) of the robot in `rig_path`, against the
 /// joint-compliance model. \throws error::FormatError / std::runtime_error naming the file.
 RunDiagnosis diagnose_table(const std::string& table_path, const std::string& rig_path, const Options& o);
