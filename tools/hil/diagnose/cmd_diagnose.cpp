@@ -40,6 +40,16 @@ struct DiagnoseArgs {
   std::string stability_grid;
 };
 
+/// Progress lines "[diagnose<stage> step/total] what" on stderr: rewritten in place on a terminal,
+/// one per line otherwise; none when quiet.
+hil::diagnose::Progress progress_lines(bool quiet, bool tty, const std::string& stage, int width) {
+  if (quiet) return {};
+  return [tty, stage, width](int step, int total, const std::string& what) {
+    if (tty) std::cerr << fmt::format("\r[diagnose{} {}/{}] {:<{}}", stage, step, total, what, width) << std::flush;
+    else std::cerr << fmt::format("[diagnose{} {}/{}] {}\n", stage, step, total, what);
+  };
+}
+
 int diagnose_cmd(const DiagnoseArgs& a) {
   diagnose::Options o;
   o.candidates = a.candidates;
@@ -50,11 +60,7 @@ int diagnose_cmd(const DiagnoseArgs& a) {
   o.max_samples = a.max_samples;
   o.progress_detail = true;
   const bool tty = isatty(STDERR_FILENO) != 0;
-  if (!a.quiet)
-    o.progress = [tty](int step, int total, const std::string& what) {
-      if (tty) std::cerr << fmt::format("\r[diagnose {}/{}] {:<80}", step, total, what) << std::flush;
-      else std::cerr << fmt::format("[diagnose {}/{}] {}\n", step, total, what);
-    };
+  o.progress = progress_lines(a.quiet, tty, "", 80);
   // A file is a stiffness-experiment table; a folder a run.
   const bool table = std::filesystem::is_regular_file(a.run);
   if (table && a.window_s > 0)
@@ -74,21 +80,13 @@ int diagnose_cmd(const DiagnoseArgs& a) {
   if (a.window_s > 0) {
     if (!a.quiet && tty) std::cerr << "\r" << std::string(100, ' ') << "\r";
     auto wo = o;
-    if (!a.quiet)
-      wo.progress = [tty](int step, int total, const std::string& what) {
-        if (tty) std::cerr << fmt::format("\r[diagnose window {}/{}] {:<50}", step, total, what) << std::flush;
-        else std::cerr << fmt::format("[diagnose window {}/{}] {}\n", step, total, what);
-      };
+    wo.progress = progress_lines(a.quiet, tty, " window", 50);
     r.windows = diagnose::diagnose_windows(*run, a.window_s, wo);
   }
   if (stability) {
     if (!a.quiet && tty) std::cerr << "\r" << std::string(100, ' ') << "\r";
     auto so = o;
-    if (!a.quiet)
-      so.progress = [tty](int step, int total, const std::string& what) {
-        if (tty) std::cerr << fmt::format("\r[diagnose stability {}/{}] {:<50}", step, total, what) << std::flush;
-        else std::cerr << fmt::format("[diagnose stability {}/{}] {}\n", step, total, what);
-      };
+    so.progress = progress_lines(a.quiet, tty, " stability", 50);
     r.stability = diagnose::verdict_stability(*run, so, grid);
   }
   if (!a.quiet && tty) std::cerr << "\r" << std::string(100, ' ') << "\r";
