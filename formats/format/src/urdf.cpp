@@ -5,7 +5,9 @@
 #include <kdl_parser/kdl_parser.hpp>
 #include <urdf_parser/urdf_parser.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <map>
 #include <mutex>
@@ -150,10 +152,47 @@ void resolve_mimic_joints(const urdf::ModelInterface& model, const std::string& 
   }
 }
 
+/// The offset of the first byte that does not belong to a well-formed UTF-8 sequence (RFC 3629:
+/// no overlong forms, no surrogates, at most U+10FFFF), or npos when the text is valid UTF-8.
+std::size_t first_invalid_utf8(const std::string& s) {
+  const auto* b = reinterpret_cast<const unsigned char*>(s.data());
+  const std::size_t n = s.size();
+  for (std::size_t i = 0; i < n;) {
+    const unsigned c = b[i];
+    if (c < 0x80) {
+      ++i;
+      continue;
+    }
+    std::size_t len = 0;
+    unsigned lo = 0x80, hi = 0xBF;  // the range of the second byte
+    if (c >= 0xC2 && c <= 0xDF) len = 2;
+    else if (c >= 0xE0 && c <= 0xEF) len = 3, lo = c == 0xE0 ? 0xA0 : 0x80, hi = c == 0xED ? 0x9F : 0xBF;
+    else if (c >= 0xF0 && c <= 0xF4) len = 4, lo = c == 0xF0 ? 0x90 : 0x80, hi = c == 0xF4 ? 0x8F : 0xBF;
+    else return i;
+    if (i + len > n) return i;
+    if (b[i + 1] < lo || b[i + 1] > hi) return i;
+    for (std::size_t k = 2; k < len; ++k)
+      if (b[i + k] < 0x80 || b[i + k] > 0xBF) return i;
+    i += len;
+  }
+  return std::string::npos;
+}
+
 }  // namespace
 
 RobotSpec parse_urdf_robot(const std::string& xml, const std::string& display_name, const std::string& base_link,
                            const std::string& tip_link) {
+  // TinyXML, which urdfdom parses with, trusts a UTF-8 lead byte's length and reads past the end of
+  // the text on a broken or truncated sequence (found by fuzz_urdf under ASan): refused here first.
+  if (const std::size_t at = first_invalid_utf8(xml); at != std::string::npos) {
+    const std::size_t line = 1 + static_cast<std::size_t>(std::count(xml.begin(), xml.begin() + static_cast<std::ptrdiff_t>(at), '\n'));
+    const std::size_t nl = at == 0 ? std::string::npos : xml.rfind('\n', at - 1);
+    const std::size_t column = at - (nl == std::string::npos ? 0 : nl + 1) + 1;
+    char hex[8];
+    std::snprintf(hex, sizeof hex, "0x%02X", static_cast<unsigned>(static_cast<unsigned char>(xml[at])));
+    throw FormatError({display_name, line, column, "robot"},
+                      "not valid UTF-8 at byte " + std::to_string(at) + " (" + hex + "): a URDF is an XML text");
+  }
   urdf::ModelInterfaceSharedPtr model;
   KDL::Tree tree;
   {

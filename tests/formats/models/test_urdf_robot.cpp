@@ -243,6 +243,17 @@ TEST(UrdfRobot, BadDescriptionsFailByName) {
   EXPECT_NE(outside.find("joint 'j2' mimics 'j1', which is not a moving joint between 'b' and 'c'"), std::string::npos) << outside;
   // A mimic joint outside the chain (a gripper's finger) is no concern of the arm's.
   EXPECT_EQ(hf::parse_urdf_robot(mimic, "mimic.urdf", "a", "b").joints.size(), 1u);
+  // Found by fuzz_urdf (ASan): TinyXML reads past the text on a broken UTF-8 sequence, so one is
+  // refused first, by line, column and byte. Valid multi-byte text (a name in German) passes.
+  const auto broken = message([] { hf::parse_urdf_robot("<robot name='x'>\n  <link name='ab\xdf\xdf'/></robot>", "utf8.urdf", "a", "b"); });
+  EXPECT_NE(broken.find("utf8.urdf:2:17"), std::string::npos) << broken;
+  EXPECT_NE(broken.find("not valid UTF-8 at byte 33 (0xDF)"), std::string::npos) << broken;
+  const auto truncated = message([] { hf::parse_urdf_robot("<robot name='x\xe2\x82'/>", "cut.urdf", "a", "b"); });
+  EXPECT_NE(truncated.find("not valid UTF-8 at byte 14 (0xE2)"), std::string::npos) << truncated;
+  const auto valid = message([] {
+    hf::parse_urdf_robot("<robot name='Gr\xc3\xbc\xc3\x9f\xe2\x82\xac'><link name='a'/></robot>", "ok.urdf", "a", "b");
+  });
+  EXPECT_EQ(valid.find("UTF-8"), std::string::npos) << valid;
   // Found by fuzz_urdf: an <axis> without xyz reaches KDL as (0, 0, 0).
   const auto no_axis = message([] {
     hf::parse_urdf_robot("<robot name='x'><link name='a'/><link name='b'/><joint name='j' type='continuous'>"
