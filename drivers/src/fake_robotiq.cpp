@@ -228,10 +228,25 @@ void FakeRobotiqFt300::run() noexcept {
       const std::uint8_t fc = req[1];
       const unsigned addr = static_cast<unsigned>(req[2] << 8 | req[3]);
       const unsigned qty = static_cast<unsigned>(req[4] << 8 | req[5]);
+      // Counters move before the bytes leave: a client that has its reply must see it counted.
       const auto exception = [&](std::uint8_t code) {
+        {
+          std::lock_guard lk(I.m);
+          ++I.stats.exceptions;
+        }
         reply({req[0], static_cast<std::uint8_t>(fc | 0x80), code});
-        std::lock_guard lk(I.m);
-        ++I.stats.exceptions;
+      };
+      const auto answer = [&](const std::vector<std::uint8_t>& out, bool starts_stream) {
+        {
+          std::lock_guard lk(I.m);
+          ++I.stats.replies;
+          if (starts_stream) ++I.stats.stream_starts;
+        }
+        if (starts_stream) {
+          I.streaming = true;
+          next = Clock::now();
+        }
+        reply(out);
       };
       bool refuse = mf.exception_fraction > 0.0 && uni(rng) < mf.exception_fraction;
       for (const auto& w : mf.exception_windows) refuse = refuse || w.contains(t);
@@ -256,7 +271,7 @@ void FakeRobotiqFt300::run() noexcept {
           exception(0x02);
           continue;
         }
-        reply(out);
+        answer(out, false);
       } else if (fc == 16) {
         const bool start_write = addr == robotiq::kRegStreamSelect && qty == 1 && req[6] == 2 && req[7] == (robotiq::kStreamStart >> 8) &&
                                  req[8] == (robotiq::kStreamStart & 0xFF);
@@ -271,17 +286,10 @@ void FakeRobotiqFt300::run() noexcept {
           ++I.stats.ignored_deaf;
           continue;
         }
-        reply({req[0], 16, req[2], req[3], req[4], req[5]});
-        I.streaming = true;
-        next = Clock::now();
-        std::lock_guard lk(I.m);
-        ++I.stats.stream_starts;
+        answer({req[0], 16, req[2], req[3], req[4], req[5]}, true);
       } else {
         exception(0x01);  // the sensor documents FC03 and FC16 only
-        continue;
       }
-      std::lock_guard lk(I.m);
-      ++I.stats.replies;
     }
     if (!I.streaming.load() || Clock::now() < next) continue;
     // One frame at its deadline.
