@@ -146,9 +146,10 @@ void FakeNetCanOemBoard::run() noexcept {
   std::uniform_real_distribution<double> uni(0.0, 1.0);
   // Sends one frame; `completes_answer`: it is the last frame of an intact gauge answer, which is
   // then counted as delivered (the fault soak reconciles that count with what was recorded).
+  // The lock is held across the send so that a reader that has the frame sees it counted.
   auto send_now = [&](const CanFrame& f, bool completes_answer) {
+    std::lock_guard lk(I.m);
     if (I.channel->send(f, std::chrono::milliseconds(5)) == IoStatus::ok) {
-      std::lock_guard lk(I.m);
       ++I.stats.frames_sent;
       if (completes_answer) ++I.stats.gauge_answers_delivered;
       return true;
