@@ -72,6 +72,50 @@ double quantum_of(std::vector<double> v, std::size_t min_levels) {
   return step;
 }
 
+std::vector<double> rate_steps(const std::vector<double>& t_s, const std::vector<Vec3>& rate, const std::vector<Vec3>& increment,
+                               double quantum, double increment_quantum) {
+  const std::size_t n = rate.size();
+  if (t_s.size() != n || increment.size() + 1 != std::max<std::size_t>(n, 1))
+    throw std::invalid_argument("rate_steps: " + std::to_string(n) + " rates need as many times and one increment fewer");
+  std::vector<double> out(n > 1 ? n - 1 : 0, std::numeric_limits<double>::quiet_NaN());
+  if (n < 3) return out;
+  std::vector<double> jump(n - 1);
+  for (std::size_t j = 0; j + 1 < n; ++j) jump[j] = (rate[j + 1] - rate[j]).norm();
+  std::vector<double> sorted = jump;
+  std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() / 2), sorted.end());
+  const double floor = kStepFloor * std::max(quantum, sorted[sorted.size() / 2]);
+  std::vector<bool> step(n - 1, false);
+  for (std::size_t j = 0; j + 1 < n; ++j) {
+    const double before = j > 0 ? jump[j - 1] : 0.0, after = j + 2 < n ? jump[j + 1] : 0.0;
+    step[j] = jump[j] > floor && jump[j] > kStepRatio * std::max(before, after);
+  }
+  // Where the measured increments and the trapezoidal integral of the rate disagree, interval by
+  // interval: the quantisation of what is integrated (2 µm of a pose against a step's 0.1 mm), which
+  // would misplace a step by a third of a millisecond; the increments over m intervals on each
+  // side average it, while the rate's own quantum (a bias over a whole segment) grows with m: m
+  // balances the two (q_x / sqrt(m) against q_v h m / 2).
+  std::vector<Vec3> mismatch(n - 1);
+  for (std::size_t i = 0; i + 1 < n; ++i) mismatch[i] = increment[i] - 0.5 * (rate[i] + rate[i + 1]) * (t_s[i + 1] - t_s[i]);
+  for (std::size_t j = 0; j + 1 < n; ++j) {
+    if (!step[j]) continue;
+    const double h = t_s[j + 1] - t_s[j];
+    const double span = quantum > 0.0 ? std::pow(increment_quantum / (quantum * h), 2.0 / 3.0) : static_cast<double>(kStepSpan);
+    const auto m = static_cast<std::size_t>(std::clamp(std::lround(span), 1L, static_cast<long>(kStepSpan)));
+    // The position (say) at t_j and at t_j+1 as the samples before and after predict them.
+    Vec3 before = Vec3::Zero(), after = Vec3::Zero(), sum = Vec3::Zero();
+    std::size_t nb = 1, na = 1;  // a = 0: the sample itself
+    for (std::size_t a = 1; a < m && a <= j && !step[j - a]; ++a, ++nb) before += (sum -= mismatch[j - a]);
+    sum.setZero();
+    for (std::size_t b = 1; b < m && j + b + 1 < n && !step[j + b]; ++b, ++na) after += (sum += mismatch[j + b]);
+    const Vec3 across = increment[j] + after / static_cast<double>(na) - before / static_cast<double>(nb);
+    // across = rate[j] s h + rate[j+1] (1 - s) h, solved for s along the jump.
+    const Vec3 dv = rate[j] - rate[j + 1];
+    const double s = (across - rate[j + 1] * h).dot(dv) / (dv.squaredNorm() * h);
+    out[j] = std::isfinite(s) ? std::clamp(s, 0.0, 1.0) : 0.5;
+  }
+  return out;
+}
+
 std::vector<double> windowed_slope(const std::vector<double>& t_s, const std::vector<double>& x, int half_window) {
   const auto n = static_cast<std::ptrdiff_t>(x.size());
   std::vector<double> out(x.size(), 0.0);
@@ -212,6 +256,29 @@ ContactData make_contact_data(const cid::Scene& scene, double v_tm, const std::v
     d.rate_mse_ratio(a) = c.mse_ratio;
     d.rate_from_poses[static_cast<std::size_t>(a)] = c.from_poses;
     for (std::size_t k = 0; k < n; ++k) d.v_rate_world[k](a) = c.v_m_per_s[k];
+  }
+  // Where the reported twist and the rates step (a robot's moves and stops), placed by the poses.
+  {
+    std::vector<Vec3> v(n), w(n), dp(n - 1), dth(n - 1);
+    Vec3 w_quantum = Vec3::Zero(), rate_quantum = Vec3::Zero();
+    for (std::size_t k = 0; k < n; ++k) {
+      v[k] = d.kin[k].v_world_ee;
+      w[k] = d.kin[k].w_world_ee;
+      if (k + 1 < n) {
+        dp[k] = d.kin[k + 1].T_world_ee.translation() - d.kin[k].T_world_ee.translation();
+        dth[k] = so3::log(Eigen::Matrix3d(d.kin[k + 1].T_world_ee.linear() * d.kin[k].T_world_ee.linear().transpose()));  // world frame
+      }
+    }
+    for (int a = 0; a < 3; ++a) {
+      std::vector<double> c(n);
+      for (std::size_t k = 0; k < n; ++k) c[k] = w[k](a);
+      w_quantum(a) = quantum_of(c);
+      rate_quantum(a) = d.rate_from_poses[static_cast<std::size_t>(a)] ? 0.0 : d.velocity_quantum_m_per_s(a);
+    }
+    const double q_p = d.position_quantum_m.norm();
+    d.v_step = rate_steps(d.obs.t_s, v, dp, d.velocity_quantum_m_per_s.norm(), q_p);
+    d.w_step = rate_steps(d.obs.t_s, w, dth, w_quantum.norm(), 0.0);
+    d.rate_step = rate_steps(d.obs.t_s, d.v_rate_world, dp, rate_quantum.norm(), q_p);
   }
   std::nth_element(deltas.begin(), deltas.begin() + static_cast<long>(deltas.size() / 2), deltas.end());
   d.delta_ref_m = deltas[deltas.size() / 2];
@@ -373,6 +440,8 @@ ContactFamily::SincWeights ContactFamily::sinc_weights(double t) const {
   const double a = it == ts.begin() || it == ts.end() ? 0.0 : (t - at(j0)) / (at(j0 + 1) - at(j0));
   SincWeights w;
   w.first = j0;
+  w.interval = j0;
+  w.fraction = a;
   if (a == 0.0) return w;
 
   constexpr int m = 2 * kSincLobes;
@@ -422,7 +491,34 @@ cid::Kinematics ContactFamily::kinematics_at(const SincWeights& sw) const {
   out.v_world_ee = v;
   out.w_world_ee = w;
   out.T_world_ee.linear() = Eigen::Quaterniond(q).normalized().toRotationMatrix();
+  // Near a step of the twist the sinc rings (a stop's zero velocity turns into a slip in some
+  // direction), and halfway is the wrong time for the step: there the twist is what the samples and
+  // the step say, linear between them, stepping where the poses put the step. The poses stay the
+  // sinc's: a linear blend would lower their quantisation noise at some fractions of a sample more
+  // than others, and a fitted delay would drift there (above).
+  const auto& k0 = sample(sw.interval);
+  const auto& k1 = sample(sw.interval + 1);
+  const double a = sw.fraction;
+  const auto twist = [a](const std::vector<double>& steps, const SincWeights& s, const Vec3& v0, const Vec3& v1, Vec3& result) {
+    const StepNear at = step_near(steps, s);
+    if (at.near) result = !at.at ? Vec3((1 - a) * v0 + a * v1) : a < at.fraction ? v0 : v1;
+  };
+  twist(d_.v_step, sw, k0.v_world_ee, k1.v_world_ee, out.v_world_ee);
+  twist(d_.w_step, sw, k0.w_world_ee, k1.w_world_ee, out.w_world_ee);
   return out;
+}
+
+ContactFamily::StepNear ContactFamily::step_near(const std::vector<double>& steps, const SincWeights& sw) {
+  StepNear r;
+  if (steps.empty() || sw.taps == 0) return r;
+  const auto last = static_cast<std::ptrdiff_t>(steps.size()) - 1;
+  for (std::ptrdiff_t j = std::max<std::ptrdiff_t>(0, sw.first); j <= std::min(last, sw.first + sw.taps - 2); ++j)
+    r.near = r.near || std::isfinite(steps[static_cast<std::size_t>(j)]);
+  if (sw.interval <= last && std::isfinite(steps[static_cast<std::size_t>(sw.interval)])) {
+    r.at = true;
+    r.fraction = steps[static_cast<std::size_t>(sw.interval)];
+  }
+  return r;
 }
 
 Vec3 ContactFamily::rate_velocity_at(const SincWeights& sw) const {
@@ -431,6 +527,11 @@ Vec3 ContactFamily::rate_velocity_at(const SincWeights& sw) const {
     return d_.v_rate_world[static_cast<std::size_t>(std::clamp<std::ptrdiff_t>(j, 0, n - 1))];
   };
   if (sw.taps == 0) return sample(sw.first);
+  if (const StepNear s = step_near(d_.rate_step, sw); s.near) {  // as kinematics_at's twist
+    const double a = sw.fraction;
+    if (!s.at) return (1 - a) * sample(sw.interval) + a * sample(sw.interval + 1);
+    return a < s.fraction ? sample(sw.interval) : sample(sw.interval + 1);
+  }
   Vec3 v = Vec3::Zero();
   for (int i = 0; i < sw.taps; ++i) v += sw.h[static_cast<std::size_t>(i)] * sample(sw.first + i);
   return v;

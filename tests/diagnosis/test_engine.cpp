@@ -999,6 +999,78 @@ TEST(ContactFamily, AWindowedSlopeIsExactOnQuadraticsAndAveragesQuantisationNois
   EXPECT_LT(rms, 0.1 * 2e-4 / std::sqrt(12.0));  // a tenth of a 2e-4 m/s twist step's noise
 }
 
+// A robot's moves: the velocity steps between two samples (a start, a stop, a turn). rate_steps
+// finds the steps, and only them, and places them from the quantised positions to a small part of a
+// sample; a smooth motion and a quantised smooth velocity have none.
+TEST(ContactFamily, RateStepsFindAndPlaceAMovesStepsAndNothingElse) {
+  using Vec3 = Eigen::Vector3d;
+  const double h = 0.01, q_p = 2e-6, q_v = 2e-5;
+  // Piecewise-constant velocity: 8 mm/s along (1, 0.5, 0) from 0.0423 s, a stop at 0.5177 s, back
+  // at 4 mm/s from 0.8031 s. Exact positions at the samples, then quantised.
+  const std::vector<double> kinks{0.0423, 0.5177, 0.8031};
+  const std::vector<Vec3> vel{Vec3::Zero(), Vec3(8e-3, 4e-3, 0.0), Vec3::Zero(), Vec3(-4e-3, -2e-3, 0.0)};
+  const auto segment = [&](double t) {
+    std::size_t i = 0;
+    while (i < kinks.size() && t >= kinks[i]) ++i;
+    return i;
+  };
+  const auto position = [&](double t) {
+    Vec3 p = Vec3(0.1, 0.2, 0.05);
+    double from = 0.0;
+    for (std::size_t i = 0; i < kinks.size() && kinks[i] < t; ++i) {
+      p += vel[i] * (kinks[i] - from);
+      from = kinks[i];
+    }
+    return Vec3(p + vel[segment(t)] * (t - from));
+  };
+  std::vector<double> t;
+  std::vector<Vec3> v, dp;
+  Vec3 last;
+  for (int k = 0; k < 120; ++k) {
+    t.push_back(h * k);
+    Vec3 p = position(t.back());
+    for (int a = 0; a < 3; ++a) p(a) = q_p * std::round(p(a) / q_p);
+    Vec3 vk = vel[segment(t.back())];
+    for (int a = 0; a < 3; ++a) vk(a) = q_v * std::round(vk(a) / q_v);
+    v.push_back(vk);
+    if (k > 0) dp.push_back(p - last);
+    last = p;
+  }
+  const auto steps = rate_steps(t, v, dp, std::sqrt(3.0) * q_v, std::sqrt(3.0) * q_p);
+  ASSERT_EQ(steps.size(), t.size() - 1);
+  for (std::size_t j = 0; j < steps.size(); ++j) {
+    bool kink = false;
+    double fraction = 0.0;
+    for (const double tk : kinks)
+      if (tk > t[j] && tk < t[j + 1]) {
+        kink = true;
+        fraction = (tk - t[j]) / h;
+      }
+    if (!kink) {
+      EXPECT_TRUE(std::isnan(steps[j])) << "a step found at interval " << j;
+      continue;
+    }
+    ASSERT_FALSE(std::isnan(steps[j])) << "the step at interval " << j << " not found";
+    // One quantum of position over the slowest jump (4 mm/s) is half a millisecond: the span of
+    // samples on each side brings the error well under it.
+    EXPECT_NEAR(steps[j], fraction, 0.02) << "interval " << j;
+  }
+  // A smooth motion (two tones) with its velocity quantised: no step anywhere.
+  std::vector<Vec3> vs, dps;
+  Vec3 prev;
+  for (std::size_t k = 0; k < t.size(); ++k) {
+    const double tk = t[k];
+    const Vec3 p(1e-3 * std::sin(2 * M_PI * 0.7 * tk), 4e-4 * std::sin(2 * M_PI * 2.3 * tk), 0.0);
+    Vec3 vk(1e-3 * 2 * M_PI * 0.7 * std::cos(2 * M_PI * 0.7 * tk), 4e-4 * 2 * M_PI * 2.3 * std::cos(2 * M_PI * 2.3 * tk), 0.0);
+    for (int a = 0; a < 3; ++a) vk(a) = q_v * std::round(vk(a) / q_v);
+    vs.push_back(vk);
+    if (k > 0) dps.push_back(p - prev);
+    prev = p;
+  }
+  for (const double s : rate_steps(t, vs, dps, std::sqrt(3.0) * q_v, 0.0)) EXPECT_TRUE(std::isnan(s));
+  EXPECT_THROW(rate_steps(t, v, v, 0.0, 0.0), std::invalid_argument);  // increments: one fewer
+}
+
 // contact_damping's penetration rates: from the pose slope on an axis only where it has less error
 // than the reported twist (a coarse twist on a smooth motion), from the twist where the twist is
 // finer, unquantised, or the motion turns within the slope's window.

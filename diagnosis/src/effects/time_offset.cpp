@@ -10,19 +10,25 @@ namespace {
 
 class Term : public ContactTerm {
  public:
-  explicit Term(const ContactData& d) {
-    const double dt = (d.obs.t_s.back() - d.obs.t_s.front()) / static_cast<double>(d.obs.size() - 1);
-    const double lim = std::max(20 * dt, 0.1);
-    param_ = {"time_offset_s", "s", dt, true, -lim, lim};
+  explicit Term(const ContactData& d) : dt_((d.obs.t_s.back() - d.obs.t_s.front()) / static_cast<double>(d.obs.size() - 1)) {
+    const double lim = std::max(20 * dt_, 0.1);
+    param_ = {"time_offset_s", "s", dt_, true, -lim, lim};
   }
   std::vector<Param> nonlinear() const override { return {param_}; }
+  // Over the bounds, and every quarter sample within ± 3 samples: where the motion steps (a robot's
+  // moves and stops), friction turns at the step, and the cost steps as a delayed instant crosses
+  // one; LM does not cross such steps, so it must start between the right ones (issue 32: a fold
+  // started at one sample stayed there, 2 ms off, and mispredicted a yaw reversal's whole moment).
   void starts(const ContactSlots& s, const Eigen::VectorXd& zero, std::vector<Eigen::VectorXd>& out) const override {
-    for (int i = -20; i <= 20; ++i) {
-      if (i == 0) continue;
+    const auto add = [&](double tau) {
       Eigen::VectorXd x = zero;
-      x(s.nonlinear) = param_.upper * i / 20.0;
+      x(s.nonlinear) = tau;
       out.push_back(x);
-    }
+    };
+    for (int i = -20; i <= 20; ++i)
+      if (i != 0) add(param_.upper * i / 20.0);
+    for (int i = -12; i <= 12; ++i)
+      if (i != 0 && i % 4 != 0) add(dt_ * i / 4.0);
   }
   bool moves_contacts() const override { return true; }
   void channels(const ContactSlots& s, const Eigen::VectorXd& phi, ContactChannels& c) const override {
@@ -31,6 +37,7 @@ class Term : public ContactTerm {
   }
 
  private:
+  double dt_;
   Param param_;
 };
 

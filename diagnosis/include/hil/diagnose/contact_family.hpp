@@ -62,9 +62,35 @@ struct ContactData {
   Eigen::Vector3d position_quantum_m = Eigen::Vector3d::Zero(), velocity_quantum_m_per_s = Eigen::Vector3d::Zero();
   /// Per linear axis, the pose slope's estimated mean square error over the twist's (NaN: not compared).
   Eigen::Vector3d rate_mse_ratio = Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
+  /// Per interval [t_k, t_k+1] (n - 1 of them), where the reported linear and angular velocities
+  /// and the penetration rates step (rate_steps: the fraction of the interval, NaN where they vary
+  /// smoothly). A robot's piecewise-linear moves and stops: time_offset's delayed twist steps there,
+  /// not halfway, nor with a windowed sinc's ringing. Empty: nothing steps.
+  std::vector<double> v_step, w_step, rate_step;
   /// One line on where the penetration rates come from, for the report.
   std::string rate_source() const;
 };
+
+/// A jump of a sampled rate is a change over kStepRatio times the changes of both neighbouring
+/// intervals and over kStepFloor times the larger of the rate's quantum and the median change.
+/// Why these: on a smooth rate the ratio of neighbouring changes stays near 1 (at most about 1 where
+/// the acceleration crosses zero), and quantised or noisy rates change by a quantum or a noise std.
+constexpr double kStepRatio = 4.0, kStepFloor = 6.0;
+
+/// At most this many samples on each side of a step place it (rate_steps).
+constexpr int kStepSpan = 8;
+
+/// Where a sampled rate steps (a robot's piecewise-linear move, a start, a stop): per interval j =
+/// [t_j, t_j+1], the fraction of the interval at which rate jumps from rate[j] to rate[j+1], or NaN
+/// where it varies smoothly. The fraction is placed so that rate[j] until the step and rate[j+1]
+/// after it integrate to the change of what `rate` is the rate of (the position, the rotation
+/// vector) across the interval, as the increments of up to kStepSpan intervals on each side predict
+/// it (the trapezoidal integral of the rate bridges them), by least squares, clipped to [0, 1].
+/// \param quantum the rate's quantisation step (norm over components; 0: none).
+/// \param increment_quantum the quantisation step of what is integrated (0: none).
+/// \pre t_s increasing; sizes n, n, n - 1.
+std::vector<double> rate_steps(const std::vector<double>& t_s, const std::vector<Eigen::Vector3d>& rate,
+                               const std::vector<Eigen::Vector3d>& increment, double quantum, double increment_quantum);
 
 /// Half-width of the pose slope's window, samples: measured on the blind suite (± 4 leaves the
 /// damping 2 std low at the fine resolution, ± 8 within 1.5 std at both).
@@ -176,7 +202,16 @@ class ContactFamily : public ModelFamily {
     std::ptrdiff_t first = 0;
     int taps = 0;
     std::array<double, kMaxTaps> h{};
+    std::ptrdiff_t interval = 0;  ///< t lies in [t_interval, t_interval+1) ...
+    double fraction = 0.0;        ///< ... at this fraction of it
   };
+  /// Whether a step (ContactData::v_step and the like) lies in sw's window (near), and whether it
+  /// lies in the interval holding t (at).
+  struct StepNear {
+    bool near = false, at = false;
+    double fraction = 0.0;  ///< of the step in the interval holding t, when `at`
+  };
+  static StepNear step_near(const std::vector<double>& steps, const SincWeights& sw);
   SincWeights sinc_weights(double t) const;
   Eigen::Vector3d rate_velocity_at(const SincWeights& w) const;
   cid::Kinematics kinematics_at(const SincWeights& w) const;
