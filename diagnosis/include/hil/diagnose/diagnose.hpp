@@ -160,7 +160,8 @@ struct CandidateResult {
 
 struct Diagnosis {
   Score nominal;
-  double noise_relative = 0.0;              ///< the measurement noise (weighted rms) estimated from the residual's differences
+  double noise_relative =
+      0.0;  ///< the measurement noise (weighted rms): the least of the nominal's and the single candidates' held-out residual differences
   std::vector<CandidateResult> candidates;  ///< ranked: supported first, then by held-out error
   /// The named cause; "none" when no extension is supported and the nominal residual is
   /// unstructured; "unexplained" when none is supported but structure remains (named in
@@ -185,12 +186,12 @@ using Progress = std::function<void(int, int, const std::string&)>;
 Diagnosis diagnose(const ModelFactory& make, const std::vector<std::string>& candidates, const Observations& obs, const Context& ctx,
                    const DiagnoseOptions& o = {}, const Progress& progress = {});
 
-/// Paired comparison of held-out predictions: the mean reduction of the per-sample squared weighted
-/// error over its autocorrelation-robust (Newey-West) standard error.
 /// The white-noise level of a residual (weighted rms): von Neumann's first-difference estimator,
 /// insensitive to slowly varying model error.
 double noise_level(const Observations& obs, const Eigen::MatrixXd& prediction);
 
+/// Paired comparison of held-out predictions: the mean reduction of the per-sample squared weighted
+/// error over its autocorrelation-robust (Newey-West) standard error.
 double paired_z(const Observations& obs, const Eigen::MatrixXd& reference, const Eigen::MatrixXd& candidate);
 /// The same on two scores' held-out predictions, the per-sample error norm averaged over the grid
 /// offsets of repeated blocked CV (CvOptions::offsets).
