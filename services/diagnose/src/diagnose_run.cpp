@@ -263,15 +263,12 @@ std::vector<WindowVerdict> diagnose_windows(const format::Run& run, double windo
   return out;
 }
 
-std::vector<std::pair<int, int>> default_stability_grid() {
-  return {{5, 1}, {5, 2}, {5, 8}, {8, 1}, {8, 2}, {8, 8}, {10, 1}, {10, 2}, {10, 8}};
-}
-
 std::vector<StabilityRow> verdict_stability(const format::Run& run, const Options& o, const std::vector<std::pair<int, int>>& grid) {
   if (grid.empty()) throw std::invalid_argument("diagnose: the stability grid is empty");
   for (const auto& [folds, offsets] : grid)
-    if (folds < 2 || offsets < 1)
-      throw std::invalid_argument(fmt::format("diagnose: stability setting {}:{} needs at least 2 folds and 1 offset", folds, offsets));
+    if (folds < kMinFolds || folds > kMaxFolds || offsets < 1 || offsets > kMaxCvOffsets)
+      throw std::invalid_argument(fmt::format("diagnose: stability setting {}:{} needs {}-{} folds and 1-{} offsets", folds, offsets,
+                                              kMinFolds, kMaxFolds, kMaxCvOffsets));
   std::vector<StabilityRow> out;
   Options so = o;
   so.progress = {};
@@ -295,30 +292,6 @@ std::vector<StabilityRow> verdict_stability(const format::Run& run, const Option
     out.push_back(std::move(row));
   }
   return out;
-}
-
-std::vector<std::pair<int, int>> parse_stability_grid(const std::string& text) {
-  std::vector<std::pair<int, int>> grid;
-  std::size_t at = 0;
-  while (at <= text.size()) {
-    const std::size_t end = std::min(text.find(',', at), text.size());
-    const std::string item = text.substr(at, end - at);
-    const auto colon = item.find(':');
-    std::size_t used_f = 0, used_o = 0;
-    int folds = 0, offsets = 0;
-    try {
-      if (colon == std::string::npos) throw std::invalid_argument("no colon");
-      folds = std::stoi(item.substr(0, colon), &used_f);
-      offsets = std::stoi(item.substr(colon + 1), &used_o);
-    } catch (const std::exception&) {
-      used_f = 0;
-    }
-    if (colon == std::string::npos || used_f != colon || used_o != item.size() - colon - 1 || folds < 2 || offsets < 1)
-      throw std::invalid_argument("--stability-grid: '" + item + "' is not FOLDS:OFFSETS with FOLDS >= 2 and OFFSETS >= 1");
-    grid.emplace_back(folds, offsets);
-    at = end + 1;
-  }
-  return grid;
 }
 
 bool RunDiagnosis::stable() const {

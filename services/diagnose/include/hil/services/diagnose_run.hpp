@@ -14,6 +14,7 @@
 #include <hil/diagnose/stiffness_family.hpp>
 #include <hil/diagnose/diagnose.hpp>
 #include <hil/format/run.hpp>
+#include <hil/services/stability_grid.hpp>
 
 namespace hil::services::diagnose {
 
@@ -63,10 +64,6 @@ struct StabilityRow {
   std::string error;  ///< why this setting could not be diagnosed
 };
 
-/// The (folds, cv offsets) settings `hil diagnose --stability` tries: 5, 8 and 10 blocks, each on
-/// one grid and pooled over 2 and 8 grid offsets.
-std::vector<std::pair<int, int>> default_stability_grid();
-
 struct RunDiagnosis {
   std::string run_name, mode;  ///< mode: "contact", "deflection" or "stiffness" (a stiffness table)
   int folds = 5;               ///< the cross-validation's blocks (Options::folds)
@@ -101,10 +98,8 @@ std::vector<WindowVerdict> diagnose_windows(const format::Run& run, double windo
 /// The run diagnosed again under each (folds, cv offsets) of `grid`, every other option as in `o`
 /// (issue 32, item 5): a verdict that changes with the cross-validation's settings is not one to
 /// act on. A setting that cannot be diagnosed keeps why in StabilityRow::error.
-/// \throws std::invalid_argument on an empty grid or a setting with folds < 2 or offsets < 1.
+/// \throws std::invalid_argument on an empty grid or a setting outside stability_grid.hpp's bounds.
 std::vector<StabilityRow> verdict_stability(const format::Run& run, const Options& o, const std::vector<std::pair<int, int>>& grid);
-/// "5:1,8:2" -> {(5, 1), (8, 2)}. \throws std::invalid_argument naming the bad item.
-std::vector<std::pair<int, int>> parse_stability_grid(const std::string& text);
 /// A stiffness-experiment table (docs/calibration.md) of the robot in `rig_path`, against the
 /// joint-compliance model. \throws error::FormatError / std::runtime_error naming the file.
 RunDiagnosis diagnose_table(const std::string& table_path, const std::string& rig_path, const Options& o);
