@@ -385,6 +385,28 @@ struct OnMoves {
 };
 void PrintTo(const OnMoves& c, std::ostream* os) { *os << c.effect; }
 
+/// Moves with stops from `r` (moves or slow moves by the parity of i; speed, stops and yaw drawn in
+/// this order: the committed draws depend on it).
+ct::Scenario drawn_moves(Draws& r, unsigned i, unsigned seed) {
+  ct::Scenario sc = clean_scenario();
+  (i % 2 ? kSlowMoves : kMoves).apply(sc);
+  auto& t = sc.trajectory;
+  t.angular_rate_rad_per_s = r.uniform(4e-3, 12e-3) / t.radius_m;
+  t.dwell_s = r.uniform(0.3, 1.0);
+  t.yaw_amplitude_rad = r.uniform(0.02, 0.04);
+  sc.sensor.seed = seed;
+  return sc;
+}
+
+/// A delay of `value` s, or a damping of `value` N s/m with friction on the total normal force.
+void hide(ct::Scenario& sc, const std::string& effect, double value) {
+  if (effect == "time_offset") sc.sensor.delay_s = value;
+  else {
+    sc.law.damping_n_s_per_m = value;
+    sc.law.friction_on_total_normal = true;
+  }
+}
+
 class DelayAndDampingOnMoves : public ::testing::TestWithParam<OnMoves> {};
 
 // History, the delay (first run, 2026-11-29): named in 2 of 4 draws, τ 9.48 ± 0.44 and 9.90 ±
@@ -405,18 +427,8 @@ TEST_P(DelayAndDampingOnMoves, AreNamedWithTheirMagnitude) {
   for (unsigned k = 0; k < 4; ++k) {
     const unsigned seed = 32'300'000u + (c.effect == "time_offset" ? 0u : 100u) + k;
     Draws r(seed);
-    ct::Scenario sc = clean_scenario();
-    (k % 2 ? kSlowMoves : kMoves).apply(sc);
-    auto& t = sc.trajectory;
-    t.angular_rate_rad_per_s = r.uniform(4e-3, 12e-3) / t.radius_m;
-    t.dwell_s = r.uniform(0.3, 1.0);
-    t.yaw_amplitude_rad = r.uniform(0.02, 0.04);
-    sc.sensor.seed = seed;
-    if (c.effect == "time_offset") sc.sensor.delay_s = c.truth;
-    else {
-      sc.law.damping_n_s_per_m = c.truth;
-      sc.law.friction_on_total_normal = true;
-    }
+    ct::Scenario sc = drawn_moves(r, k, seed);
+    hide(sc, c.effect, c.truth);
     const Diagnosed run = diagnose_scenario(sc, {}, kFine);
     std::cout << "MOVES " << c.effect << " seed " << seed << ": " << run.line << "\n";
     EXPECT_EQ(run.d.cause, c.effect) << "seed " << seed << ": " << run.line;
@@ -449,20 +461,10 @@ TEST_P(DelayAndDampingOnFreshMoves, MeetTheirRule) {
   for (unsigned i = first; i < first + count; ++i) {
     const unsigned seed = 32'500'000u + (c.effect == "time_offset" ? 0u : 100u) + i;
     Draws r(seed);
-    ct::Scenario sc = clean_scenario();
-    (i % 2 ? kSlowMoves : kMoves).apply(sc);
-    auto& t = sc.trajectory;
-    t.angular_rate_rad_per_s = r.uniform(4e-3, 12e-3) / t.radius_m;
-    t.dwell_s = r.uniform(0.3, 1.0);
-    t.yaw_amplitude_rad = r.uniform(0.02, 0.04);
-    t.depth_amplitude_m *= r.uniform(0.8, 1.2);
-    sc.sensor.seed = seed;
-    double truth = 0.0;
-    if (c.effect == "time_offset") sc.sensor.delay_s = truth = r.uniform(0.005, 0.015);
-    else {
-      sc.law.damping_n_s_per_m = truth = r.uniform(2000.0, 6000.0);
-      sc.law.friction_on_total_normal = true;
-    }
+    ct::Scenario sc = drawn_moves(r, i, seed);
+    sc.trajectory.depth_amplitude_m *= r.uniform(0.8, 1.2);
+    const double truth = c.effect == "time_offset" ? r.uniform(0.005, 0.015) : r.uniform(2000.0, 6000.0);
+    hide(sc, c.effect, truth);
     const Diagnosed run = diagnose_scenario(sc, {}, kFine);
     std::cout << "FRESH " << c.effect << " seed " << seed << " truth " << truth << ": " << run.line << "\n";
     if (run.d.cause != c.effect) continue;
