@@ -417,9 +417,9 @@ class DelayAndDampingOnMoves : public ::testing::TestWithParam<OnMoves> {};
 // in the nominal model's residual were taken for noise (2.1 % against 0.35 % on clean moves), so a
 // delay explained "0.04 noise variances"; (3) the cost then steps as a delayed instant crosses a
 // kink, and a fold's LM stayed at its start one sample off, mispredicting a yaw reversal's whole
-// moment. Fixed (2026-11-30): the twist steps where the poses place the step (rate_steps), the
-// noise is estimated without isolated spikes and from the least rough model, and time_offset
-// starts every quarter sample near zero. Then: named 4 of 4, τ 7.97 ± 0.27, 7.34 ± 0.16, 7.76 ±
+// moment. Fixed (later the same day): the twist steps where the poses place the step (rate_steps),
+// the noise is the least the nominal and the single candidates leave, and time_offset starts
+// every quarter sample near zero. Then: named 4 of 4, τ 7.97 ± 0.27, 7.34 ± 0.16, 7.76 ±
 // 0.15, 7.86 ± 0.59 ms. Fresh draws: DelayAndDampingOnFreshMoves below.
 TEST_P(DelayAndDampingOnMoves, AreNamedWithTheirMagnitude) {
   const OnMoves& c = GetParam();
@@ -444,7 +444,7 @@ INSTANTIATE_TEST_SUITE_P(Issue32, DelayAndDampingOnMoves,
                                            OnMoves{"contact_damping", "damping_n_s_per_m", 4000.0}),
                          [](const ::testing::TestParamInfo<OnMoves>& i) { return i.param.effect; });
 
-// Fresh draws after the fix above, rules written before their first run (2026-11-30): the delay
+// Fresh draws after the fix above, rules written before their first run (2026-11-29): the delay
 // uniform in 5-15 ms, the damping in 2,000-6,000 N s/m (friction on the total normal force), on
 // the moves and slow moves families with drawn speeds, stops and yaw, at the fine resolution. Per
 // effect, of 8 draws (seeds 32,500,000 + 100 e + i, i = 0..7; HIL_MOVES_DRAWS=50: i = 100..149,
@@ -484,7 +484,7 @@ TEST_P(DelayAndDampingOnFreshMoves, MeetTheirRule) {
   const unsigned allowed = full ? count / 8 : 1u;  // 1 of 8; the full draw at the same rate
   EXPECT_GE(named + allowed, count) << c.effect << " named first in " << named << " of " << count;
   EXPECT_GE(single + allowed, count) << "a second cause in " << count - single << " of " << count;
-  // Known failure, the damping's intervals (first run of these draws, 2026-11-30): named 8 of 8,
+  // Known failure, the damping's intervals (first run of these draws, 2026-11-29): named 8 of 8,
   // no second cause, but D inside its interval in 3 of 8: 2-3.5 % low on the two-tone moves (4,960
   // ± 51 for 5,139; 5,400 ± 43 for 5,543), within 1.5 % on the one-tone slow moves. Not the clip at
   // lift-off (0-42 of 4,000 foot samples clipped, 0 in a draw 3.3 std low), not smoothed rates (the
