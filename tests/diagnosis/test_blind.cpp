@@ -27,13 +27,11 @@
 
 #include <hil/diagnose/contact_family.hpp>
 #include <hil/diagnose/diagnose.hpp>
-#include "tripod_scene.hpp"
+#include "blind_runs.hpp"
 
 namespace hil::diagnose::test {
 namespace {
 
-// 15 s at 100 Hz: 1,500 samples, about 2.4 turns of the circle and 5 presses.
-constexpr double kDuration_s = 15.0;
 // Out-of-library effects: a named cause must not explain more than this share of the misfit.
 constexpr double kPartialGainPercent = 50.0;
 
@@ -44,33 +42,14 @@ struct Effect {
   bool out_of_library = false;
 };
 
-struct Resolution {
-  std::string name;
-  double velocity_m_per_s;
-};
-
 struct Case {
   Effect effect;
   Resolution resolution;
   std::string known_failure;  ///< non-empty: skipped, with the outcome observed (see known_failure())
 };
 
-/// The two-sided normal quantile that holds m intervals jointly at 95 % (Bonferroni): Φ⁻¹(1 - 0.025/m).
-double joint_z(std::size_t m) {
-  const double tail = 0.05 / static_cast<double>(std::max<std::size_t>(1, m));
-  double lo = 0.0, hi = 10.0;  // erfc(z/√2) falls from 1 to 0 on [0, 10]
-  for (int i = 0; i < 100; ++i) {
-    const double mid = 0.5 * (lo + hi);
-    (std::erfc(mid / std::sqrt(2.0)) > tail ? lo : hi) = mid;
-  }
-  return 0.5 * (lo + hi);
-}
-
 std::string label(const Case& c) { return c.effect.name + "_" + c.resolution.name; }
 void PrintTo(const Case& c, std::ostream* os) { *os << label(c); }
-
-const Resolution kPaper{"paper", 2e-4};
-const Resolution kFine{"fine", 2e-5};
 
 // Effects with fixed magnitudes, each well above the sensor's 0.1 N / 0.005 N m noise on this run.
 const Effect kNone{"none", [](ct::Scenario&, TripodRigOptions&) {}, {}};
@@ -141,59 +120,6 @@ const Effect kSlip{"slip_event",
                    },
                    {},
                    true};
-
-/// The true value of a reported parameter, if the scenario defines it, in hil's parameterisation.
-/// sensor_gain: hil's gains are relative to the reference component (the one K absorbs, without a
-/// gain entry); a friction component's gain fixed as not identifiable (collinear with μ and the
-/// other friction components' gains: friction lives in fx, fy and mz only) is the reference of the
-/// other friction components, μ absorbing its factor.
-std::optional<double> truth_of(const std::string& name, const ct::Scenario& s, const Fit& f) {
-  const char* comp[6] = {"fx", "fy", "fz", "mx", "my", "mz"};
-  auto index = [&](const std::string& n) {
-    for (int c = 0; c < 6; ++c)
-      if (n == std::string("gain_") + comp[c]) return c;
-    return -1;
-  };
-  int ref = -1;
-  for (int c = 0; c < 6; ++c) {
-    bool listed = false;
-    for (const auto& q : f.reported) listed = listed || q.name == std::string("gain_") + comp[c];
-    for (const auto& u : f.unidentifiable) listed = listed || u.name == std::string("gain_") + comp[c];
-    if (!listed) ref = c;
-  }
-  for (int c = 0; c < 6; ++c) {
-    if (name == std::string("bias_") + comp[c]) return s.sensor.bias(c);
-    if (name == std::string("gain_") + comp[c] && ref >= 0) {
-      // fx, fy and mz carry the friction: relative to the one of them fixed, if any.
-      auto friction = [](int k) { return k == 0 || k == 1 || k == 5; };
-      int r = ref;
-      for (const auto& u : f.unidentifiable)
-        if (friction(index(u.name)) && friction(c)) r = index(u.name);
-      return (1.0 + s.sensor.gain(c)) / (1.0 + s.sensor.gain(r)) - 1.0;
-    }
-  }
-  if (name == "time_offset_s") return s.sensor.delay_s;
-  if (name == "viscous_n_s_per_m") return s.law.viscous_n_s_per_m;
-  if (name == "damping_n_s_per_m") return s.law.damping_n_s_per_m;
-  if (name == "stiffness_exponent") return s.law.exponent;
-  // The truth's surface is at o_P, level in P: the rig's declared values are what may be off.
-  if (name == kPlateHeight || name == kPlateTiltX || name == kPlateTiltY) return 0.0;
-  return std::nullopt;
-}
-
-/// The reported parameters that belong to an extension (by name).
-bool belongs_to(const std::string& param, const std::string& extension) {
-  auto starts = [&](const char* p) { return param.rfind(p, 0) == 0; };
-  if (extension == "sensor_bias") return starts("bias_");
-  if (extension == "sensor_gain") return starts("gain_");
-  if (extension == "time_offset") return param == "time_offset_s";
-  if (extension == "viscous_friction") return param == "viscous_n_s_per_m";
-  if (extension == "contact_damping") return param == "damping_n_s_per_m";
-  if (extension == "nonlinear_stiffness") return param == "stiffness_exponent";
-  if (extension == "robot_compliance") return starts("compliance_");
-  if (extension == "geometric_offset") return param == kPlateHeight || param == kPlateTiltX || param == kPlateTiltY;
-  return false;
-}
 
 class Blind : public ::testing::TestWithParam<Case> {};
 

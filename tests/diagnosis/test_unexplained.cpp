@@ -22,107 +22,10 @@
 
 #include <hil/diagnose/contact_family.hpp>
 #include <hil/diagnose/diagnose.hpp>
-#include "tripod_scene.hpp"
+#include "blind_runs.hpp"
 
 namespace hil::diagnose::test {
 namespace {
-
-constexpr double kDuration_s = 15.0;
-// "Clean" is the nominal model's own physics plus the sensor: Coulomb friction at every slip speed
-// the rig resolves (the truth's regularisation at 1 µm/s, not pressing_and_sliding's 0.1 mm/s),
-// and a sticking threshold declared below the slowest slip (a yawing foot at a stop slides at
-// about 0.7 mm/s; the blind suite's 1 mm/s would call it sticking). Found on the calibration runs:
-// with 0.1 mm/s regularisation the truth's friction is 1 % short at 0.7 mm/s, about one noise std
-// of fx, and the check rightly reports fx correlating with vx; with 1 mm/s declared, mz misfits
-// by 39 noise variances at the stops.
-constexpr double kSlipRegularisation_m_per_s = 1e-6;
-constexpr double kStickBelow_m_per_s = 1e-4;
-
-ct::Scenario clean_scenario() {
-  ct::Scenario sc = pressing_and_sliding(kDuration_s);
-  sc.law.slip_regularisation_m_per_s = kSlipRegularisation_m_per_s;
-  return sc;
-}
-
-/// A motion family: changes to the blind suite's scenario (pressing_and_sliding).
-struct Motion {
-  std::string name;
-  std::function<void(ct::Scenario&)> apply;
-};
-
-// The blind suite's own: a 5 mm/s circle, one normal tone, a slow yaw.
-const Motion kCircle{"circle", [](ct::Scenario&) {}};
-// Two normal tones (0.7 and 2.3 Hz), the circle slower (3 mm/s).
-const Motion kTwoTone{"two_tone", [](ct::Scenario& s) {
-                        auto& t = s.trajectory;
-                        t.angular_rate_rad_per_s = 0.6;
-                        t.depth_m = 7e-5;
-                        t.depth_amplitude_m = 6e-5;
-                        t.depth_rate_rad_per_s = 2 * M_PI * 0.7;
-                        t.depth_amplitude2_m = 3e-5;
-                        t.depth_rate2_rad_per_s = 2 * M_PI * 2.3;
-                      }};
-// A robot's point-to-point moves: a square at 10 mm/s with 0.4 s stops, triangle-wave normal
-// motion (0.4 and 1.3 Hz), triangle yaw.
-const Motion kMoves{"moves", [](ct::Scenario& s) {
-                      auto& t = s.trajectory;
-                      t.motion = ct::PlateTrajectory::Motion::piecewise_linear;
-                      t.angular_rate_rad_per_s = 2.0;
-                      t.dwell_s = 0.4;
-                      t.depth_m = 7e-5;
-                      t.depth_amplitude_m = 6e-5;
-                      t.depth_rate_rad_per_s = 2 * M_PI * 0.4;
-                      t.depth_amplitude2_m = 2e-5;
-                      t.depth_rate2_rad_per_s = 2 * M_PI * 1.3;
-                    }};
-// Slower moves: 4 mm/s sides, 1 s stops, one triangle tone.
-const Motion kSlowMoves{"slow_moves", [](ct::Scenario& s) {
-                          auto& t = s.trajectory;
-                          t.motion = ct::PlateTrajectory::Motion::piecewise_linear;
-                          t.radius_m = 4e-3;
-                          t.angular_rate_rad_per_s = 1.0;
-                          t.dwell_s = 1.0;
-                        }};
-
-struct Resolution {
-  std::string name;
-  double velocity_m_per_s;
-};
-const Resolution kPaper{"paper", 2e-4};
-const Resolution kFine{"fine", 2e-5};
-
-struct Diagnosed {
-  Diagnosis d;
-  std::string line;  ///< one line of statistics for the report
-};
-
-/// Diagnoses the scenario as the CLI does (the same context signals).
-Diagnosed diagnose_scenario(const ct::Scenario& sc, const TripodRigOptions& rig, const Resolution& r) {
-  const cid::Scene scene = tripod_scene(sc.plate, sc.tripod, rig);
-  const auto data = make_contact_data(scene, kStickBelow_m_per_s, to_measurements(ct::simulate(sc), {2e-6, r.velocity_m_per_s}));
-  const ModelFactory make = [&data](const std::set<std::string>& x) { return std::make_unique<ContactFamily>(data, x); };
-  Diagnosed run{diagnose(make, contact_extensions(), data.obs, contact_context(data)), ""};
-  const auto& d = run.d;
-  const auto& a = d.nominal_residuals;
-  std::ostringstream o;
-  o << std::setprecision(3) << "cause " << d.cause << (d.second_cause.empty() ? "" : " + " + d.second_cause) << ", nominal "
-    << 100 * d.nominal.cv_error << " %, noise " << 100 * d.noise_relative << " %, excess " << a.excess_variance << " [";
-  for (int c = 0; c < 6; ++c) o << (c ? " " : "") << a.excess(c);
-  o << "], Q " << a.ljung_box_q;
-  for (std::size_t i = 0; i < 2 && i < a.correlations.size(); ++i) {
-    const auto& k = a.correlations[i];
-    o << "; " << k.component << "~" << k.signal << " r " << k.correlation << " lag " << k.lag << " expl " << k.explained;
-  }
-  if (!a.trends.empty())
-    o << "; trend " << a.trends.front().component << " r " << a.trends.front().correlation << " expl " << a.trends.front().explained;
-  if (d.extended)
-    for (const auto& q : d.extended->full.reported)
-      if (q.extension) o << "; " << q.name << " = " << q.value << " ± " << q.std;
-  if (a.structured()) o << " | STRUCTURE: " << a.structure_text();
-  if (d.extended && d.extended_residuals.structured()) o << " | LEFT: " << d.extended_residuals.structure_text();
-  run.line = o.str();
-  return run;
-}
 
 struct CleanCase {
   Motion motion;
@@ -207,13 +110,6 @@ TEST(QuantisedTwist, StraightMovesOnAYawedPlateLeaveFrictionAcrossTheMotion) {
 //    draws first ran, before any full draw).
 
 enum class Hidden { none, stribeck, drift, coupling };
-
-struct Draws {
-  std::mt19937_64 rng;
-  explicit Draws(unsigned seed) : rng(seed) {}
-  double uniform(double a, double b) { return a + (b - a) * static_cast<double>(rng() >> 11) * 0x1.0p-53; }
-  double sign() { return (rng() >> 63) ? 1.0 : -1.0; }
-};
 
 struct Drawn {
   ct::Scenario scenario;

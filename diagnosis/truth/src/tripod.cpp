@@ -44,19 +44,41 @@ struct PlanarState {
   double yaw_rad = 0.0, yaw_rate_rad_per_s = 0.0;
 };
 
-// A tone of amplitude a and angular rate w: a sine, or the triangle wave of the same period and
-// amplitude (value and rate at t; the rate one-sided at the triangle's kinks).
-std::pair<double, double> tone(PlateTrajectory::Motion m, double a, double w, double t) {
-  if (a == 0.0) return {0.0, 0.0};
-  if (m == PlateTrajectory::Motion::sinusoidal) return {a * std::sin(w * t), a * w * std::cos(w * t)};
-  constexpr double two_over_pi = 0.6366197723675814;
-  return {a * two_over_pi * std::asin(std::sin(w * t)), a * two_over_pi * w * (std::cos(w * t) >= 0.0 ? 1.0 : -1.0)};
+// A move of `distance` in `duration` from rest to rest: the distance covered and the speed at
+// tau in [0, duration], with a trapezoidal speed profile (ramp: the share of the duration spent
+// accelerating, and as much decelerating), or a constant speed (ramp = 0).
+std::pair<double, double> move(double distance, double duration, double ramp, double tau) {
+  if (ramp == 0.0) return {distance * tau / duration, distance / duration};
+  const double t_ramp = ramp * duration, v = distance / ((1.0 - ramp) * duration), a = v / t_ramp;
+  if (tau < t_ramp) return {0.5 * a * tau * tau, a * tau};
+  const double left = duration - tau;
+  if (left < t_ramp) return {distance - 0.5 * a * left * left, a * left};
+  return {0.5 * v * t_ramp + v * (tau - t_ramp), v};
+}
+
+// A tone of amplitude a and angular rate w (value and rate at t): a sine; or, for the moving
+// families, a back-and-forth between -a and a of the same period and phase, each half period one
+// move (piecewise-linear: the triangle wave (2/π) a asin(sin wt), its rate one-sided at the kinks).
+std::pair<double, double> tone(const PlateTrajectory& tr, double a, double w, double t) {
+  if (a == 0.0 || w == 0.0) return {0.0, 0.0};
+  if (tr.motion == PlateTrajectory::Motion::sinusoidal) return {a * std::sin(w * t), a * w * std::cos(w * t)};
+  const double half = M_PI / std::abs(w), period = 2.0 * half;
+  double m = std::fmod(t + 0.5 * half, period);  // the rising half spans t in [-half/2, half/2]
+  if (m < 0.0) m += period;
+  const double ramp = tr.motion == PlateTrajectory::Motion::trapezoidal ? tr.ramp_fraction : 0.0;
+  const double sign = w > 0.0 ? 1.0 : -1.0;
+  if (m < half) {
+    const auto [s, v] = move(2.0 * a, half, ramp, m);
+    return {sign * (s - a), sign * v};
+  }
+  const auto [s, v] = move(2.0 * a, half, ramp, m - half);
+  return {sign * (a - s), -sign * v};
 }
 
 // The square path with stops: position and velocity in the plate plane, relative to the centre.
-std::pair<Eigen::Vector2d, Eigen::Vector2d> square_path(double r, double w, double dwell, double t) {
+std::pair<Eigen::Vector2d, Eigen::Vector2d> square_path(double r, double w, double dwell, double ramp, double t) {
   const Eigen::Vector2d corner[4] = {{r, r}, {-r, r}, {-r, -r}, {r, -r}};
-  const double side_s = 2.0 / std::abs(w);  // a side of 2r at the speed r|w|
+  const double side_s = 2.0 / std::abs(w);  // a side of 2r at the speed r|w| (piecewise-linear)
   const double leg = side_s + dwell, cycle = 4.0 * leg;
   double m = std::fmod(t, cycle);
   if (m < 0.0) m += cycle;
@@ -64,23 +86,25 @@ std::pair<Eigen::Vector2d, Eigen::Vector2d> square_path(double r, double w, doub
   const double tau = m - i * leg;
   const Eigen::Vector2d a = corner[i], b = corner[(i + 1) % 4];
   if (tau >= side_s) return {b, Eigen::Vector2d::Zero()};
-  const Eigen::Vector2d v = (b - a) / side_s;
-  return {a + v * tau, v};
+  const Eigen::Vector2d u = (b - a) / (2.0 * r);
+  const auto [s, v] = move(2.0 * r, side_s, ramp, tau);
+  return {a + u * s, u * v};
 }
 
 PlanarState planar(const PlateTrajectory& tr, double t) {
   PlanarState s;
   const auto m = tr.motion;
-  const auto d1 = tone(m, tr.depth_amplitude_m, tr.depth_rate_rad_per_s, t);
-  const auto d2 = tone(m, tr.depth_amplitude2_m, tr.depth_rate2_rad_per_s, t);
-  const auto yaw = tone(m, tr.yaw_amplitude_rad, tr.yaw_rate_rad_per_s, t);
+  const auto d1 = tone(tr, tr.depth_amplitude_m, tr.depth_rate_rad_per_s, t);
+  const auto d2 = tone(tr, tr.depth_amplitude2_m, tr.depth_rate2_rad_per_s, t);
+  const auto yaw = tone(tr, tr.yaw_amplitude_rad, tr.yaw_rate_rad_per_s, t);
   Eigen::Vector2d p, v;
   if (m == PlateTrajectory::Motion::sinusoidal) {
     const double w = tr.angular_rate_rad_per_s;
     p = {tr.radius_m * std::cos(w * t), tr.radius_m * std::sin(w * t)};
     v = {-tr.radius_m * w * std::sin(w * t), tr.radius_m * w * std::cos(w * t)};
   } else {
-    std::tie(p, v) = square_path(tr.radius_m, tr.angular_rate_rad_per_s, tr.dwell_s, t);
+    const double ramp = m == PlateTrajectory::Motion::trapezoidal ? tr.ramp_fraction : 0.0;
+    std::tie(p, v) = square_path(tr.radius_m, tr.angular_rate_rad_per_s, tr.dwell_s, ramp, t);
   }
   s.p_plate_m = {tr.centre_x_m + p.x(), tr.centre_y_m + p.y(), -(tr.depth_m + d1.first + d2.first)};
   s.v_plate_m_per_s = {v.x(), v.y(), -(d1.second + d2.second)};
@@ -198,15 +222,19 @@ std::string validate(const Scenario& s) {
   if (!finite_positive(s.duration_s)) o << "duration_s must be > 0 (got " << s.duration_s << "); ";
   else if (std::isfinite(sen.rate_hz) && s.duration_s * sen.rate_hz > 1e8) o << "duration_s * sensor.rate_hz exceeds 1e8 samples; ";
   const auto& tr = s.trajectory;
-  for (double v :
-       {tr.centre_x_m, tr.centre_y_m, tr.radius_m, tr.angular_rate_rad_per_s, tr.depth_m, tr.depth_amplitude_m, tr.depth_rate_rad_per_s,
-        tr.depth_amplitude2_m, tr.depth_rate2_rad_per_s, tr.yaw_rad, tr.yaw_amplitude_rad, tr.yaw_rate_rad_per_s, tr.dwell_s})
+  for (double v : {tr.centre_x_m, tr.centre_y_m, tr.radius_m, tr.angular_rate_rad_per_s, tr.depth_m, tr.depth_amplitude_m,
+                   tr.depth_rate_rad_per_s, tr.depth_amplitude2_m, tr.depth_rate2_rad_per_s, tr.yaw_rad, tr.yaw_amplitude_rad,
+                   tr.yaw_rate_rad_per_s, tr.dwell_s, tr.ramp_fraction})
     if (!std::isfinite(v)) {
       o << "trajectory has a parameter that is not finite; ";
       break;
     }
   if (tr.motion == PlateTrajectory::Motion::piecewise_linear && (!(tr.angular_rate_rad_per_s != 0.0) || !(tr.dwell_s >= 0.0)))
     o << "trajectory: a piecewise-linear motion needs angular_rate_rad_per_s != 0 and dwell_s >= 0; ";
+  if (tr.motion == PlateTrajectory::Motion::trapezoidal &&
+      (!(tr.angular_rate_rad_per_s != 0.0) || !(tr.dwell_s >= 0.0) || !(tr.ramp_fraction > 0.0 && tr.ramp_fraction <= 0.5)))
+    o << "trajectory: a trapezoidal motion needs angular_rate_rad_per_s != 0, dwell_s >= 0 and ramp_fraction in (0, 0.5] (got "
+      << tr.ramp_fraction << "); ";
   if (!s.plate.origin_world_m.allFinite() || !std::isfinite(s.plate.yaw_rad) || !std::isfinite(s.plate.tilt_x_rad) ||
       !std::isfinite(s.plate.tilt_y_rad))
     o << "plate has a parameter that is not finite; ";

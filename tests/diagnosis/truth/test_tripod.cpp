@@ -279,6 +279,64 @@ TEST(Trajectory, PiecewiseLinearMotionHasConstantRatesBetweenKinksAndStopsAtTheC
   EXPECT_NEAR(hi, -0.6e-4, 1e-12);
 }
 
+// The trapezoidal family: the same moves in the same time as the piecewise-linear family, with a
+// speed that ramps instead of stepping. Expected values from the profile's own arithmetic.
+TEST(Trajectory, TrapezoidalMotionRampsItsSpeedAndKeepsEachMovesDuration) {
+  Plate plate;
+  plate.yaw_rad = -0.3;
+  plate.tilt_y_rad = 0.02;
+  PlateTrajectory tr;
+  tr.motion = PlateTrajectory::Motion::trapezoidal;
+  tr.ramp_fraction = 0.2;
+  tr.radius_m = 4e-3;
+  tr.angular_rate_rad_per_s = 2.0;  // a side of 8 mm in 1 s: cruise 8 / 0.8 = 10 mm/s, 0.2 s ramps
+  tr.dwell_s = 0.25;
+  tr.depth_m = 1e-4;
+  tr.depth_amplitude_m = 4e-5;
+  tr.depth_rate_rad_per_s = M_PI;  // half period 1 s from -4e-5 to 4e-5: cruise 1e-4 m/s
+  tr.depth_amplitude2_m = 0.0;
+  tr.yaw_amplitude_rad = 0.02;
+  tr.yaw_rate_rad_per_s = -M_PI / 2;  // a negative rate: the yaw falls first
+  const Eigen::Matrix3d R = plate.T_world_plate().linear();
+  auto p_plate = [&](double t) -> Vector3d { return R.transpose() * (tr.at(plate, t).T_world_body.translation() - plate.origin_world_m); };
+  auto v_plate = [&](double t) -> Vector3d { return R.transpose() * tr.at(plate, t).v_world_m_per_s; };
+  auto yaw_rate = [&](double t) { return (R.transpose() * tr.at(plate, t).w_world_rad_per_s).z(); };
+  // Mid-side and mid-ramp speeds; the corner reached at the end of the side and held at the stop.
+  EXPECT_NEAR(v_plate(0.5).x(), -1e-2, 1e-12);
+  EXPECT_NEAR(v_plate(0.1).x(), -0.5e-2, 1e-12);                   // half the ramp: half the cruise speed
+  EXPECT_NEAR(p_plate(0.1).x(), 4e-3 - 0.5 * 0.05 * 0.01, 1e-12);  // ½ a t², a = 0.01 / 0.2 = 0.05 m/s²
+  EXPECT_NEAR(p_plate(1.0).x(), -4e-3, 1e-12);
+  EXPECT_NEAR(v_plate(1.1).head<2>().norm(), 0.0, 1e-15);
+  EXPECT_NEAR(p_plate(1.1).y(), 4e-3, 1e-12);
+  EXPECT_NEAR(v_plate(1.75).y(), -1e-2, 1e-12);  // second side: starts at 1.25 s
+  // The depth: rising through its mean at t = 0 at the cruise speed (the body sinks: z falls),
+  // at its extremes at t = ±0.5 s with zero rate, as the triangle wave of the same period.
+  EXPECT_NEAR(p_plate(0.0).z(), -1e-4, 1e-15);
+  EXPECT_NEAR(v_plate(0.0).z(), -1e-4, 1e-12);
+  EXPECT_NEAR(p_plate(0.5).z(), -1.4e-4, 1e-15);
+  EXPECT_NEAR(v_plate(0.5).z(), 0.0, 1e-15);
+  EXPECT_NEAR(p_plate(1.5).z(), -0.6e-4, 1e-15);
+  // The yaw (ω_ψ < 0): falls first, at 0.02 / (0.8 · 2 s) · 2 = 0.025 rad/s cruising.
+  EXPECT_NEAR(yaw_rate(0.0), -0.025, 1e-12);
+  // No kinks: the rates are continuous everywhere (one 10 µs step apart, at most the largest
+  // acceleration, 0.05 m/s² in the plane, times the step), and they are the poses' derivatives.
+  const double h = 1e-6;
+  for (double t = -3.0; t < 9.0; t += 0.01037) {
+    EXPECT_LT((v_plate(t + 1e-5) - v_plate(t)).norm(), 0.06 * 1e-5) << t;
+    EXPECT_LT(std::abs(yaw_rate(t + 1e-5) - yaw_rate(t)), 0.2 * 1e-5) << t;
+    const BodyState a = tr.at(plate, t - h), b = tr.at(plate, t + h), s = tr.at(plate, t);
+    EXPECT_LT(((b.T_world_body.translation() - a.T_world_body.translation()) / (2 * h) - s.v_world_m_per_s).norm(), 1e-8) << t;
+    const Eigen::AngleAxisd d(b.T_world_body.linear() * a.T_world_body.linear().transpose());
+    EXPECT_LT((d.angle() * d.axis() / (2 * h) - s.w_world_rad_per_s).norm(), 1e-6) << t;
+  }
+  // The same trajectory as piecewise-linear reaches the same corners and extremes at the same times.
+  PlateTrajectory pl = tr;
+  pl.motion = PlateTrajectory::Motion::piecewise_linear;
+  auto p_linear = [&](double t) -> Vector3d { return R.transpose() * (pl.at(plate, t).T_world_body.translation() - plate.origin_world_m); };
+  for (double t : {1.0, 1.1, 2.25, 3.5, 4.75}) EXPECT_LT((p_plate(t) - p_linear(t)).head<2>().norm(), 1e-12) << t;  // corners
+  for (double t : {0.5, 1.5, 2.5, -0.5}) EXPECT_NEAR(p_plate(t).z(), p_linear(t).z(), 1e-15) << t;                  // extremes
+}
+
 Scenario quiet_scenario() {
   Scenario sc;
   sc.duration_s = 5.0;
@@ -450,6 +508,16 @@ TEST(BadInput, EveryProblemIsNamed) {
        [](Scenario& x) {
          x.trajectory.motion = PlateTrajectory::Motion::piecewise_linear;
          x.trajectory.dwell_s = -1.0;
+       }},
+      {"ramp_fraction in (0, 0.5] (got 0.6)",
+       [](Scenario& x) {
+         x.trajectory.motion = PlateTrajectory::Motion::trapezoidal;
+         x.trajectory.ramp_fraction = 0.6;
+       }},
+      {"ramp_fraction in (0, 0.5] (got 0)",
+       [](Scenario& x) {
+         x.trajectory.motion = PlateTrajectory::Motion::trapezoidal;
+         x.trajectory.ramp_fraction = 0.0;
        }},
   };
   for (const auto& [field, spoil] : one_each) {

@@ -86,7 +86,7 @@ struct FootContact {
 Vector6d plate_wrench(const Plate& plate, const Tripod& tripod, const ContactLaw& law, const BodyState& s,
                       std::vector<FootContact>* feet = nullptr);
 
-/// A closed-form trajectory relative to the plate, of one of two motion families. In P:
+/// A closed-form trajectory relative to the plate, of one of three motion families. In P:
 ///  * sinusoidal: the body origin circles, x = cx + r cos(ω t), y = cy + r sin(ω t); the depth
 ///    z = -(d0 + d1 sin(ω_d t) + d2 sin(ω_d2 t)) (d > 0: the feet penetrate); the yaw
 ///    ψ = ψ0 + ψ1 sin(ω_ψ t);
@@ -94,10 +94,17 @@ Vector6d plate_wrench(const Plate& plate, const Tripod& tripod, const ContactLaw
 ///    square of half-side r about (cx, cy) at the speed r ω along each side, and stops `dwell_s` at
 ///    each corner; the depth and the yaw are the same sums with each sine replaced by the triangle
 ///    wave of the same period and amplitude, tri(θ) = (2/π) asin(sin θ), so the normal motion
-///    has kinks and constant rates.
+///    has kinks and constant rates;
+///  * trapezoidal (what a robot's trajectory generator gives for the same moves): the same square
+///    with stops and the same periodic depth and yaw, but every move's speed is a trapezoid: a
+///    constant acceleration for the share `ramp_fraction` of the move, cruise, and the mirrored
+///    deceleration. The cruise speed is raised so that each move keeps its duration (the square's
+///    side 2/|ω|, a tone's half period π/ω_d): v = distance / ((1 - ramp_fraction) duration).
+///    The rates are continuous (no kinks), the accelerations step; ramp_fraction → 0 is the
+///    piecewise-linear family, 0.5 a triangular speed profile.
 /// The body's z stays along the plate normal.
 struct PlateTrajectory {
-  enum class Motion { sinusoidal, piecewise_linear };
+  enum class Motion { sinusoidal, piecewise_linear, trapezoidal };
   Motion motion = Motion::sinusoidal;
   double centre_x_m = 0.0, centre_y_m = 0.0;
   double radius_m = 5e-3;
@@ -110,7 +117,8 @@ struct PlateTrajectory {
   double yaw_rad = 0.0;                 ///< ψ0
   double yaw_amplitude_rad = 0.05;      ///< ψ1
   double yaw_rate_rad_per_s = 0.7;      ///< ω_ψ
-  double dwell_s = 0.5;                 ///< piecewise_linear: the stop at each corner
+  double dwell_s = 0.5;                 ///< piecewise_linear, trapezoidal: the stop at each corner
+  double ramp_fraction = 0.25;          ///< trapezoidal: each move's share accelerating, in (0, 0.5]
   /// The body state at time t (W), with its analytic velocities (one-sided at a kink).
   BodyState at(const Plate& plate, double t_s) const;
 };

@@ -1,0 +1,104 @@
+#include "blind_runs.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <iomanip>
+#include <memory>
+#include <set>
+#include <sstream>
+
+#include <hil/diagnose/contact_family.hpp>
+
+namespace hil::diagnose::test {
+
+ct::Scenario clean_scenario() {
+  ct::Scenario sc = pressing_and_sliding(kDuration_s);
+  sc.law.slip_regularisation_m_per_s = kSlipRegularisation_m_per_s;
+  return sc;
+}
+
+Diagnosed diagnose_scenario(const ct::Scenario& sc, const TripodRigOptions& rig, const Resolution& r) {
+  const cid::Scene scene = tripod_scene(sc.plate, sc.tripod, rig);
+  const auto data = make_contact_data(scene, kStickBelow_m_per_s, to_measurements(ct::simulate(sc), {2e-6, r.velocity_m_per_s}));
+  const ModelFactory make = [&data](const std::set<std::string>& x) { return std::make_unique<ContactFamily>(data, x); };
+  Diagnosed run{diagnose(make, contact_extensions(), data.obs, contact_context(data)), ""};
+  const auto& d = run.d;
+  const auto& a = d.nominal_residuals;
+  std::ostringstream o;
+  o << std::setprecision(3) << "cause " << d.cause << (d.second_cause.empty() ? "" : " + " + d.second_cause) << ", nominal "
+    << 100 * d.nominal.cv_error << " %, noise " << 100 * d.noise_relative << " %, excess " << a.excess_variance << " [";
+  for (int c = 0; c < 6; ++c) o << (c ? " " : "") << a.excess(c);
+  o << "], Q " << a.ljung_box_q;
+  for (std::size_t i = 0; i < 2 && i < a.correlations.size(); ++i) {
+    const auto& k = a.correlations[i];
+    o << "; " << k.component << "~" << k.signal << " r " << k.correlation << " lag " << k.lag << " expl " << k.explained;
+  }
+  if (!a.trends.empty())
+    o << "; trend " << a.trends.front().component << " r " << a.trends.front().correlation << " expl " << a.trends.front().explained;
+  if (d.extended)
+    for (const auto& q : d.extended->full.reported)
+      if (q.extension) o << "; " << q.name << " = " << q.value << " ± " << q.std;
+  if (a.structured()) o << " | STRUCTURE: " << a.structure_text();
+  if (d.extended && d.extended_residuals.structured()) o << " | LEFT: " << d.extended_residuals.structure_text();
+  run.line = o.str();
+  return run;
+}
+
+std::optional<double> truth_of(const std::string& name, const ct::Scenario& s, const Fit& f) {
+  const char* comp[6] = {"fx", "fy", "fz", "mx", "my", "mz"};
+  auto index = [&](const std::string& n) {
+    for (int c = 0; c < 6; ++c)
+      if (n == std::string("gain_") + comp[c]) return c;
+    return -1;
+  };
+  int ref = -1;
+  for (int c = 0; c < 6; ++c) {
+    bool listed = false;
+    for (const auto& q : f.reported) listed = listed || q.name == std::string("gain_") + comp[c];
+    for (const auto& u : f.unidentifiable) listed = listed || u.name == std::string("gain_") + comp[c];
+    if (!listed) ref = c;
+  }
+  for (int c = 0; c < 6; ++c) {
+    if (name == std::string("bias_") + comp[c]) return s.sensor.bias(c);
+    if (name == std::string("gain_") + comp[c] && ref >= 0) {
+      // fx, fy and mz carry the friction: relative to the one of them fixed, if any.
+      auto friction = [](int k) { return k == 0 || k == 1 || k == 5; };
+      int r = ref;
+      for (const auto& u : f.unidentifiable)
+        if (friction(index(u.name)) && friction(c)) r = index(u.name);
+      return (1.0 + s.sensor.gain(c)) / (1.0 + s.sensor.gain(r)) - 1.0;
+    }
+  }
+  if (name == "time_offset_s") return s.sensor.delay_s;
+  if (name == "viscous_n_s_per_m") return s.law.viscous_n_s_per_m;
+  if (name == "damping_n_s_per_m") return s.law.damping_n_s_per_m;
+  if (name == "stiffness_exponent") return s.law.exponent;
+  // The truth's surface is at o_P, level in P: the rig's declared values are what may be off.
+  if (name == kPlateHeight || name == kPlateTiltX || name == kPlateTiltY) return 0.0;
+  return std::nullopt;
+}
+
+bool belongs_to(const std::string& param, const std::string& extension) {
+  auto starts = [&](const char* p) { return param.rfind(p, 0) == 0; };
+  if (extension == "sensor_bias") return starts("bias_");
+  if (extension == "sensor_gain") return starts("gain_");
+  if (extension == "time_offset") return param == "time_offset_s";
+  if (extension == "viscous_friction") return param == "viscous_n_s_per_m";
+  if (extension == "contact_damping") return param == "damping_n_s_per_m";
+  if (extension == "nonlinear_stiffness") return param == "stiffness_exponent";
+  if (extension == "robot_compliance") return starts("compliance_");
+  if (extension == "geometric_offset") return param == kPlateHeight || param == kPlateTiltX || param == kPlateTiltY;
+  return false;
+}
+
+double joint_z(std::size_t m) {
+  const double tail = 0.05 / static_cast<double>(std::max<std::size_t>(1, m));
+  double lo = 0.0, hi = 10.0;  // erfc(z/√2) falls from 1 to 0 on [0, 10]
+  for (int i = 0; i < 100; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    (std::erfc(mid / std::sqrt(2.0)) > tail ? lo : hi) = mid;
+  }
+  return 0.5 * (lo + hi);
+}
+
+}  // namespace hil::diagnose::test

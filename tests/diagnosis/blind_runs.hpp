@@ -1,0 +1,118 @@
+#pragma once
+// What the suites on the independent truth's runs share (test_blind, test_unexplained,
+// test_families): the reported resolutions, the motion families, the clean scenario, seeded draws,
+// one diagnosis as the CLI runs it, and the truth of each reported parameter in hil's
+// parameterisation. Test code: it knows the scenario; the diagnosis it calls does not.
+#include <cmath>
+#include <functional>
+#include <optional>
+#include <random>
+#include <string>
+
+#include <hil/diagnose/diagnose.hpp>
+#include "tripod_scene.hpp"
+
+namespace hil::diagnose::test {
+
+/// The reported twist's quantisation per world component (the position's is the paper's 2 µm).
+struct Resolution {
+  std::string name;
+  double velocity_m_per_s;
+};
+inline const Resolution kPaper{"paper", 2e-4};
+inline const Resolution kFine{"fine", 2e-5};
+
+/// A motion family: changes to the blind suite's scenario (pressing_and_sliding). Inline: the
+/// suites' parameter lists copy them during static initialisation, after these in every file.
+struct Motion {
+  std::string name;
+  std::function<void(ct::Scenario&)> apply;
+};
+
+/// The blind suite's own: a 5 mm/s circle, one normal tone, a slow yaw.
+inline const Motion kCircle{"circle", [](ct::Scenario&) {}};
+/// Two normal tones (0.7 and 2.3 Hz), the circle slower (3 mm/s).
+inline const Motion kTwoTone{"two_tone", [](ct::Scenario& s) {
+                               auto& t = s.trajectory;
+                               t.angular_rate_rad_per_s = 0.6;
+                               t.depth_m = 7e-5;
+                               t.depth_amplitude_m = 6e-5;
+                               t.depth_rate_rad_per_s = 2 * M_PI * 0.7;
+                               t.depth_amplitude2_m = 3e-5;
+                               t.depth_rate2_rad_per_s = 2 * M_PI * 2.3;
+                             }};
+/// A robot's point-to-point moves: a square at 10 mm/s with 0.4 s stops, triangle-wave normal
+/// motion (0.4 and 1.3 Hz), triangle yaw.
+inline const Motion kMoves{"moves", [](ct::Scenario& s) {
+                             auto& t = s.trajectory;
+                             t.motion = ct::PlateTrajectory::Motion::piecewise_linear;
+                             t.angular_rate_rad_per_s = 2.0;
+                             t.dwell_s = 0.4;
+                             t.depth_m = 7e-5;
+                             t.depth_amplitude_m = 6e-5;
+                             t.depth_rate_rad_per_s = 2 * M_PI * 0.4;
+                             t.depth_amplitude2_m = 2e-5;
+                             t.depth_rate2_rad_per_s = 2 * M_PI * 1.3;
+                           }};
+/// Slower moves: 4 mm/s sides, 1 s stops, one triangle tone.
+inline const Motion kSlowMoves{"slow_moves", [](ct::Scenario& s) {
+                                 auto& t = s.trajectory;
+                                 t.motion = ct::PlateTrajectory::Motion::piecewise_linear;
+                                 t.radius_m = 4e-3;
+                                 t.angular_rate_rad_per_s = 1.0;
+                                 t.dwell_s = 1.0;
+                               }};
+/// kMoves as a robot's trajectory generator runs them: trapezoidal speed profiles (a quarter of
+/// each move accelerating, a quarter decelerating), the same corners and extremes at the same times.
+inline const Motion kTrapezoidal{"trapezoidal", [](ct::Scenario& s) {
+                                   kMoves.apply(s);
+                                   s.trajectory.motion = ct::PlateTrajectory::Motion::trapezoidal;
+                                   s.trajectory.ramp_fraction = 0.25;
+                                 }};
+
+/// The run's duration in the suites of issue 32 (1,500 samples at 100 Hz).
+inline constexpr double kDuration_s = 15.0;
+// "Clean" is the nominal model's own physics plus the sensor: Coulomb friction at every slip speed
+// the rig resolves (the truth's regularisation at 1 µm/s, not pressing_and_sliding's 0.1 mm/s),
+// and a sticking threshold declared below the slowest slip (a yawing foot at a stop slides at
+// about 0.7 mm/s; the blind suite's 1 mm/s would call it sticking). Found on the calibration runs:
+// with 0.1 mm/s regularisation the truth's friction is 1 % short at 0.7 mm/s, about one noise std
+// of fx, and the structure check rightly reports fx correlating with vx; with 1 mm/s declared, mz
+// misfits by 39 noise variances at the stops.
+inline constexpr double kSlipRegularisation_m_per_s = 1e-6;
+inline constexpr double kStickBelow_m_per_s = 1e-4;
+
+/// pressing_and_sliding(kDuration_s) with the clean slip regularisation above.
+ct::Scenario clean_scenario();
+
+/// A seeded source of draws, the same sequence on every standard library (no std distributions).
+struct Draws {
+  std::mt19937_64 rng;
+  explicit Draws(unsigned seed) : rng(seed) {}
+  double uniform(double a, double b) { return a + (b - a) * static_cast<double>(rng() >> 11) * 0x1.0p-53; }
+  double sign() { return (rng() >> 63) ? 1.0 : -1.0; }
+};
+
+struct Diagnosed {
+  Diagnosis d;
+  std::string line;  ///< one line of statistics for the report
+};
+
+/// Diagnoses the scenario as the CLI does (the same context signals), sticking below
+/// kStickBelow_m_per_s, the position reported to 2 µm and the twist at `r`.
+Diagnosed diagnose_scenario(const ct::Scenario& sc, const TripodRigOptions& rig, const Resolution& r);
+
+/// The true value of a reported parameter, if the scenario defines it, in hil's parameterisation.
+/// sensor_gain: hil's gains are relative to the reference component (the one K absorbs, without a
+/// gain entry); a friction component's gain fixed as not identifiable (collinear with μ and the
+/// other friction components' gains: friction lives in fx, fy and mz only) is the reference of the
+/// other friction components, μ absorbing its factor.
+std::optional<double> truth_of(const std::string& name, const ct::Scenario& s, const Fit& f);
+
+/// Whether a reported parameter belongs to an extension (by name).
+bool belongs_to(const std::string& param, const std::string& extension);
+
+/// The two-sided normal quantile that holds m intervals jointly at 95 % (Bonferroni): Φ⁻¹(1 - 0.025/m).
+double joint_z(std::size_t m);
+
+}  // namespace hil::diagnose::test

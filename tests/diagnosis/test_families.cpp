@@ -1,0 +1,231 @@
+// The blind suite over motion families (issue 32, items 1 and 4): every effect the independent
+// truth (hil::contact_truth) can hide alone, with drawn magnitudes, on three motion families,
+// diagnosed without knowing the scenario.
+//
+// Rules written and committed (2026-12-01) before any of these draws ran:
+//  * Effects: clean (no effect); sensor_bias, sensor_gain, time_offset, viscous_friction,
+//    contact_damping (friction on the total normal force, the truth's Kelvin-Voigt law),
+//    nonlinear_stiffness, geometric_offset (the rig declares the plate's height off).
+//  * Draw i of effect e: seed 32,600,000 + 1000 e + i, never used before. Its motion family is
+//    i % 3: two-tone sinusoidal normal motion on a circle (smooth sums of sinusoids), moves with
+//    stops (piecewise-linear), moves with stops on trapezoidal speed profiles (the ramp drawn in
+//    10-50 % of each move). Speeds, stops, amplitudes, yaw, ramp, the effect's magnitudes and the
+//    noise all come from the seed (draw() below: the order of the draws is part of the rule).
+//  * Fine velocity resolution (2e-5 m/s): straight moves at the paper's 2e-4 m/s carry structure
+//    of their own (test_unexplained's QuantisedTwist).
+//  * CI draws 6 per effect (i = 0..5, two per family); HIL_FAMILY_DRAWS=N is the full draw, i = 100
+//    .. 100 + N - 1 (50: docs/diagnosis.md).
+//  * Per effect, of n draws, at most ceil(10 %) may fail each of:
+//     - named: the effect named first (clean: `none`);
+//     - single: no second cause.
+//  * Intervals: in each draw where the effect is named first, every reported parameter of it with a
+//    truth gives z = (value - truth) / std; inside when |z| <= 1.96. Of the m values of an effect,
+//    the count inside must not be in the binomial(m, 0.95) lower tail below 0.001 (a coverage
+//    that low is not a 95 % interval's). Full draw only, also:
+//     - widths: the mean of z² at least 0.5 (the intervals at most about 1.4 times too wide), and
+//       when m >= 100 at most 99 % inside (the issue's 85-99 % band's upper side);
+//     - bias: for each parameter name, |mean z| within joint_z(p) standard errors of the mean
+//       (sd(z) / sqrt(count)), p the number of parameter names of the effect (Bonferroni over
+//       them, at 95 % jointly).
+//
+// Label `blind`: minutes under sanitizers.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <iomanip>
+#include <iostream>
+#include <map>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "blind_runs.hpp"
+
+namespace hil::diagnose::test {
+namespace {
+
+enum class Effect { none, bias, gain, delay, viscous, damping, stiffness, geometric };
+
+std::string effect_name(Effect e) {
+  switch (e) {
+    case Effect::none: return "none";
+    case Effect::bias: return "sensor_bias";
+    case Effect::gain: return "sensor_gain";
+    case Effect::delay: return "time_offset";
+    case Effect::viscous: return "viscous_friction";
+    case Effect::damping: return "contact_damping";
+    case Effect::stiffness: return "nonlinear_stiffness";
+    case Effect::geometric: return "geometric_offset";
+  }
+  return "?";
+}
+
+struct Drawn {
+  ct::Scenario scenario;
+  TripodRigOptions rig;
+  std::string family, label;
+};
+
+Drawn draw(Effect e, unsigned i) {
+  const unsigned seed = 32'600'000u + 1000u * static_cast<unsigned>(e) + i;
+  Draws r(seed);
+  Drawn d{clean_scenario(), {}, "", ""};
+  ct::Scenario& sc = d.scenario;
+  auto& t = sc.trajectory;
+  const Motion* families[] = {&kTwoTone, &kMoves, &kTrapezoidal};
+  const Motion& family = *families[i % 3];
+  family.apply(sc);
+  d.family = family.name;
+  if (i % 3 == 0) {
+    t.angular_rate_rad_per_s *= r.uniform(0.7, 1.3);
+  } else {
+    t.angular_rate_rad_per_s = r.uniform(4e-3, 12e-3) / t.radius_m;
+    t.dwell_s = r.uniform(0.3, 1.0);
+  }
+  if (i % 3 == 2) t.ramp_fraction = r.uniform(0.1, 0.5);
+  t.depth_amplitude_m *= r.uniform(0.8, 1.2);
+  t.depth_amplitude2_m *= r.uniform(0.5, 1.5);
+  t.yaw_amplitude_rad = r.uniform(0.02, 0.04);
+  std::ostringstream o;
+  o << std::setprecision(3) << "seed " << seed << " " << family.name;
+  switch (e) {
+    case Effect::none: break;
+    case Effect::bias:
+      for (int c = 0; c < 6; ++c)
+        sc.sensor.bias(c) = r.sign() * (c < 2 ? r.uniform(0.3, 1.0) : c == 2 ? r.uniform(0.5, 2.0) : r.uniform(0.01, 0.04));
+      o << ", bias " << sc.sensor.bias.transpose();
+      break;
+    case Effect::gain:
+      for (int c = 0; c < 6; ++c) sc.sensor.gain(c) = r.sign() * r.uniform(0.01, 0.05);
+      o << ", gain " << sc.sensor.gain.transpose();
+      break;
+    case Effect::delay:
+      sc.sensor.delay_s = r.uniform(0.005, 0.025);
+      o << ", delay " << 1e3 * sc.sensor.delay_s << " ms";
+      break;
+    case Effect::viscous:
+      sc.law.viscous_n_s_per_m = r.uniform(100.0, 300.0);
+      o << ", viscous " << sc.law.viscous_n_s_per_m << " N s/m";
+      break;
+    case Effect::damping:
+      sc.law.damping_n_s_per_m = r.uniform(2000.0, 6000.0);
+      sc.law.friction_on_total_normal = true;
+      o << ", damping " << sc.law.damping_n_s_per_m << " N s/m";
+      break;
+    case Effect::stiffness:
+      sc.law.exponent = r.uniform(1.2, 1.6);
+      o << ", exponent " << sc.law.exponent;
+      break;
+    case Effect::geometric:
+      d.rig.declared_plate_height_m = r.sign() * r.uniform(1e-5, 3e-5);
+      o << ", declared plate height " << 1e6 * d.rig.declared_plate_height_m << " um";
+      break;
+  }
+  sc.sensor.seed = seed;
+  d.label = o.str();
+  return d;
+}
+
+/// P(X <= k) for X ~ binomial(m, p).
+double binomial_cdf(unsigned k, unsigned m, double p) {
+  double sum = 0.0;
+  for (unsigned j = 0; j <= std::min(k, m); ++j)
+    sum += std::exp(std::lgamma(m + 1.0) - std::lgamma(j + 1.0) - std::lgamma(m - j + 1.0) + j * std::log(p) + (m - j) * std::log1p(-p));
+  return std::min(1.0, sum);
+}
+
+TEST(FamilySuite, BinomialTailIsTheSumOfItsTerms) {
+  EXPECT_NEAR(binomial_cdf(6, 6, 0.95), 1.0, 1e-12);
+  EXPECT_NEAR(binomial_cdf(0, 6, 0.95), std::pow(0.05, 6), 1e-18);
+  EXPECT_NEAR(binomial_cdf(4, 6, 0.95), 1.0 - std::pow(0.95, 6) - 6 * std::pow(0.95, 5) * 0.05, 1e-12);
+  // 50 at 95 %: 42 inside is below the 0.001 tail, 43 is not (43 / 50 = 86 %).
+  EXPECT_LT(binomial_cdf(42, 50, 0.95), 1e-3);
+  EXPECT_GT(binomial_cdf(43, 50, 0.95), 1e-3);
+}
+
+struct Parameter {
+  std::vector<double> z;
+};
+
+class Families : public ::testing::TestWithParam<Effect> {};
+
+TEST_P(Families, MeetTheirRule) {
+  const Effect e = GetParam();
+  const std::string want = effect_name(e);
+  const bool full = std::getenv("HIL_FAMILY_DRAWS") != nullptr;
+  const unsigned n = full ? static_cast<unsigned>(std::stoul(std::getenv("HIL_FAMILY_DRAWS"))) : 6u, first = full ? 100u : 0u;
+  const unsigned allowed = (n + 9) / 10;  // ceil(10 %)
+  unsigned named = 0, single = 0;
+  std::map<std::string, Parameter> params;
+  std::map<std::string, unsigned> named_by_family;
+  for (unsigned i = first; i < first + n; ++i) {
+    const Drawn x = draw(e, i);
+    const Diagnosed run = diagnose_scenario(x.scenario, x.rig, kFine);
+    const Diagnosis& d = run.d;
+    const bool is_named = d.cause == want;
+    named += is_named ? 1 : 0;
+    single += d.second_cause.empty() ? 1 : 0;
+    std::ostringstream zs;
+    if (is_named && d.extended) {
+      ++named_by_family[x.family];
+      for (const auto& q : d.extended->full.reported) {
+        if (!q.extension || !belongs_to(q.name, want)) continue;
+        const auto truth = truth_of(q.name, x.scenario, d.extended->full);
+        if (!truth) continue;
+        const double z = (q.value - *truth) / q.std;
+        params[q.name].z.push_back(z);
+        zs << " " << q.name << " z " << std::setprecision(3) << z;
+      }
+    }
+    std::cout << "FAMILY " << want << " " << x.label << ": " << (is_named ? "named" : "NOT NAMED")
+              << (zs.str().empty() ? "" : " |" + zs.str()) << " | " << run.line << "\n";
+  }
+  // The summary table: per parameter, its count, share inside, mean z, its standard error, mean z².
+  unsigned m = 0, inside = 0;
+  double z2 = 0.0;
+  std::ostringstream table;
+  table << std::setprecision(3);
+  std::vector<std::string> biased;
+  const double zb = joint_z(params.size());
+  for (const auto& [name, p] : params) {
+    double mean = 0.0, sq = 0.0;
+    unsigned in = 0;
+    for (const double z : p.z) {
+      mean += z / static_cast<double>(p.z.size());
+      sq += z * z;
+      in += std::abs(z) <= 1.96 ? 1 : 0;
+    }
+    double var = 0.0;
+    for (const double z : p.z) var += (z - mean) * (z - mean) / std::max<double>(1.0, static_cast<double>(p.z.size()) - 1.0);
+    const double se = std::sqrt(var / static_cast<double>(p.z.size()));
+    m += static_cast<unsigned>(p.z.size());
+    inside += in;
+    z2 += sq;
+    const bool bias = p.z.size() >= 2 && std::abs(mean) > zb * se;
+    if (bias) biased.push_back(name);
+    table << "\n  " << name << ": " << in << " of " << p.z.size() << " inside, mean z " << mean << " (se " << se << ")"
+          << (bias ? " BIASED" : "") << ", mean z2 " << sq / static_cast<double>(p.z.size());
+  }
+  std::cout << "SUMMARY " << want << ": named " << named << ", single " << single << " of " << n << " (at most " << allowed
+            << " may fail each); by family:";
+  for (const auto& [f, k] : named_by_family) std::cout << " " << f << " " << k;
+  std::cout << "; intervals " << inside << " of " << m << " inside" << table.str() << "\n";
+
+  EXPECT_GE(named + allowed, n) << want << " named first in " << named << " of " << n;
+  EXPECT_GE(single + allowed, n) << "a second cause in " << n - single << " of " << n;
+  if (m > 0) EXPECT_GE(binomial_cdf(inside, m, 0.95), 1e-3) << inside << " of " << m << " intervals inside" << table.str();
+  if (!full || m == 0) return;
+  EXPECT_GE(z2 / m, 0.5) << "intervals too wide: mean z² " << z2 / m << table.str();
+  if (m >= 100) EXPECT_LE(inside, 0.99 * m) << inside << " of " << m << " inside: intervals too wide" << table.str();
+  EXPECT_TRUE(biased.empty()) << "biased beyond " << zb << " standard errors:" << table.str();
+}
+
+INSTANTIATE_TEST_SUITE_P(Issue32, Families,
+                         ::testing::Values(Effect::none, Effect::bias, Effect::gain, Effect::delay, Effect::viscous, Effect::damping,
+                                           Effect::stiffness, Effect::geometric),
+                         [](const ::testing::TestParamInfo<Effect>& i) { return effect_name(i.param); });
+
+}  // namespace
+}  // namespace hil::diagnose::test
