@@ -498,27 +498,23 @@ cid::Kinematics ContactFamily::kinematics_at(const SincWeights& sw) const {
   // than others, and a fitted delay would drift there (above).
   const auto& k0 = sample(sw.interval);
   const auto& k1 = sample(sw.interval + 1);
-  const double a = sw.fraction;
-  const auto twist = [a](const std::vector<double>& steps, const SincWeights& s, const Vec3& v0, const Vec3& v1, Vec3& result) {
-    const StepNear at = step_near(steps, s);
-    if (at.near) result = !at.at ? Vec3((1 - a) * v0 + a * v1) : a < at.fraction ? v0 : v1;
-  };
-  twist(d_.v_step, sw, k0.v_world_ee, k1.v_world_ee, out.v_world_ee);
-  twist(d_.w_step, sw, k0.w_world_ee, k1.w_world_ee, out.w_world_ee);
+  if (const auto v_step = velocity_near_step(d_.v_step, sw, k0.v_world_ee, k1.v_world_ee)) out.v_world_ee = *v_step;
+  if (const auto w_step = velocity_near_step(d_.w_step, sw, k0.w_world_ee, k1.w_world_ee)) out.w_world_ee = *w_step;
   return out;
 }
 
-ContactFamily::StepNear ContactFamily::step_near(const std::vector<double>& steps, const SincWeights& sw) {
-  StepNear r;
-  if (steps.empty() || sw.taps == 0) return r;
+std::optional<Vec3> ContactFamily::velocity_near_step(const std::vector<double>& steps, const SincWeights& sw, const Vec3& v0,
+                                                      const Vec3& v1) {
+  if (steps.empty() || sw.taps == 0) return std::nullopt;
   const auto last = static_cast<std::ptrdiff_t>(steps.size()) - 1;
+  bool near = false;
   for (std::ptrdiff_t j = std::max<std::ptrdiff_t>(0, sw.first); j <= std::min(last, sw.first + sw.taps - 2); ++j)
-    r.near = r.near || std::isfinite(steps[static_cast<std::size_t>(j)]);
-  if (sw.interval <= last && std::isfinite(steps[static_cast<std::size_t>(sw.interval)])) {
-    r.at = true;
-    r.fraction = steps[static_cast<std::size_t>(sw.interval)];
-  }
-  return r;
+    near = near || std::isfinite(steps[static_cast<std::size_t>(j)]);
+  if (!near) return std::nullopt;
+  if (sw.interval >= 0 && sw.interval <= last && std::isfinite(steps[static_cast<std::size_t>(sw.interval)]))
+    return sw.fraction < steps[static_cast<std::size_t>(sw.interval)] ? v0 : v1;
+  const double a = sw.fraction;
+  return Vec3((1 - a) * v0 + a * v1);
 }
 
 Vec3 ContactFamily::rate_velocity_at(const SincWeights& sw) const {
@@ -527,11 +523,7 @@ Vec3 ContactFamily::rate_velocity_at(const SincWeights& sw) const {
     return d_.v_rate_world[static_cast<std::size_t>(std::clamp<std::ptrdiff_t>(j, 0, n - 1))];
   };
   if (sw.taps == 0) return sample(sw.first);
-  if (const StepNear s = step_near(d_.rate_step, sw); s.near) {  // as kinematics_at's twist
-    const double a = sw.fraction;
-    if (!s.at) return (1 - a) * sample(sw.interval) + a * sample(sw.interval + 1);
-    return a < s.fraction ? sample(sw.interval) : sample(sw.interval + 1);
-  }
+  if (const auto v_step = velocity_near_step(d_.rate_step, sw, sample(sw.interval), sample(sw.interval + 1))) return *v_step;
   Vec3 v = Vec3::Zero();
   for (int i = 0; i < sw.taps; ++i) v += sw.h[static_cast<std::size_t>(i)] * sample(sw.first + i);
   return v;

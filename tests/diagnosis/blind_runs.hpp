@@ -14,10 +14,11 @@
 
 namespace hil::diagnose::test {
 
-/// The reported twist's quantisation per world component (the position's is the paper's 2 µm).
+/// The reported twist's and position's quantisation per world component.
 struct Resolution {
   std::string name;
   double velocity_m_per_s;
+  double position_m = 2e-6;  ///< the paper's 2 µm
 };
 inline const Resolution kPaper{"paper", 2e-4};
 inline const Resolution kFine{"fine", 2e-5};
@@ -99,7 +100,7 @@ struct Diagnosed {
 };
 
 /// Diagnoses the scenario as the CLI does (the same context signals), sticking below
-/// kStickBelow_m_per_s, the position reported to 2 µm and the twist at `r`.
+/// kStickBelow_m_per_s, the pose and twist reported at `r`.
 Diagnosed diagnose_scenario(const ct::Scenario& sc, const TripodRigOptions& rig, const Resolution& r);
 
 /// The true value of a reported parameter, if the scenario defines it, in hil's parameterisation.

@@ -136,7 +136,8 @@ TEST_P(Blind, TheRightCauseWithItsMagnitude) {
   TripodRigOptions rig;
   c.effect.apply(sc, rig);
   const cid::Scene scene = tripod_scene(sc.plate, sc.tripod, rig);
-  const auto data = make_contact_data(scene, kVtm_m_per_s, to_measurements(ct::simulate(sc), {2e-6, c.resolution.velocity_m_per_s}));
+  const auto data = make_contact_data(scene, kVtm_m_per_s,
+                                      to_measurements(ct::simulate(sc), {c.resolution.position_m, c.resolution.velocity_m_per_s}));
   const ModelFactory make = [&data](const std::set<std::string>& x) { return std::make_unique<ContactFamily>(data, x); };
   const Diagnosis d = diagnose(make, contact_extensions(), data.obs, {});
 

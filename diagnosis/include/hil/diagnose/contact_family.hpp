@@ -205,13 +205,11 @@ class ContactFamily : public ModelFamily {
     std::ptrdiff_t interval = 0;  ///< t lies in [t_interval, t_interval+1) ...
     double fraction = 0.0;        ///< ... at this fraction of it
   };
-  /// Whether a step (ContactData::v_step and the like) lies in sw's window (near), and whether it
-  /// lies in the interval holding t (at).
-  struct StepNear {
-    bool near = false, at = false;
-    double fraction = 0.0;  ///< of the step in the interval holding t, when `at`
-  };
-  static StepNear step_near(const std::vector<double>& steps, const SincWeights& sw);
+  /// A velocity at t near a step of it (ContactData::v_step and the like) in sw's window: linear
+  /// between the samples v0, v1 around t, or v0 before and v1 after the step when the step lies in
+  /// their interval. Empty when no step lies in the window (the sinc's value holds there).
+  static std::optional<Eigen::Vector3d> velocity_near_step(const std::vector<double>& steps, const SincWeights& sw,
+                                                           const Eigen::Vector3d& v0, const Eigen::Vector3d& v1);
   SincWeights sinc_weights(double t) const;
   Eigen::Vector3d rate_velocity_at(const SincWeights& w) const;
   cid::Kinematics kinematics_at(const SincWeights& w) const;
