@@ -222,10 +222,14 @@ void meet_the_rule(const std::string& want, const char* env, const std::function
 
   EXPECT_GE(named + allowed, n) << want << " named first in " << named << " of " << n;
   EXPECT_GE(single + allowed, n) << "a second cause in " << n - single << " of " << n;
-  if (m > 0) EXPECT_GE(binomial_cdf(inside, m, 0.95), 1e-3) << inside << " of " << m << " intervals inside" << table.str();
+  if (m > 0) {
+    EXPECT_GE(binomial_cdf(inside, m, 0.95), 1e-3) << inside << " of " << m << " intervals inside" << table.str();
+  }
   if (!full || m == 0) return;
   EXPECT_GE(z2 / m, 0.5) << "intervals too wide: mean z² " << z2 / m << table.str();
-  if (m >= 100) EXPECT_LE(inside, 0.99 * m) << inside << " of " << m << " inside: intervals too wide" << table.str();
+  if (m >= 100) {
+    EXPECT_LE(inside, 0.99 * m) << inside << " of " << m << " inside: intervals too wide" << table.str();
+  }
   EXPECT_TRUE(biased.empty()) << "biased beyond " << zb << " standard errors:" << table.str();
 }
 
