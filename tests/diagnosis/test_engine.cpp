@@ -974,6 +974,56 @@ TEST(ContactFamily, AQuantumIsSeenOnlyWhenEveryValueLiesOnItsGrid) {
   EXPECT_EQ(quantum_of({0.0, 2e-4, 5e-4}), 0.0);           // 5e-4 is off the 2e-4 grid
 }
 
+// The bias a quantiser leaves in a mean, against its direct simulation: a constant at an unknown
+// place on the grid, dithered by Gaussian noise, its quantised mean's error squared over the places.
+TEST(ContactFamily, TheQuantisationBiasFloorShrinksWithTheDitherTheNoiseGives) {
+  const double step = 0.1;
+  std::mt19937_64 rng(11);
+  std::normal_distribution<double> unit(0.0, 1.0);
+  std::uniform_real_distribution<double> place(0.0, step);
+  auto simulated = [&](double sigma) {  // E over places of (mean quantised - x)², 20,000 samples each
+    double sum = 0.0;
+    for (int i = 0; i < 200; ++i) {
+      const double x = place(rng);
+      double mean = 0.0;
+      for (int k = 0; k < 20000; ++k) mean += step * std::round((x + sigma * unit(rng)) / step) / 20000.0;
+      sum += (mean - x) * (mean - x) / 200.0;
+    }
+    return sum;
+  };
+  EXPECT_NEAR(quantisation_bias_variance(step, 0.0), step * step / 12.0, 1e-15);
+  EXPECT_NEAR(simulated(0.0), step * step / 12.0, 0.2 * step * step / 12.0);
+  // σ = step/4 and step/6: the floor falls to 5 % and 26 % of step²/12, as simulated (the
+  // simulation's own sampling error is 5e-7 step² per place, far below).
+  for (const double sigma : {step / 4, step / 6}) {
+    const double v = quantisation_bias_variance(step, sigma);
+    EXPECT_NEAR(v, simulated(sigma), 0.25 * v) << sigma;
+  }
+  EXPECT_NEAR(quantisation_bias_variance(step, step / 4) / (step * step / 12.0), 0.0515, 0.001);
+  EXPECT_LT(quantisation_bias_variance(step, step), 1e-18);
+  EXPECT_EQ(quantisation_bias_variance(0.0, 0.0), 0.0);
+
+  // From a series: a signal sweeping the grid (fz-like, 2 N at 0.7 Hz) plus noise, quantised; the
+  // floor no larger than 0.9 σ would give at σ = step/2 and step; no dither seen on a noiseless constant; a few
+  // jumps (a friction's sign flips) do not spoil it.
+  auto series = [&](double sigma, double sweep_n, int jumps) {
+    std::vector<double> y;
+    for (int k = 0; k < 1500; ++k) {
+      double x = 0.0123 + sweep_n * std::sin(2 * M_PI * 0.7 * 0.01 * k) + sigma * unit(rng);
+      if (jumps > 0 && (k / (1500 / (jumps + 1))) % 2 == 1) x += 5.0;
+      y.push_back(step * std::round(x / step));
+    }
+    return y;
+  };
+  for (const double sigma : {step / 2, step})
+    EXPECT_NEAR(quantisation_bias_variance(series(sigma, 2.0, 8), step), quantisation_bias_variance(step, sigma),
+                quantisation_bias_variance(step, 0.9 * sigma) - quantisation_bias_variance(step, sigma))
+        << sigma;
+  EXPECT_NEAR(quantisation_bias_variance(series(0.0, 0.0, 0), step), step * step / 12.0, 1e-15);
+  EXPECT_NEAR(quantisation_bias_variance(std::vector<double>{}, step), step * step / 12.0, 1e-15);
+  EXPECT_EQ(quantisation_bias_variance(std::vector<double>{1.0, 2.0, 3.0}, 0.0), 0.0);  // not quantised
+}
+
 TEST(ContactFamily, AWindowedSlopeIsExactOnQuadraticsAndAveragesQuantisationNoise) {
   std::vector<double> t, x;
   for (int k = 0; k < 200; ++k) {

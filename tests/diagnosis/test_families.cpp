@@ -149,9 +149,9 @@ TEST(FamilySuite, BinomialTailIsTheSumOfItsTerms) {
   EXPECT_NEAR(binomial_cdf(6, 6, 0.95), 1.0, 1e-12);
   EXPECT_NEAR(binomial_cdf(0, 6, 0.95), std::pow(0.05, 6), 1e-18);
   EXPECT_NEAR(binomial_cdf(4, 6, 0.95), 1.0 - std::pow(0.95, 6) - 6 * std::pow(0.95, 5) * 0.05, 1e-12);
-  // 50 at 95 %: 42 inside is below the 0.001 tail, 43 is not (43 / 50 = 86 %).
-  EXPECT_LT(binomial_cdf(42, 50, 0.95), 1e-3);
-  EXPECT_GT(binomial_cdf(43, 50, 0.95), 1e-3);
+  // 50 at 95 %: 41 inside is below the 0.001 tail (7.6e-4), 42 is not (3.2e-3; 42 / 50 = 84 %).
+  EXPECT_NEAR(binomial_cdf(41, 50, 0.95), 7.5598e-4, 1e-8);
+  EXPECT_NEAR(binomial_cdf(42, 50, 0.95), 3.18834e-3, 1e-8);
 }
 
 struct Parameter {

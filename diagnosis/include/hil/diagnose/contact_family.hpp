@@ -48,9 +48,12 @@ struct ContactData {
   std::vector<int> fit_uncertainties;                    ///< observable x_u (geometric_offset fits these)
   std::vector<std::string> unfit_uncertainties;          ///< and why the others are not fitted
   std::size_t samples_in_contact = 0;
-  /// Per plate component, the sensor's quantisation step seen in the data (0: not quantised). A
-  /// constant offset cannot be known better than step/√12, whatever the number of samples.
+  /// Per plate component, the sensor's quantisation step seen in the data (0: not quantised).
   Vector6d resolution = Vector6d::Zero();
+  /// Per plate component, the variance of the bias quantisation can leave in a constant offset,
+  /// whatever the number of samples (quantisation_bias_variance): step²/12 without dither, far less
+  /// when the sensor's noise dithers the quantiser.
+  Vector6d quantisation_bias_variance = Vector6d::Zero();
   /// The ee's linear velocity (world) contact_damping takes its penetration rates from, per sample.
   /// Per axis either the reported twist or, where both streams are quantised and the reported
   /// twist's step is the coarser noise, the least-squares slope of the reported positions over
@@ -100,6 +103,19 @@ constexpr int kRateHalfWindow = 8;
 /// lies on that grid (0: fewer than max(3, min_levels) distinct values, not on a grid, or a
 /// non-finite value).
 double quantum_of(std::vector<double> values, std::size_t min_levels = 3);
+
+/// The variance of the bias a quantiser of `step` leaves in the mean of a signal dithered by
+/// Gaussian noise of std σ, over an unknown position of the signal on the grid: the quantiser's
+/// mean error is the Fourier series Σ_k (-1)^k (step/πk) e^{-2π²k²σ²/step²} sin(2πk x/step)
+/// (Widrow and Kollár, Quantization Noise, 2008, ch. 4-5), whose mean square over x is
+/// Σ_k step²/(2π²k²) e^{-4π²k²σ²/step²}: step²/12 at σ = 0, 3e-19 step² at σ = step. 0 when step is 0.
+double quantisation_bias_variance(double step, double sigma);
+/// The same with σ estimated from `series` (the quantised samples in time order): from the mean
+/// square of its second differences (a slow signal cancels), the largest tenth left out (a jump
+/// spoils a few, not the estimate; the Gaussian's trimmed second moment corrected for), less the
+/// quantisation's own step²/12. Conservative where σ is below step/4 (it sees less dither than
+/// there is) and on a series without second differences (σ = 0).
+double quantisation_bias_variance(const std::vector<double>& series, double step);
 
 /// Per sample, the least-squares slope of x over the samples within ± half_window of it (clipped at
 /// the ends of the run), against the sample times. \pre t increasing, t.size() == x.size().
