@@ -28,6 +28,13 @@
 //       (sd(z) / sqrt(count)), p the number of parameter names of the effect (Bonferroni over
 //       them, at 95 % jointly).
 //
+// The CI draws pass. The full draw (2026-12-02, docs/diagnosis.md "The blind suite over motion
+// families") does not, and is not asserted in CI: clean and gain runs on trapezoidal moves say
+// `unexplained` (6 and 8 of 17 named: the declared sticking threshold against slow slip), the
+// intervals of bias, gain, viscous friction and plate height are too wide (mean z² 0.1-0.6: one
+// pooled σ² over the six components), damping is low (40 of 50 inside); the delay, the stiffness
+// exponent and the delay off the suite's sensor chain pass.
+//
 // Label `blind`: minutes under sanitizers.
 #include <gtest/gtest.h>
 
