@@ -4,6 +4,7 @@
 
 #include <string>
 
+#include <hil/error/error.hpp>
 #include <hil/format/rig.hpp>
 #include <hil/models/contact.hpp>
 #include <hil/test/files.hpp>
@@ -28,6 +29,15 @@ TEST(RigContact, BadTruthAndTrajectoryFilesAreRefusedWithWhereAndWhat) {
   EXPECT_TRUE(hil::test::fails_with([&] { hil::models::read_truth(res, rig); }, 2, "sensor.force_resolution_n", "expected a number >= 0"));
   const auto syntax = dir.file("syntax.yaml", "stiffness_n_per_m: [1\n");
   EXPECT_TRUE(hil::test::fails_with([&] { hil::models::read_truth(syntax, rig); }, 0, "", "YAML syntax error"));
+  // The same reader on text (what the fuzz target drives) names the display name; a missing file is named.
+  try {
+    (void)hil::models::parse_truth("stiffness_n_per_m: 1.8e5\nfriction: 0.2\n", "inline.yaml", rig);
+    ADD_FAILURE() << "no exception";
+  } catch (const error::FormatError& e) {
+    EXPECT_NE(std::string(e.what()).find("inline.yaml"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(hil::models::parse_truth("stiffness_n_per_m: 2.5e5\n", "inline.yaml", rig).model.K, 2.5e5);
+  EXPECT_TRUE(hil::test::fails_with([&] { hil::models::read_truth(dir.path() + "/absent.yaml", rig); }, 0, "", "cannot open the file"));
   // An uncertainty the rig does not declare: the file and the name.
   try {
     hil::models::uncertainty_vector(hil::models::scene_from_rig(rig), {{"guide9_shift", 1e-4}}, "truth.yaml");

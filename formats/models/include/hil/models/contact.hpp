@@ -41,7 +41,10 @@ struct Truth {
   contact_id::SensorModel sensor;
   std::map<std::string, double> geometric;
 };
+/// \throws FormatError naming the file, line and field.
 Truth read_truth(const std::string& path, const format::RigSpec& rig);
+/// read_truth on text; `display_name` names it in errors.
+Truth parse_truth(const std::string& yaml_text, const std::string& display_name, const format::RigSpec& rig);
 
 /// x_u from name -> value (others at their design value). \throws std::runtime_error on unknown names.
 Eigen::VectorXd uncertainty_vector(const contact_id::Scene& s, const std::map<std::string, double>& values, const std::string& where);
