@@ -1,9 +1,7 @@
 #include <hil/models/contact.hpp>
 
 #include <cmath>
-#include <fstream>
 #include <limits>
-#include <sstream>
 #include <stdexcept>
 
 #include <hil/format/csv.hpp>
@@ -174,18 +172,11 @@ Trajectory read_trajectory(const std::string& path) {
   return tr;
 }
 
-Truth read_truth(const std::string& path, const format::RigSpec& rig) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw FormatError({path, 0, 0, ""}, "cannot open the file");
-  std::ostringstream text;
-  text << in.rdbuf();
-  return parse_truth(text.str(), path, rig);
-}
+namespace {
 
-Truth parse_truth(const std::string& yaml_text, const std::string& path, const format::RigSpec& rig) {
+Truth truth_from(const YAML::Node& doc, const std::string& path, const format::RigSpec& rig) {
   Truth t;
   t.model = model_from_rig(rig);
-  const YAML::Node doc = format::load_yaml(yaml_text, path);
   if (!doc.IsDefined() || doc.IsNull()) return t;  // an empty truth: the rig's nominal model
   const format::YamlNode root(doc, "", &path);
   root.only({"stiffness_n_per_m", "friction_coefficient", "sticking_threshold_m_per_s", "sensor", "geometric"});
@@ -226,6 +217,14 @@ Truth parse_truth(const std::string& yaml_text, const std::string& path, const f
     throw FormatError({path, 0, 0, ""}, e.what());
   }
   return t;
+}
+
+}  // namespace
+
+Truth read_truth(const std::string& path, const format::RigSpec& rig) { return truth_from(format::load_yaml_file(path), path, rig); }
+
+Truth parse_truth(const std::string& yaml_text, const std::string& display_name, const format::RigSpec& rig) {
+  return truth_from(format::load_yaml(yaml_text, display_name), display_name, rig);
 }
 
 Eigen::VectorXd uncertainty_vector(const cid::Scene& s, const std::map<std::string, double>& values, const std::string& where) {
