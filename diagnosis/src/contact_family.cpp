@@ -97,6 +97,53 @@ double quantisation_bias_variance(const std::vector<double>& series, double step
   return quantisation_bias_variance(step, var > 0.0 ? std::sqrt(var) : 0.0);
 }
 
+// Lobes of the Lanczos window of the pose interpolation (2 kSincLobes samples per instant).
+// Why not a linear blend of the two neighbours: the reported poses are quantised (2 µm on the
+// paper's rig) and a blend halves the quantisation noise's variance at a half-sample shift, so a
+// fitted delay drifted towards fractional shifts (τ 10 % high on the blind suite's 20 ms). The
+// windowed sinc keeps 92-100 % of white noise's variance at every fraction. Its weights get the
+// least change that makes them reproduce cubics exactly (a truncated sinc alone shifts a ramp by up
+// to 0.007 of a sample); exact at the samples, so τ = 0 gives the measured kinematics.
+constexpr int kSincLobes = 8;
+
+std::vector<double> delay_crossings(const ContactData& d, double lower_s, double upper_s, double merge_s) {
+  const auto& t = d.obs.t_s;
+  const std::size_t n = t.size();
+  std::vector<double> at;            // the instants the delayed sample instants must not cross unnoticed
+  std::vector<bool> near(n, false);  // sample instants within a step's interpolation window
+  constexpr std::size_t window = 2 * kSincLobes;
+  for (const auto* steps : {&d.v_step, &d.w_step, &d.rate_step}) {
+    if (steps->empty()) continue;
+    if (steps->size() + 1 != n)
+      throw std::invalid_argument("delay_crossings: steps for " + std::to_string(steps->size()) + " intervals, the run has " +
+                                  std::to_string(n) + " samples");
+    for (std::size_t j = 0; j + 1 < n; ++j) {
+      const double f = (*steps)[j];
+      if (!std::isfinite(f)) continue;
+      at.push_back(t[j] + f * (t[j + 1] - t[j]));
+      for (std::size_t k = j > window ? j - window : 0; k < std::min(n, j + window + 2); ++k) near[k] = true;
+    }
+  }
+  if (at.empty()) return {};
+  for (std::size_t k = 0; k < n; ++k)
+    if (near[k]) at.push_back(t[k]);
+  std::vector<double> tau;
+  for (const double s : at) {  // t_k - s in [lower, upper]: t_k in [s + lower, s + upper]
+    const auto from = std::lower_bound(t.begin(), t.end(), s + lower_s);
+    for (auto k = from; k != t.end() && *k <= s + upper_s; ++k) tau.push_back(*k - s);
+  }
+  std::sort(tau.begin(), tau.end());
+  std::vector<double> out;
+  for (std::size_t i = 0; i < tau.size();) {  // runs of neighbours closer than merge_s: their mean
+    std::size_t j = i + 1;
+    double sum = tau[i];
+    while (j < tau.size() && tau[j] - tau[j - 1] < merge_s) sum += tau[j++];
+    out.push_back(sum / static_cast<double>(j - i));
+    i = j;
+  }
+  return out;
+}
+
 std::vector<double> rate_steps(const std::vector<double>& t_s, const std::vector<Vec3>& rate, const std::vector<Vec3>& increment,
                                double quantum, double increment_quantum) {
   const std::size_t n = rate.size();
@@ -435,6 +482,12 @@ std::vector<Eigen::VectorXd> ContactFamily::starts() const {
   return out;
 }
 
+std::vector<Eigen::VectorXd> ContactFamily::starts_near(const Eigen::VectorXd& best) const {
+  std::vector<Eigen::VectorXd> out;
+  for (const auto& b : terms_) b.term->starts_near(b.slots, best, out);
+  return out;
+}
+
 void ContactFamily::columns(const std::vector<cid::ContactPoint>& cs, const cid::Kinematics& k, const Vec3& v_rate, double p,
                             Eigen::Ref<Eigen::MatrixXd> out) const {
   const auto& T = d_.scene.T_world_fp;
@@ -449,15 +502,6 @@ void ContactFamily::columns(const std::vector<cid::ContactPoint>& cs, const cid:
     for (const auto& b : terms_) b.term->contact_columns(b.slots, at, out);
   }
 }
-
-// Lobes of the Lanczos window of the pose interpolation (2 kSincLobes samples per instant).
-// Why not a linear blend of the two neighbours: the reported poses are quantised (2 µm on the
-// paper's rig) and a blend halves the quantisation noise's variance at a half-sample shift, so a
-// fitted delay drifted towards fractional shifts (τ 10 % high on the blind suite's 20 ms). The
-// windowed sinc keeps 92-100 % of white noise's variance at every fraction. Its weights get the
-// least change that makes them reproduce cubics exactly (a truncated sinc alone shifts a ramp by up
-// to 0.007 of a sample); exact at the samples, so τ = 0 gives the measured kinematics.
-constexpr int kSincLobes = 8;
 
 ContactFamily::SincWeights ContactFamily::sinc_weights(double t) const {
   const auto& ts = d_.obs.t_s;

@@ -304,6 +304,14 @@ Fit fit_with(const ModelFamily& m, const Observations& obs, const std::vector<in
       first = false;
     }
   }
+  for (const auto& s0 : m.starts_near(phi)) {  // near the best: not kept, each fold's best differs
+    const Eigen::VectorXd s = hold(clamp(s0, nl));
+    Projected pr = ev.project(s);
+    if (pr.cost < cur.cost) {
+      cur = pr;
+      phi = s;
+    }
+  }
   if (!cur.theta.allFinite()) throw std::runtime_error(m.name() + ": the fit is not finite");
   if (statistics && o.collinearity_sine > 0) {
     // Before estimation: directions the design cannot separate at the start are fixed, not fitted.

@@ -1121,6 +1121,36 @@ TEST(ContactFamily, RateStepsFindAndPlaceAMovesStepsAndNothingElse) {
   EXPECT_THROW(rate_steps(t, v, v, 0.0, 0.0), std::invalid_argument);  // increments: one fewer
 }
 
+// time_offset's plateaus: a delay τ moves sample k's instant to t_k - τ, which crosses a placed step
+// at t_j + f h when τ = t_k - t_j - f h, and a sample instant near a step at τ = t_k - t_j (the
+// delayed twist switches there between its step-aware and its sinc interpolation). delay_crossings
+// lists exactly those within the bounds, merges the close ones, and nothing when nothing steps.
+TEST(ContactFamily, DelayCrossingsAreWhereADelayedInstantMeetsAStep) {
+  const double h = 0.01;
+  ContactData d;
+  for (int k = 0; k < 100; ++k) d.obs.t_s.push_back(h * k);
+  d.v_step.assign(99, std::numeric_limits<double>::quiet_NaN());
+  d.v_step[40] = 0.3;  // a step at 0.403 s
+  d.rate_step.assign(99, std::numeric_limits<double>::quiet_NaN());
+  d.rate_step[40] = 0.3004;  // the same step placed from the rates, 4 µs later: merged with it
+  d.w_step.clear();          // no angular step
+  const double lim = 0.025;
+  const auto c = delay_crossings(d, -lim, lim, 1e-5);
+  // From the step: t_k - 0.403 for t_k in [0.378, 0.428]: k = 38..42 -> -0.023, -0.013, -0.003, 0.007, 0.017.
+  // From the sample instants within the step's window (t_24 .. t_57): every whole sample, -0.02 .. 0.02.
+  std::vector<double> want{-0.023, -0.02, -0.013, -0.01, -0.003, 0.0, 0.007, 0.01, 0.017, 0.02};
+  ASSERT_EQ(c.size(), want.size());
+  for (std::size_t i = 0; i < want.size(); ++i) EXPECT_NEAR(c[i], want[i], 3e-6) << i;
+  // Merged: the two placements 4 µs apart are one crossing at their mean.
+  EXPECT_NEAR(c[0], -0.02300 - 2e-6, 1e-9);
+  // Nothing steps: no crossings; a step list of the wrong length is refused with the sizes.
+  ContactData smooth;
+  smooth.obs.t_s = d.obs.t_s;
+  EXPECT_TRUE(delay_crossings(smooth, -lim, lim, 1e-5).empty());
+  d.w_step.assign(50, 0.5);
+  EXPECT_THROW(delay_crossings(d, -lim, lim, 1e-5), std::invalid_argument);
+}
+
 // contact_damping's penetration rates: from the pose slope on an axis only where it has less error
 // than the reported twist (a coarse twist on a smooth motion), from the twist where the twist is
 // finer, unquantised, or the motion turns within the slope's window.

@@ -73,6 +73,12 @@ class ContactTerm {
     (void)zero;
     (void)out;
   }
+  /// Starting points near the best of the first ones (ModelFamily::starts_near): `best` with this
+  /// term's entries changed.
+  virtual void starts_near(const ContactSlots&, const Eigen::VectorXd& best, std::vector<Eigen::VectorXd>& out) const {
+    (void)best;
+    (void)out;
+  }
   /// Its contacts depend on φ (geometry, poses or time): the family tables the near pairs.
   virtual bool moves_contacts() const { return false; }
   /// Its columns need the penetration rates (ContactData::v_rate_world, delayed with the poses).

@@ -95,6 +95,14 @@ constexpr int kStepSpan = 8;
 std::vector<double> rate_steps(const std::vector<double>& t_s, const std::vector<Eigen::Vector3d>& rate,
                                const std::vector<Eigen::Vector3d>& increment, double quantum, double increment_quantum);
 
+/// The delays τ in [lower_s, upper_s] at which a delayed sample instant t_k - τ crosses a placed step
+/// of the twist or the penetration rates (ContactData::v_step, w_step, rate_step), or a sample
+/// instant while the run has steps (there the delayed twist switches between its step-aware and
+/// its sinc interpolation): sorted, crossings closer than merge_s merged into their mean. Between
+/// two neighbours time_offset's cost is smooth; at each it may step (docs/diagnosis.md, "Delay
+/// plateaus"). Empty when nothing steps. \pre the steps' sizes n - 1 or 0, t_s increasing.
+std::vector<double> delay_crossings(const ContactData& d, double lower_s, double upper_s, double merge_s);
+
 /// Half-width of the pose slope's window, samples: measured on the blind suite (± 4 leaves the
 /// damping 2 std low at the fine resolution, ± 8 within 1.5 std at both).
 constexpr int kRateHalfWindow = 8;
@@ -168,6 +176,7 @@ class ContactFamily : public ModelFamily {
   std::vector<Param> linear() const override { return linear_; }
   std::vector<Param> nonlinear() const override { return nonlinear_; }
   std::vector<Eigen::VectorXd> starts() const override;
+  std::vector<Eigen::VectorXd> starts_near(const Eigen::VectorXd& best) const override;
   std::unique_ptr<FamilyData> make_data() const override;
   using ModelFamily::design;
   void design(const Eigen::VectorXd& phi, Eigen::MatrixXd& A, FamilyData& data) const override;

@@ -94,6 +94,12 @@ class ModelFamily {
   virtual std::vector<Param> nonlinear() const { return {}; }
   /// Starting points for φ (the best by projected cost starts LM). Default: φ = 0.
   virtual std::vector<Eigen::VectorXd> starts() const;
+  /// More starting points near the best of starts() (a finer search where the cost has many flat
+  /// steps, e.g. a delay on moves); the best of all starts LM. Default: none.
+  virtual std::vector<Eigen::VectorXd> starts_near(const Eigen::VectorXd& best) const {
+    (void)best;
+    return {};
+  }
   /// A fresh workspace for design(), one per evaluator (thread). Default: an empty one.
   virtual std::unique_ptr<FamilyData> make_data() const { return std::make_unique<FamilyData>(); }
   /// A(φ) in physical units, 6N x linear().size(). Must be deterministic, whatever `data` holds.
