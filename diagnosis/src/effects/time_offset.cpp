@@ -1,6 +1,7 @@
 // time_offset: the wrench stream lags the pose stream by τ (s); the model is evaluated on the poses
 // interpolated at t - τ (windowed sinc, ContactFamily::kinematics_at). A delay has local minima at
-// multiples of the excitation's period: a grid of starts over the bounds precedes LM.
+// multiples of the excitation's period: a grid of starts over the bounds precedes LM. Where the
+// motion steps, the cost steps too, and the starts go to the plateaus between (below).
 #include <hil/diagnose/contact_family.hpp>
 
 #include <algorithm>
@@ -50,7 +51,7 @@ class Term : public ContactTerm {
     c.delay_s = phi(s.nonlinear);
     if (c.delay_s != 0.0) c.recompute = true;
   }
-  // Between two crossings the delayed twist does not change, so what locates τ within its plateau
+  // Between two crossings the delayed twist does not step, so what locates τ within its plateau
   // is only the poses' smooth part: the plateau's width, as a uniform uncertainty (w / √12), is
   // added to the interval (at a crossing itself, both neighbours').
   void report(const ContactSlots& s, bool linear, Eigen::Index, const Fit& f, Reported& r) const override {
