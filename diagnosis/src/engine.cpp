@@ -74,13 +74,20 @@ struct Projected {
 class DesignCache {
  public:
   DesignCache(const ModelFamily& m, std::size_t samples) : m_(m), data_(m.make_data()), rows_(static_cast<Eigen::Index>(6 * samples)) {}
-  /// A(φ); `keep`: hold it for the rest of the cache's life.
+  /// A(φ); `keep`: hold it for the rest of the cache's life, while the kept designs stay within
+  /// kKeptBytes (beyond it, like any other).
   const Eigen::MatrixXd& get(const Eigen::VectorXd& phi, bool keep = false) {
     const Key key(phi.data(), phi.data() + phi.size());
     if (const auto it = kept_.find(key); it != kept_.end()) return it->second;
+    const auto room = [&](const Eigen::MatrixXd& A) {
+      const std::size_t bytes = sizeof(double) * static_cast<std::size_t>(A.size());
+      if (!keep || kept_bytes_ + bytes > kKeptBytes) return false;
+      kept_bytes_ += bytes;
+      return true;
+    };
     for (auto it = recent_.begin(); it != recent_.end(); ++it)
       if (it->first == key) {
-        if (keep) {
+        if (room(it->second)) {
           auto& A = kept_[key];
           A.swap(it->second);
           recent_.erase(it);
@@ -92,7 +99,7 @@ class DesignCache {
     m_.design(phi, A, *data_);
     ++computed;
     if (A.rows() != rows_) throw std::logic_error(m_.name() + ": design has the wrong number of rows");
-    if (keep) return kept_[key] = std::move(A);
+    if (room(A)) return kept_[key] = std::move(A);
     if (recent_.size() >= kRecent) recent_.pop_back();
     recent_.emplace_front(key, std::move(A));
     return recent_.front().second;
@@ -102,6 +109,10 @@ class DesignCache {
  private:
   using Key = std::vector<double>;
   static constexpr std::size_t kRecent = 24;  // an LM iteration: q columns and up to 12 trials
+  // The kept designs' memory per cache (a score has one per worker): ~450 designs of a 1,500-sample
+  // run with 8 columns, ~65 of a 10,000-sample one (whose later starts are then designed again).
+  static constexpr std::size_t kKeptBytes = std::size_t{256} << 20;
+  std::size_t kept_bytes_ = 0;
   const ModelFamily& m_;
   std::unique_ptr<FamilyData> data_;  ///< this cache's evaluator's: a cache is used by one thread
   Eigen::Index rows_;
@@ -175,8 +186,8 @@ std::vector<Reported> reported_of(const ModelFamily& m, const Fit& f) {
 /// asymptotic std 300 times too small. When the two sides agree within 10 % their mean (central
 /// difference) is taken, else the smaller: the side without the switch. Fixed parameters' columns are 0.
 Eigen::MatrixXd full_jacobian(Evaluator& ev, const std::vector<Param>& nl, const Eigen::VectorXd& theta, const Eigen::VectorXd& phi,
-                              const std::vector<bool>& fixed) {
-  const Eigen::MatrixXd A = ev.weighted_design(phi);
+                              const std::vector<bool>& fixed, bool keep = false) {
+  const Eigen::MatrixXd A = ev.weighted_design(phi, keep);
   const Eigen::Index p = A.cols(), q = phi.size();
   Eigen::MatrixXd J(A.rows(), p + q);
   J.leftCols(p) = A;
@@ -190,11 +201,11 @@ Eigen::MatrixXd full_jacobian(Evaluator& ev, const std::vector<Param>& nl, const
     const double h = fd_step(par, phi(j));
     Eigen::VectorXd ph = phi;
     ph(j) += h;
-    const Eigen::VectorXd one = (ev.weighted_design(ph) * theta - At) / h;
+    const Eigen::VectorXd one = (ev.weighted_design(ph, keep) * theta - At) / h;
     J.col(p + j) = one;
     if (phi(j) - h < par.lower || phi(j) - h > par.upper) continue;  // no room on the other side
     ph(j) = phi(j) - h;
-    const Eigen::VectorXd other = (At - ev.weighted_design(ph) * theta) / h;
+    const Eigen::VectorXd other = (At - ev.weighted_design(ph, keep) * theta) / h;
     const double a = one.norm(), b = other.norm();
     if ((one - other).norm() <= 0.1 * std::max(a, b)) J.col(p + j) = 0.5 * (one + other);
     else if (b < a) J.col(p + j) = other;
@@ -264,9 +275,14 @@ std::vector<Unidentifiable> unidentifiable_columns(const Eigen::MatrixXd& J, con
 /// starts also from the cause's optimum, each of its folds from the cause's fit of that fold; the
 /// start with the lowest training cost wins, so the estimate is still its own training data's
 /// optimum). `statistics`: identifiability, covariance, rank, reported parameters and validity (a
-/// fold's prediction needs none of them). `fixed`: parameters held at their nominal value (0).
+/// fold's prediction needs none of them). `identify` (a fold's fit, without statistics): what its
+/// own samples cannot separate at its best start is fixed, and so is what its fit runs to a bound
+/// (then fitted again), as in the full fit, so that a fold decides its parameters from its training
+/// samples alone; the full fit's collinearity check at the optimum, which needs another Jacobian,
+/// is not repeated (a collinear direction does not change a prediction). `fixed`: parameters held
+/// at their nominal value (0).
 Fit fit_with(const ModelFamily& m, const Observations& obs, const std::vector<int>& train, const FitOptions& o, DesignCache& cache,
-             const Eigen::VectorXd* warm, bool statistics, const std::vector<bool>* fixed_in = nullptr) {
+             const Eigen::VectorXd* warm, bool statistics, const std::vector<bool>* fixed_in = nullptr, bool identify = false) {
   if (train.empty()) throw std::runtime_error(m.name() + ": no samples to fit");
   const auto lin = m.linear();
   const auto nl = m.nonlinear();
@@ -304,18 +320,21 @@ Fit fit_with(const ModelFamily& m, const Observations& obs, const std::vector<in
       first = false;
     }
   }
-  for (const auto& s0 : m.starts_near(phi)) {  // near the best: not kept, each fold's best differs
+  // Near the best: kept too. The near starts depend on the best start only, and the folds of a
+  // single candidate mostly share it, so the folds a worker runs reuse the full fit's designs.
+  for (const auto& s0 : m.starts_near(phi)) {
     const Eigen::VectorXd s = hold(clamp(s0, nl));
-    Projected pr = ev.project(s);
+    Projected pr = ev.project(s, true);
     if (pr.cost < cur.cost) {
       cur = pr;
       phi = s;
     }
   }
   if (!cur.theta.allFinite()) throw std::runtime_error(m.name() + ": the fit is not finite");
-  if (statistics && o.collinearity_sine > 0) {
+  if ((statistics || identify) && o.collinearity_sine > 0) {
     // Before estimation: directions the design cannot separate at the start are fixed, not fitted.
-    auto u = unidentifiable_columns(full_jacobian(ev, nl, cur.theta, phi, f.fixed), params, o.collinearity_sine, {}, f.fixed);
+    // Its designs are kept: the folds that share the full fit's best start reuse them.
+    auto u = unidentifiable_columns(full_jacobian(ev, nl, cur.theta, phi, f.fixed, true), params, o.collinearity_sine, {}, f.fixed);
     f.unidentifiable.insert(f.unidentifiable.end(), u.begin(), u.end());
     if (!u.empty()) {
       ev.fixed_theta.assign(f.fixed.begin(), f.fixed.begin() + p);
@@ -389,7 +408,33 @@ Fit fit_with(const ModelFamily& m, const Observations& obs, const std::vector<in
     f.rss = cur.cost;
   };
   finish();
+  // The nonlinear parameters that ended at a bound (a bound is no estimate).
+  auto at_bounds = [&]() {
+    std::vector<bool> bounded(static_cast<std::size_t>(p + q), false);
+    for (Eigen::Index j = 0; j < q; ++j) {
+      const auto& b = nl[static_cast<std::size_t>(j)];
+      const double tol = 1e-6 * std::max(b.scale, std::min(b.upper - b.lower, 1e300));
+      bounded[static_cast<std::size_t>(p + j)] = phi(j) <= b.lower + tol || phi(j) >= b.upper - tol;
+    }
+    return bounded;
+  };
   if (!statistics) {
+    if (identify && o.collinearity_sine > 0) {
+      const std::vector<bool> bounded = at_bounds();
+      bool any = false;
+      for (std::size_t j = 0; j < bounded.size(); ++j)
+        if (bounded[j] && !f.fixed[j]) {
+          f.fixed[j] = true;
+          f.unidentifiable.push_back({params[j].name, "ran to its bound", {}});
+          any = true;
+        }
+      if (any) {
+        phi = hold(phi);
+        cur = ev.project(phi);
+        levenberg_marquardt();
+        finish();
+      }
+    }
     f.evaluations = ev.evaluations;
     return f;
   }
@@ -399,13 +444,7 @@ Fit fit_with(const ModelFamily& m, const Observations& obs, const std::vector<in
   // parameter that ran to a bound (a bound is no estimate), is fixed and the fit repeated once.
   Eigen::MatrixXd J = full_jacobian(ev, nl, cur.theta, phi, f.fixed);
   if (o.collinearity_sine > 0) {
-    std::vector<bool> bounded(static_cast<std::size_t>(p + q), false);
-    for (Eigen::Index j = 0; j < q; ++j) {
-      const auto& b = nl[static_cast<std::size_t>(j)];
-      const double tol = 1e-6 * std::max(b.scale, std::min(b.upper - b.lower, 1e300));
-      bounded[static_cast<std::size_t>(p + j)] = phi(j) <= b.lower + tol || phi(j) >= b.upper - tol;
-    }
-    auto u = unidentifiable_columns(J, params, o.collinearity_sine, bounded, f.fixed);
+    auto u = unidentifiable_columns(J, params, o.collinearity_sine, at_bounds(), f.fixed);
     if (!u.empty()) {
       f.unidentifiable.insert(f.unidentifiable.end(), u.begin(), u.end());
       ev.fixed_theta.assign(f.fixed.begin(), f.fixed.begin() + p);
@@ -691,11 +730,12 @@ Score score(const ModelFamily& m, const Observations& obs, const CvOptions& o, c
     std::optional<DesignCache> own_cache;
     if (fd.own) own_cache.emplace(fm, n);
     DesignCache& fc = fd.own ? *own_cache : shared;
-    // The fold's model may differ from the full one in its parameters: warm start and fixed flags by name.
+    // The fold's model may differ from the full one in its parameters: warm start by name. What it
+    // fixes as not identifiable it decides from its training samples (the full fit's flags would
+    // carry its held-out block's information into it).
     std::optional<Eigen::VectorXd> warm;
     if (extends && i < extends->fold_phi.size()) warm = mapped(fm.nonlinear(), extends->fold_phi_names[i], extends->fold_phi[i]);
-    const std::vector<bool> fixed = fixed_by_name(m, s.full.fixed, fm);
-    fd.fit = fit_with(fm, obs, fd.train, fold_fit, fc, warm ? &*warm : nullptr, false, &fixed);
+    fd.fit = fit_with(fm, obs, fd.train, fold_fit, fc, warm ? &*warm : nullptr, false, nullptr, true);
     fd.prediction = predict_with(fc.get(fd.fit.phi), fd.fit, n);
   };
   // The model forms' refits (they need the full fit only) and the folds are independent: they run

@@ -576,6 +576,58 @@ TEST(Engine, RepeatedCvHoldsOutEveryShiftedBlockAndPoolsTheErrors) {
   EXPECT_EQ(paired_z(o, repeated, repeated), 0.0);
 }
 
+/// y_c = θ (1 + φ b(t)), b = 1 on the samples `bump` and 0 elsewhere: φ is seen only there.
+/// Its one start is φ = 0.5.
+class Bump : public ModelFamily {
+ public:
+  Bump(const Observations& o, std::vector<int> bump) : o_(o), bump_(std::move(bump)) {}
+  std::string name() const override { return "bump"; }
+  std::vector<Param> linear() const override { return {{"level", "", 1, false}}; }
+  std::vector<Param> nonlinear() const override { return {{"bump", "", 0.1, true, -5, 5}}; }
+  std::vector<Eigen::VectorXd> starts() const override { return {Eigen::VectorXd::Constant(1, 0.5)}; }
+  void design(const Eigen::VectorXd& phi, Eigen::MatrixXd& A, FamilyData&) const override {
+    A.setOnes(static_cast<Eigen::Index>(6 * o_.size()), 1);
+    for (int k : bump_) A.middleRows(6 * k, 6).array() += phi(0);
+  }
+
+ private:
+  const Observations& o_;
+  std::vector<int> bump_;
+};
+
+TEST(Engine, AFoldFixesWhatItsOwnTrainingSamplesCannotTell) {
+  const int n = 200;
+  const CvOptions cv;
+  const auto blocks = time_blocks(n, cv.folds);
+  const std::vector<int>& middle = blocks[2];
+  const std::set<int> in(middle.begin(), middle.end());
+  Observations o = noiseless(n,
+                             [&](int k, double, int c) { return 2.0 * (1.0 + (in.count(k) ? 0.8 : 0.0)) + 0.001 * std::sin(0.9 * k + c); });
+  const Bump m(o, middle);
+  const Score s = score(m, o, cv);
+  EXPECT_NEAR(s.full.phi(0), 0.8, 1e-3);  // the whole run sees the bump
+  ASSERT_EQ(s.fold_phi.size(), blocks.size());
+  for (std::size_t b = 0; b < blocks.size(); ++b) {
+    if (b == 2) {
+      // Its training samples never see the bump: fixed at its nominal value, not left at the start
+      // (the full fit's flags would have left it free there, at 0.5).
+      EXPECT_EQ(s.fold_phi[b](0), 0.0);
+      for (int k : middle) EXPECT_NEAR(s.cv_prediction(k, 0), 2.0, 1e-3) << "sample " << k;
+    } else {
+      EXPECT_NEAR(s.fold_phi[b](0), 0.8, 1e-3) << "fold " << b;
+    }
+  }
+  // A fold whose fit runs to a bound fixes that parameter too, as the full fit does.
+  Observations r;
+  for (int k = 0; k < 200; ++k) r.t_s.push_back(0.02 * k);
+  r.y.resize(200, 6);
+  for (int k = 0; k < 200; ++k) r.y.row(k).setConstant(2.0 * (1.0 + 0.3 * r.t_s[static_cast<std::size_t>(k)]));
+  const BoundedSlope bs(r);
+  const Score t = score(bs, r, cv);
+  ASSERT_TRUE(listed(t.full, "slope"));
+  for (const auto& phi : t.fold_phi) EXPECT_EQ(phi(0), 0.0);
+}
+
 TEST(Engine, PairedZIsZeroForEqualPredictionsAndLargeForAConsistentGain) {
   const auto o = sine_data(1.0, 1.0, 0.0, 0.1, 3);
   Eigen::MatrixXd truth(static_cast<Eigen::Index>(o.size()), 6), off = truth;
