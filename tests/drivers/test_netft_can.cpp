@@ -29,6 +29,15 @@ ForcePlateConfig box_config(double rate_hz = 500.0) {
   return c;
 }
 
+/// For tests of what a reading holds, not of its timing: the default answer window (0.9 period,
+/// 1.8 ms at 500 Hz) is shorter than a loaded CI machine may take to schedule the fake box's thread
+/// (a fresh-clone CI run saw one poll time out here).
+ForcePlateConfig patient_config() {
+  auto c = box_config();
+  c.response_timeout_s = 0.2;
+  return c;
+}
+
 /// The fake box on an in-process bus and a started driver on it.
 struct BoxOnBus {
   std::shared_ptr<CanLoopbackBus> bus = CanLoopbackBus::create("netft-can");
@@ -81,7 +90,7 @@ TEST(NetFtCanCodec, ShortDataIsLittleEndianInTheManualsOrder) {
 
 TEST(NetFtCanDriver, ReadsTheBoxScaledByTheRigsCountsAndBiasesIt) {
   FakeNetCanOemConfig fc;
-  BoxOnBus rig(fc);
+  BoxOnBus rig(fc, patient_config());
   rig.box.set_wrench((Vector6d() << 1.5, -2.25, 120.0, 0.25, -0.5, 0.125).finished());
   WrenchSample s;
   ASSERT_EQ(rig.drv->poll(s), PollStatus::ok) << rig.drv->last_problem();
@@ -104,7 +113,7 @@ TEST(NetFtCanDriver, ReadsTheBoxScaledByTheRigsCountsAndBiasesIt) {
 TEST(NetFtCanDriver, StatusBitsAreDeviceFaultsNamedByBit) {
   FakeNetCanOemConfig fc;
   fc.faults.status_now = 0x0004;
-  BoxOnBus rig(fc);
+  BoxOnBus rig(fc, patient_config());
   WrenchSample s;
   ASSERT_EQ(rig.drv->poll(s), PollStatus::ok);
   EXPECT_TRUE(s.device_fault);
