@@ -488,15 +488,24 @@ std::vector<Eigen::VectorXd> ContactFamily::starts_near(const Eigen::VectorXd& b
   return out;
 }
 
-void ContactFamily::columns(const std::vector<cid::ContactPoint>& cs, const cid::Kinematics& k, const Vec3& v_rate, double p,
-                            Eigen::Ref<Eigen::MatrixXd> out) const {
+void ContactFamily::columns(const std::vector<cid::ContactPoint>& cs, const cid::Kinematics& k, const Vec3& v_rate,
+                            const ContactChannels& ch, Eigen::Ref<Eigen::MatrixXd> out) const {
   const auto& T = d_.scene.T_world_fp;
+  const double p = ch.stiffness_exponent;
   cid::Kinematics k_rate = k;
   k_rate.v_world_ee = v_rate;
   for (const auto& c : cs) {
     const double de = p == 1.0 ? c.delta : d_.delta_ref_m * std::pow(c.delta / d_.delta_ref_m, p);
+    // With damping the normal force is K (δ_e + τ_D δ̇): a foot withdrawing faster than δ_e / τ_D
+    // pushes nothing and does not pull, so it bears no friction either (issue 32: a damping column
+    // D δ̇ wherever the contact exists predicted a pull there, and the fit lowered D).
+    double normal = de;
+    if (ch.damping_time_s != 0.0) {
+      normal += ch.damping_time_s * -cid::relative_velocity(d_.scene, k_rate, c.point).dot(c.normal);
+      if (normal <= 0.0) continue;
+    }
     const Eigen::Vector3d pt = c.point + friction_lever_ * c.delta * c.normal;  // the tangential forces' point
-    out.col(0) += plate_wrench_of(T, de * c.normal, c.point);
+    out.col(0) += plate_wrench_of(T, normal * c.normal, c.point);
     out.col(1) += plate_wrench_of(T, de * c.tangent, pt);
     const ContactAt at{d_, c, k_rate, pt};
     for (const auto& b : terms_) b.term->contact_columns(b.slots, at, out);
@@ -764,14 +773,13 @@ void ContactFamily::design(const Eigen::VectorXd& phi, Eigen::MatrixXd& A, Famil
   ContactChannels ch;
   ch.x = d_.scene.design();
   for (const auto& b : terms_) b.term->channels(b.slots, phi, ch);
-  const double expo = ch.stiffness_exponent;
   const double tau = ch.delay_s;
   const bool recompute = ch.recompute;
   const Eigen::VectorXd& x = ch.x;
   const Matrix6d& C = ch.compliance;
   if (!recompute) {
     for (std::size_t k = 0; k < n; ++k)
-      columns(d_.contacts[k], d_.kin[k], d_.v_rate_world[k], expo, A.block(static_cast<Eigen::Index>(6 * k), 0, 6, p));
+      columns(d_.contacts[k], d_.kin[k], d_.v_rate_world[k], ch, A.block(static_cast<Eigen::Index>(6 * k), 0, 6, p));
   } else {
     if (!base.valid) {
       // The first base: the contacts at the design geometry and the measured poses.
@@ -799,7 +807,7 @@ void ContactFamily::design(const Eigen::VectorXd& phi, Eigen::MatrixXd& A, Famil
       }
       const bool reuse = same_poses && !base.full[k];
       full[k] = !sample_contacts(k, kin, g, reuse ? &base.contacts[k] : nullptr, cs[k], own.scratch);
-      columns(cs[k], kin, v_rate, expo, A.block(static_cast<Eigen::Index>(6 * k), 0, 6, p));
+      columns(cs[k], kin, v_rate, ch, A.block(static_cast<Eigen::Index>(6 * k), 0, 6, p));
     }
     // A finite-difference step moves one feature: the point it steps from stays the base.
     if (!same_poses || changed > 1) {
@@ -1007,6 +1015,7 @@ std::vector<cid::SimulatedSample> simulate_with_effects(const cid::Scene& s, con
       const SimulatedContact at{s, k, c};
       for (const Injection* inj : effects) inj->contact_force(at, cf);
       const double elastic_n = m.K * cf.delta_m;
+      if (elastic_n + cf.normal_n <= 0.0) continue;  // lift-off: a contact pushes, it never pulls
       const double friction_n = m.mu * (elastic_n + cf.friction_normal_n);
       const Vec3 f = (elastic_n + cf.normal_n) * c.normal + (friction_n + cf.tangential_n) * c.tangent;
       out += plate_wrench_of(s.T_world_fp, f, c.point);

@@ -18,6 +18,9 @@
 //  * Second full draw (rule added 2026-12-02, before it ran): HIL_FAMILY_FIRST=200, i = 200..249,
 //    never drawn before, the same rules. HIL_FAMILY_FIRST=F moves any full draw (OffTheSuite's too)
 //    to i = F..F + N - 1; F = 133, N = 1 replays one draw of the first full draw.
+//  * Third full draw of contact_damping (rule added 2026-12-03, before it ran, after the damping's
+//    normal force was clipped at lift-off): HIL_FAMILY_FIRST=300, i = 300..349, never drawn
+//    before, the same rules.
 //  * Per effect, of n draws, at most ceil(10 %) may fail each of:
 //     - named: the effect named first (clean: `none`);
 //     - single: no second cause.
@@ -50,9 +53,12 @@
 #include <iomanip>
 #include <iostream>
 #include <map>
+#include <numeric>
 #include <sstream>
 #include <string>
 #include <vector>
+
+#include <hil/diagnose/contact_family.hpp>
 
 #include "blind_runs.hpp"
 
@@ -277,6 +283,40 @@ TEST(FamilySuite, ADelayOnMovesIsFoundOnItsPlateau) {
   }
   EXPECT_TRUE(seen) << run.line;
   EXPECT_TRUE(run.d.second_cause.empty()) << run.d.second_cause;
+}
+
+// The clip at lift-off (issue 32, item 1; docs/diagnosis.md): the truth's normal force per foot is
+// max(0, K δ + D δ̇), so a foot withdrawing faster than δ / (D / K) pushes nothing and does not
+// pull. CI draw 3 (two-tone, D = 5,543 N s/m) lifts off; with its noise, a damping column that
+// pulled there gave 5,440 ± 28 (z -3.6). Rule written before the clipped candidate ran: without
+// noise, with the exact poses and twist, the truth clips at least 10 foot-samples and D, fitted
+// alone, is within 0.5 % of it.
+TEST(FamilySuite, ADampingWhoseFeetLiftOffIsNotFittedLow) {
+  Drawn x = draw(Effect::damping, 3);
+  x.scenario.sensor.noise_std.setZero();
+  const double D = x.scenario.law.damping_n_s_per_m;
+  ASSERT_NEAR(D, 5543.0, 1.0);
+  const auto samples = ct::simulate(x.scenario);
+  int clipped = 0;
+  for (const auto& s : samples) {
+    std::vector<ct::FootContact> feet;
+    ct::plate_wrench(x.scenario.plate, x.scenario.tripod, x.scenario.law, ct::true_state(x.scenario, s.t_s), &feet);
+    for (const auto& foot : feet) clipped += foot.penetration_m > 0.0 && foot.normal_n == 0.0 ? 1 : 0;
+  }
+  EXPECT_GE(clipped, 10) << "the draw no longer lifts off";
+  const cid::Scene scene = tripod_scene(x.scenario.plate, x.scenario.tripod, x.rig);
+  const auto data = make_contact_data(scene, kStickBelow_m_per_s, to_measurements(samples, {0.0, 0.0}));
+  const ContactFamily m(data, {"contact_damping"});
+  std::vector<int> all(data.obs.size());
+  std::iota(all.begin(), all.end(), 0);
+  const Fit f = fit(m, data.obs, all);
+  bool seen = false;
+  for (const auto& q : f.reported)
+    if (q.name == "damping_n_s_per_m") {
+      seen = true;
+      EXPECT_NEAR(q.value, D, 0.005 * D) << clipped << " foot-samples clipped";
+    }
+  EXPECT_TRUE(seen);
 }
 
 // Off the suite's sensor chain (issue 32, items 4 and 6). Rule written and committed before any of

@@ -39,7 +39,9 @@ struct ContactChannels {
   hil::Matrix6d compliance = hil::Matrix6d::Zero();  ///< ee deflection per measured ee wrench (ee frame)
   bool deflect = false;                              ///< the ee pose is deflected by `compliance`
   double stiffness_exponent = 1.0;                   ///< normal force K δ_ref (δ/δ_ref)^p
-  bool recompute = false;                            ///< the contacts depend on φ: recomputed by mindist
+  /// D / K (s): the normal force K (δ_e + τ_D δ̇)₊, clipped where the foot lifts off (contact_damping)
+  double damping_time_s = 0.0;
+  bool recompute = false;  ///< the contacts depend on φ: recomputed by mindist
 };
 
 /// One contact of one sample, as the per-contact columns see it.
@@ -164,7 +166,8 @@ struct SimulatedContact {
 };
 
 /// The force of one contact as the effects build it: (K δ_e + normal_n) e_n + (μ (K δ_e +
-/// friction_normal_n) + tangential_n) e_t, with δ_e the interference the stiffness law sees.
+/// friction_normal_n) + tangential_n) e_t, with δ_e the interference the stiffness law sees; none
+/// where K δ_e + normal_n <= 0 (a contact pushes, it never pulls: damping at lift-off).
 struct ContactForce {
   double delta_m = 0.0;            ///< δ_e: the interference, or what a stiffness law makes of it
   double normal_n = 0.0;           ///< added normal force (e.g. damping)

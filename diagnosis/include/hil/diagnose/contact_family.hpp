@@ -218,7 +218,8 @@ class ContactFamily : public ModelFamily {
   void add_terms(std::vector<Bound> terms);
   bool has(const std::string& e) const { return ext_.count(e) > 0; }
   /// \param v_rate the ee's linear velocity the damping's penetration rates take (ContactData::v_rate_world).
-  void columns(const std::vector<cid::ContactPoint>& cs, const cid::Kinematics& k, const Eigen::Vector3d& v_rate, double p,
+  /// \param ch the stiffness law's exponent and the damping's time D / K.
+  void columns(const std::vector<cid::ContactPoint>& cs, const cid::Kinematics& k, const Eigen::Vector3d& v_rate, const ContactChannels& ch,
                Eigen::Ref<Eigen::MatrixXd> out) const;
   /// The Lanczos weights of kinematics_at: the window's first sample and its weights (taps 0: the
   /// sample `first` itself). Fixed storage: one is made per sample of every design under a delay.
