@@ -188,25 +188,29 @@ std::vector<double> rate_steps(const std::vector<double>& t_s, const std::vector
   return out;
 }
 
+double slope_over(const std::vector<double>& t_s, const std::vector<double>& x, std::size_t lo, std::size_t hi) {
+  double tm = 0.0, xm = 0.0;
+  for (std::size_t j = lo; j <= hi; ++j) {
+    tm += t_s[j];
+    xm += x[j];
+  }
+  tm /= static_cast<double>(hi - lo + 1);
+  xm /= static_cast<double>(hi - lo + 1);
+  double stt = 0.0, stx = 0.0;
+  for (std::size_t j = lo; j <= hi; ++j) {
+    const double dt = t_s[j] - tm;
+    stt += dt * dt;
+    stx += dt * (x[j] - xm);
+  }
+  return stt > 0 ? stx / stt : 0.0;
+}
+
 std::vector<double> windowed_slope(const std::vector<double>& t_s, const std::vector<double>& x, int half_window) {
   const auto n = static_cast<std::ptrdiff_t>(x.size());
   std::vector<double> out(x.size(), 0.0);
   for (std::ptrdiff_t k = 0; k < n; ++k) {
     const std::ptrdiff_t lo = std::max<std::ptrdiff_t>(0, k - half_window), hi = std::min<std::ptrdiff_t>(n - 1, k + half_window);
-    double tm = 0.0, xm = 0.0;
-    for (std::ptrdiff_t j = lo; j <= hi; ++j) {
-      tm += t_s[static_cast<std::size_t>(j)];
-      xm += x[static_cast<std::size_t>(j)];
-    }
-    tm /= static_cast<double>(hi - lo + 1);
-    xm /= static_cast<double>(hi - lo + 1);
-    double stt = 0.0, stx = 0.0;
-    for (std::ptrdiff_t j = lo; j <= hi; ++j) {
-      const double dt = t_s[static_cast<std::size_t>(j)] - tm;
-      stt += dt * dt;
-      stx += dt * (x[static_cast<std::size_t>(j)] - xm);
-    }
-    out[static_cast<std::size_t>(k)] = stt > 0 ? stx / stt : 0.0;
+    out[static_cast<std::size_t>(k)] = slope_over(t_s, x, static_cast<std::size_t>(lo), static_cast<std::size_t>(hi));
   }
   return out;
 }

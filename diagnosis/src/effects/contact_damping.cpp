@@ -54,8 +54,9 @@ class Term : public ContactTerm {
   /// error). Measured on DelayAndDampingOnMoves' draws (no noise): the formula with the true errors
   /// -1.4, +2.5, -0.3, +4.0 %, the fit -2.6, +2.1, -0.4, +3.8 % (+0.1 % on the exact twist). The
   /// errors are estimated on every run of one level at least kRun samples long as the level less
-  /// the positions' slope over the run (within ± q/2; a slope over 10+ samples of 2 µm poses is
-  /// ten times finer than the level), and the shift they give is added to D's variance, not
+  /// the positions' slope over the run, within ± q/2 (the slope of 2 µm poses at 100 Hz has a std
+  /// of 6.4e-6 m/s over 10 samples, 5.7e-7 over 50, against 5.8e-6 for a 2e-5 level): long runs,
+  /// which carry the shift, are estimated well. The shift they give is added to D's variance, not
   /// subtracted from D: where the poses and the twist disagree for another reason (a deflection the
   /// twist does not carry, hil's ACU runs) a correction would be wrong, a wider interval is not.
   /// Shorter runs (smooth motion) change level every few samples and their errors average out.
@@ -70,31 +71,23 @@ class Term : public ContactTerm {
     for (std::size_t k = 0; k < n; ++k)
       if (use[k]) S += static_cast<double>(d.contacts[k].size()) * std::pow(d.v_rate_world[k].dot(normal), 2);
     if (!(S > 0.0)) return 0.0;
+    std::vector<double> x(n);
     for (int a = 0; a < 3; ++a) {
       const double q = d.velocity_quantum_m_per_s(a);
       if (d.rate_from_poses[static_cast<std::size_t>(a)] || normal(a) == 0.0) continue;
+      for (std::size_t k = 0; k < n; ++k) x[k] = d.kin[k].T_world_ee.translation()(a);
       std::size_t start = 0;
       for (std::size_t k = 0; k < n; ++k) {
         const double level = d.v_rate_world[k](a);
         if (k + 1 < n && d.v_rate_world[k + 1](a) == level) continue;
-        // The run [start, k] at one level: its positions' least-squares slope.
-        const std::size_t len = k + 1 - start;
-        if (len >= kRun && level != 0.0) {
-          double tm = 0.0, xm = 0.0;
-          for (std::size_t j = start; j <= k; ++j) {
-            tm += d.obs.t_s[j] / static_cast<double>(len);
-            xm += d.kin[j].T_world_ee.translation()(a) / static_cast<double>(len);
-          }
-          double stt = 0.0, stx = 0.0, R = 0.0;
-          for (std::size_t j = start; j <= k; ++j) {
-            const double dt = d.obs.t_s[j] - tm;
-            stt += dt * dt;
-            stx += dt * (d.kin[j].T_world_ee.translation()(a) - xm);
+        // The run [start, k] at one level, against its positions' least-squares slope.
+        if (k + 1 - start >= kRun && level != 0.0) {
+          double R = 0.0;
+          for (std::size_t j = start; j <= k; ++j)
             if (use[j]) R += static_cast<double>(d.contacts[j].size()) * -d.v_rate_world[j].dot(normal);
-          }
           // Of v_a (the rate's is -n_a times it), within the level's half quantum where it is known
           // (quantum_of may miss it: it did on slow moves' normal twist, levels 6e-5 to 5.2e-4 m/s).
-          const double raw = level - stx / stt;
+          const double raw = level - slope_over(d.obs.t_s, x, start, k);
           const double error = q > 0.0 ? std::clamp(raw, -0.5 * q, 0.5 * q) : raw;
           shift += normal(a) * error * R;
         }

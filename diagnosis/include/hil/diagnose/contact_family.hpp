@@ -129,6 +129,10 @@ double quantisation_bias_variance(const std::vector<double>& series, double step
 /// the ends of the run), against the sample times. \pre t increasing, t.size() == x.size().
 std::vector<double> windowed_slope(const std::vector<double>& t_s, const std::vector<double>& x, int half_window);
 
+/// The least-squares slope of x against t over the samples lo..hi (0 when their times do not
+/// differ). \pre lo <= hi < t.size() == x.size().
+double slope_over(const std::vector<double>& t_s, const std::vector<double>& x, std::size_t lo, std::size_t hi);
+
 /// Where contact_damping's penetration rates come from (ContactData::v_rate_world).
 enum class RateSource {
   automatic,  ///< per axis, the pose slope where it is estimated to have less error than the twist
