@@ -21,6 +21,9 @@
 //  * Third full draw of contact_damping (rule added 2026-12-03, before it ran, after the damping's
 //    normal force was clipped at lift-off): HIL_FAMILY_FIRST=300, i = 300..349, never drawn
 //    before, the same rules.
+//  * Fourth full draw of contact_damping (rule added 2026-12-03, before it ran, after quantum_of
+//    saw steps below the smallest gap and through zero): HIL_FAMILY_FIRST=400, i = 400..449, never
+//    drawn before, the same rules.
 //  * Per effect, of n draws, at most ceil(10 %) may fail each of:
 //     - named: the effect named first (clean: `none`);
 //     - single: no second cause.
