@@ -53,23 +53,51 @@ std::string describe_extension(const std::string& n) {
   return e ? e->description() : "";
 }
 
+namespace {
+
+/// The coarsest grid through levels.front() holding every level (sorted, distinct), its step the
+/// smallest gap or a fraction 1/k of it (k <= kMaxDivisor, k > 1 only on kMinLevelsBelowGap data
+/// levels); 0 when there is none.
+double coarsest_grid(const std::vector<double>& levels, std::size_t data_levels) {
+  // A signal that never takes two adjacent levels has a step a fraction of its smallest gap (a slow
+  // move's normal twist at ±1, ±5, ±11, ±15 steps of 2e-5 m/s). Three levels fit some fraction by
+  // chance (0, 2, 5 on a grid of 1), while each further level off a grid lands on it with
+  // probability 2e-3 (the tolerance): a finer step needs five.
+  constexpr int kMaxDivisor = 10;
+  constexpr std::size_t kMinLevelsBelowGap = 5;
+  double gap = 0.0;
+  for (std::size_t i = 1; i < levels.size(); ++i) {
+    const double g = levels[i] - levels[i - 1];
+    if (g > 1e-12 * std::max(1.0, std::abs(levels[i])) && (gap == 0.0 || g < gap)) gap = g;
+  }
+  const double scale = std::max(std::abs(levels.front()), std::abs(levels.back()));
+  for (int k = 1; k <= kMaxDivisor && (k == 1 || data_levels >= kMinLevelsBelowGap); ++k) {
+    const double step = gap / k;
+    if (step == 0.0 || step < 1e-9 * scale) return 0.0;
+    const bool on_grid = std::all_of(levels.begin(), levels.end(), [&](double x) {
+      const double r = (x - levels.front()) / step;
+      return std::abs(r - std::round(r)) <= 1e-3;
+    });
+    if (on_grid) return step;
+  }
+  return 0.0;
+}
+
+}  // namespace
+
 double quantum_of(std::vector<double> v, std::size_t min_levels) {
   if (!std::all_of(v.begin(), v.end(), [](double x) { return std::isfinite(x); })) return 0.0;  // (and sort needs an order)
   std::sort(v.begin(), v.end());
   v.erase(std::unique(v.begin(), v.end()), v.end());
   if (v.size() < std::max<std::size_t>(3, min_levels)) return 0.0;
-  double step = 0.0;
-  for (std::size_t i = 1; i < v.size(); ++i) {
-    const double g = v[i] - v[i - 1];
-    if (g > 1e-12 * std::max(1.0, std::abs(v[i])) && (step == 0.0 || g < step)) step = g;
-  }
-  const double scale = std::max(std::abs(v.front()), std::abs(v.back()));
-  if (step == 0.0 || step < 1e-9 * scale) return 0.0;
-  for (const double x : v) {
-    const double r = (x - v.front()) / step;
-    if (std::abs(r - std::round(r)) > 1e-3) return 0.0;  // not on the grid: not quantised
-  }
-  return step;
+  // A register holds an integer count of its step, so zero is on the grid: the values with zero
+  // first (levels at odd multiples only are then seen on their step, not on twice it), then, for a
+  // signal offset after its quantiser (a tare), the values alone.
+  std::vector<double> with_zero = v;
+  with_zero.insert(std::lower_bound(with_zero.begin(), with_zero.end(), 0.0), 0.0);
+  with_zero.erase(std::unique(with_zero.begin(), with_zero.end()), with_zero.end());
+  const double zero_grid = coarsest_grid(with_zero, v.size());
+  return zero_grid > 0.0 ? zero_grid : coarsest_grid(v, v.size());
 }
 
 double quantisation_bias_variance(double step, double sigma) {

@@ -1026,6 +1026,25 @@ TEST(ContactFamily, AQuantumIsSeenOnlyWhenEveryValueLiesOnItsGrid) {
   EXPECT_EQ(quantum_of({0.0, 2e-4, 5e-4}), 0.0);           // 5e-4 is off the 2e-4 grid
 }
 
+// A signal that never takes two adjacent levels (a slow move's normal twist on a fine grid): its
+// step is a fraction of the smallest gap. Found 2026-12-03: the smallest gap (4e-5) was off the
+// grid of the other values and no quantum was seen at all.
+TEST(ContactFamily, AQuantumIsSeenWhenNoTwoLevelsAreAdjacent) {
+  // Levels 3, 5, 7, 11, 26 and -26 steps of 2e-5: the smallest gap is two steps, 26 - 3 is odd.
+  std::vector<double> twist;
+  for (const int level : {3, 5, 7, 11, 26, -26, 5, 3}) twist.push_back(2e-5 * level);
+  EXPECT_NEAR(quantum_of(twist), 2e-5, 1e-18);
+  // Every gap even: the coarsest grid holding the values is the smallest gap, 4e-5.
+  EXPECT_NEAR(quantum_of({0.0, 4e-5, 8e-5, 2e-4, -1.2e-4}), 4e-5, 1e-18);
+  // Below five distinct values a finer grid is not inferred: 0, 2, 5 fit a grid of 1 by chance.
+  EXPECT_EQ(quantum_of({0.0, 2e-4, 5e-4, 7e-4}), 0.0);
+  EXPECT_NEAR(quantum_of({0.0, 2e-4, 5e-4, 7e-4, 1.1e-3}), 1e-4, 1e-18);
+  // At most a tenth of the smallest gap: 0, 11, 23, 34, 47 steps is no grid of the gap's tenths.
+  std::vector<double> sparse;
+  for (const int level : {0, 11, 23, 34, 47}) sparse.push_back(1e-5 * level);
+  EXPECT_EQ(quantum_of(sparse), 0.0);
+}
+
 // The bias a quantiser leaves in a mean, against its direct simulation: a constant at an unknown
 // place on the grid, dithered by Gaussian noise, its quantised mean's error squared over the places.
 TEST(ContactFamily, TheQuantisationBiasFloorShrinksWithTheDitherTheNoiseGives) {

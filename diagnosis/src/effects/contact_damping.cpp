@@ -86,7 +86,7 @@ class Term : public ContactTerm {
           for (std::size_t j = start; j <= k; ++j)
             if (use[j]) R += static_cast<double>(d.contacts[j].size()) * -d.v_rate_world[j].dot(normal);
           // Of v_a (the rate's is -n_a times it), within the level's half quantum where it is known
-          // (quantum_of may miss it: it did on slow moves' normal twist, levels 6e-5 to 5.2e-4 m/s).
+          // (quantum_of misses it on few sparse levels, and may see a multiple of it there).
           const double raw = level - slope_over(d.obs.t_s, x, start, k);
           const double error = q > 0.0 ? std::clamp(raw, -0.5 * q, 0.5 * q) : raw;
           shift += normal(a) * error * R;

@@ -107,9 +107,11 @@ std::vector<double> delay_crossings(const ContactData& d, double lower_s, double
 /// damping 2 std low at the fine resolution, ± 8 within 1.5 std at both).
 constexpr int kRateHalfWindow = 8;
 
-/// The step of a quantised signal: the smallest gap between its distinct values when every value
-/// lies on that grid (0: fewer than max(3, min_levels) distinct values, not on a grid, or a
-/// non-finite value).
+/// The step of a quantised signal: the coarsest grid holding every distinct value and zero (else,
+/// an offset signal, every distinct value) whose step is the smallest gap between them or a
+/// fraction 1/k of it (k <= 10; k > 1 needs 5 distinct values). A signal that takes few, sparse
+/// levels may show a multiple of its quantiser's step (the step divides it), or none. 0: fewer
+/// than max(3, min_levels) distinct values, not on such a grid, or a non-finite value.
 double quantum_of(std::vector<double> values, std::size_t min_levels = 3);
 
 /// The variance of the bias a quantiser of `step` leaves in the mean of a signal dithered by
