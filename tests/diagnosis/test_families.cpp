@@ -46,7 +46,8 @@
 // (2026-12-02), the delay's first draw is 48/50 inside but biased (mean z +0.50, se 0.12: the
 // friction's lever on the two-tone draws, docs/diagnosis.md); its second draw (i = 200..249) passes.
 // After the damping's clip at lift-off and its twist-level interval (2026-12-03), the damping's
-// third draw (i = 300..349) passes: 49 of 50 inside, mean z -0.19 (se 0.11), mean z² 0.60.
+// third draw (i = 300..349) passes: 49 of 50 inside, mean z -0.19 (se 0.11), mean z² 0.60. After
+// quantum_of's change its fourth (i = 400..449) passes: 49 of 50, mean z -0.17 (se 0.11), z² 0.67.
 //
 // Label `blind`: minutes under sanitizers.
 #include <gtest/gtest.h>
