@@ -1,6 +1,8 @@
 #include <hil/contact_truth/tripod.hpp>
 
+#include <algorithm>
 #include <cmath>
+#include <optional>
 #include <random>
 #include <tuple>
 #include <utility>
@@ -212,6 +214,8 @@ std::string validate(const Scenario& s) {
   if (!finite_positive(sen.rate_hz)) o << "sensor.rate_hz must be > 0 (got " << sen.rate_hz << "); ";
   if (sen.adc_subsamples < 1) o << "sensor.adc_subsamples must be >= 1 (got " << sen.adc_subsamples << "); ";
   if (!std::isfinite(sen.delay_s)) o << "sensor.delay_s is not finite; ";
+  if (!(sen.filter_time_constant_s >= 0.0) || !std::isfinite(sen.filter_time_constant_s))
+    o << "sensor.filter_time_constant_s must be finite and >= 0 (got " << sen.filter_time_constant_s << "); ";
   if (!(sen.gain.array() > -1.0).all() || !sen.gain.allFinite()) o << "sensor.gain must be finite and > -1 per component; ";
   if (!sen.bias.allFinite()) o << "sensor.bias is not finite; ";
   if (!sen.drift_per_s.allFinite()) o << "sensor.drift_per_s is not finite; ";
@@ -247,6 +251,29 @@ std::string validate(const Scenario& s) {
   return r.empty() ? r : r.substr(0, r.size() - 2);
 }
 
+FirstOrderLag::FirstOrderLag(double time_constant_s) : tau_s_(time_constant_s) {
+  if (!(tau_s_ > 0.0) || !std::isfinite(tau_s_)) throw std::invalid_argument("FirstOrderLag: the time constant must be finite and > 0");
+}
+
+Vector6d FirstOrderLag::at(double t_s, const Vector6d& x) {
+  if (!started_) {
+    started_ = true;
+    y_ = x;
+  } else {
+    const double h = t_s - t_s_;
+    if (h < 0.0) throw std::invalid_argument("FirstOrderLag: time went back");
+    if (h > 0.0) {
+      // y(h) = e^-a y0 + ∫0^h e^-(h-s)/τ x(s) ds / τ for x linear from x0 to x1, a = h / τ.
+      const double a = h / tau_s_, e = std::exp(-a);
+      const double ramp = a < 1e-6 ? a / 2.0 : 1.0 - (1.0 - e) / a;  // (series: a/2 - a²/6 ...)
+      y_ = e * y_ + (1.0 - e) * x_ + ramp * (x - x_);
+    }
+  }
+  t_s_ = t_s;
+  x_ = x;
+  return y_;
+}
+
 std::vector<Sample> simulate(const Scenario& s) {
   if (const auto problems = validate(s); !problems.empty()) throw std::invalid_argument("contact_truth: " + problems);
   const auto& sen = s.sensor;
@@ -254,6 +281,32 @@ std::vector<Sample> simulate(const Scenario& s) {
   const auto n = static_cast<std::size_t>(std::floor(s.duration_s * sen.rate_hz + 1e-9));
   const Eigen::Isometry3d T_wp = s.plate.T_world_plate();
   std::mt19937_64 rng(sen.seed);
+  // The filter's input at steps of at most a tenth of τ_f and 0.5 ms (the motion's kinks are
+  // where a linear input between steps is wrong), from 10 τ_f before its first output, settled.
+  const double tau_f = sen.filter_time_constant_s;
+  const bool filter = tau_f > 0.0;
+  std::optional<FirstOrderLag> lag;
+  if (filter) lag.emplace(tau_f);
+  double t_fed = 0.0;
+  bool lag_started = false;
+  auto filtered = [&](double t) {
+    auto input = [&](double ti) { return wrench_unchecked(T_wp, s.tripod, s.law, true_state(s, ti)); };
+    Vector6d y = Vector6d::Zero();
+    if (!lag_started) {
+      t_fed = t - 10.0 * tau_f;
+      y = lag->at(t_fed, input(t_fed));
+      lag_started = true;
+    }
+    const double h_max = std::min(0.1 * tau_f, 5e-4);
+    const auto m = static_cast<int>(std::ceil((t - t_fed) / h_max - 1e-9));
+    for (int i = 1; i <= m; ++i) {
+      const double ti = i == m ? t : t_fed + (t - t_fed) * i / m;
+      y = lag->at(ti, input(ti));
+    }
+    if (m < 1) y = lag->at(t, input(t));
+    t_fed = t;
+    return y;
+  };
   std::vector<Sample> out(n);
   for (std::size_t k = 0; k < n; ++k) {
     Sample& o = out[k];
@@ -262,11 +315,13 @@ std::vector<Sample> simulate(const Scenario& s) {
     std::vector<FootContact> feet;
     o.wrench_true = wrench_unchecked(T_wp, s.tripod, s.law, true_state(s, o.t_s), &feet);
     for (const auto& f : feet) o.feet_in_contact += f.in_contact ? 1 : 0;
-    // The ADC's average over the period that ends at t - τ (the wrench stream lags).
+    // The ADC's average over the period that ends at t - τ (the wrench stream lags); through the
+    // filter, its instants in time order.
     Vector6d mean = Vector6d::Zero();
-    for (int j = 0; j < sen.adc_subsamples; ++j) {
+    for (int i = 0; i < sen.adc_subsamples; ++i) {
+      const int j = filter ? sen.adc_subsamples - 1 - i : i;
       const double t = o.t_s - sen.delay_s - period * static_cast<double>(j) / sen.adc_subsamples;
-      mean += wrench_unchecked(T_wp, s.tripod, s.law, true_state(s, t));
+      mean += filter ? filtered(t) : wrench_unchecked(T_wp, s.tripod, s.law, true_state(s, t));
     }
     mean /= sen.adc_subsamples;
     const Vector6d coupled = mean + sen.cross_coupling * mean;

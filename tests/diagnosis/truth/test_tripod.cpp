@@ -379,6 +379,68 @@ TEST(SensorChain, ADelayShowsTheWrenchOfAnEarlierInstant) {
   EXPECT_TRUE(late[100].reported.T_world_body.isApprox(now[100].reported.T_world_body));
 }
 
+// The filter against its closed forms: a ramp's response lags it by exactly τ_f once settled,
+// a sinusoid's has the gain 1 / sqrt(1 + (ω τ_f)²) and the phase lag atan(ω τ_f).
+TEST(SensorChain, AFirstOrderLagFollowsItsClosedForms) {
+  const double tau = 0.012;
+  FirstOrderLag ramp(tau);
+  Vector6d y = Vector6d::Zero();
+  for (int i = 0; i <= 20000; ++i) {  // 2 s at 0.1 ms; x = 3 t on every component
+    const double t = 1e-4 * i;
+    y = ramp.at(t, Vector6d::Constant(3.0 * t));
+  }
+  EXPECT_NEAR(y(0), 3.0 * (2.0 - tau), 1e-9);  // exact for a linear input: e^(-2/τ) of transient left
+  // Coarse steps are exact for a linear input too (first-order hold).
+  FirstOrderLag coarse(tau);
+  for (int i = 0; i <= 40; ++i) y = coarse.at(0.05 * i, Vector6d::Constant(3.0 * 0.05 * i));
+  EXPECT_NEAR(y(5), 3.0 * (2.0 - tau), 1e-9);
+
+  const double w = 2.0 * M_PI * 2.3;
+  FirstOrderLag sine(tau);
+  double peak = 0.0, t_peak = 0.0;
+  for (int i = 0; i <= 40000; ++i) {  // 4 s at 0.1 ms, the peak searched in the last period
+    const double t = 1e-4 * i;
+    const double out = sine.at(t, Vector6d::Constant(std::sin(w * t)))(2);
+    if (t > 4.0 - 2.0 * M_PI / w && out > peak) {
+      peak = out;
+      t_peak = t;
+    }
+  }
+  EXPECT_NEAR(peak, 1.0 / std::sqrt(1.0 + w * w * tau * tau), 1e-6);
+  // sin(w t - φ) peaks where w t - φ = π/2 (mod 2π): φ from the peak's time, on a 0.1 ms grid.
+  const double phase = std::remainder(w * t_peak - M_PI / 2.0, 2.0 * M_PI);
+  EXPECT_NEAR(phase, std::atan(w * tau), w * 1e-4);
+  EXPECT_THROW(FirstOrderLag(0.0), std::invalid_argument);
+  FirstOrderLag back(tau);
+  back.at(1.0, Vector6d::Zero());
+  EXPECT_THROW(back.at(0.5, Vector6d::Zero()), std::invalid_argument);
+}
+
+// In the sensor chain: the filtered stream is the filter of the true wrench, sample by sample
+// (fed here at 0.05 ms, a tenth of the chain's own step), before the delay and the ADC.
+TEST(SensorChain, AFilterActsOnTheTrueWrenchBeforeTheAdc) {
+  Scenario sc = quiet_scenario();
+  sc.sensor.filter_time_constant_s = 0.008;
+  sc.sensor.delay_s = 0.004;
+  const auto samples = simulate(sc);
+  FirstOrderLag lag(0.008);
+  double t = -0.004 - 0.08;
+  lag.at(t, plate_wrench(sc.plate, sc.tripod, sc.law, true_state(sc, t)));
+  double worst = 0.0, scale = 0.0;
+  for (std::size_t k = 0; k < samples.size(); ++k) {
+    const double until = samples[k].t_s - 0.004;
+    Vector6d y = Vector6d::Zero();
+    for (; t < until - 1e-12;) {
+      t = std::min(until, t + 5e-5);
+      y = lag.at(t, plate_wrench(sc.plate, sc.tripod, sc.law, true_state(sc, t)));
+    }
+    worst = std::max(worst, (samples[k].wrench_measured - y).norm());
+    scale = std::max(scale, (samples[k].wrench_measured - samples[k].wrench_true).norm());
+  }
+  EXPECT_LT(worst, 1e-3 * scale) << "the chain's filter against one fed ten times finer; the filter's effect " << scale;
+  EXPECT_GT(scale, 0.0);
+}
+
 TEST(SensorChain, GainBiasDriftThenQuantisation) {
   Scenario sc = quiet_scenario();
   sc.sensor.gain << 0.1, 0, -0.05, 0, 0, 0;
@@ -493,6 +555,7 @@ TEST(BadInput, EveryProblemIsNamed) {
       {"tripod.feet_body_m must list", [](Scenario& x) { x.tripod.feet_body_m.clear(); }},
       {"tripod.feet_body_m[1]", [](Scenario& x) { x.tripod.feet_body_m[1].x() = std::nan(""); }},
       {"sensor.delay_s", [](Scenario& x) { x.sensor.delay_s = std::numeric_limits<double>::infinity(); }},
+      {"sensor.filter_time_constant_s", [](Scenario& x) { x.sensor.filter_time_constant_s = -0.01; }},
       {"sensor.bias", [](Scenario& x) { x.sensor.bias(0) = std::nan(""); }},
       {"sensor.drift_per_s", [](Scenario& x) { x.sensor.drift_per_s(5) = std::nan(""); }},
       {"sensor.noise_std", [](Scenario& x) { x.sensor.noise_std(2) = -0.1; }},

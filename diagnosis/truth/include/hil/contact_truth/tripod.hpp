@@ -18,9 +18,10 @@
 /// The plate feels -(N_i n + F_i) at p_i; the reported wrench is that sum's force and moment about
 /// o_P, in P (fx fy fz in N, mx my mz in N m).
 ///
-/// Sensor chain per output sample k at t_k = k / rate: the ADC averages the true wrench at
-/// `adc_subsamples` instants evenly spread over the period (t_k - τ - T, t_k - τ] (τ a delay of the
-/// wrench stream), then w = (1 + γ) ∘ w̄ + b + ḃ t_k + e (gain, bias, drifting offset, white
+/// Sensor chain per output sample k at t_k = k / rate: an optional first-order low-pass filter
+/// (an amplifier's anti-aliasing stage, y' = (x - y) / τ_f) on the true wrench, then the ADC
+/// averages it at `adc_subsamples` instants evenly spread over the period (t_k - τ - T, t_k - τ]
+/// (τ a delay of the wrench stream), then w = (1 + γ) ∘ w̄ + b + ḃ t_k + e (gain, bias, drifting offset, white
 /// Gaussian noise e), then quantisation to multiples of the resolution. The pose the robot reports
 /// is the commanded one; a slip event moves the true tripod against it from its time on.
 #include <Eigen/Core>
@@ -136,6 +137,9 @@ struct SensorChain {
   double rate_hz = 100.0;
   int adc_subsamples = 10;                  ///< instants the ADC averages per output sample
   double delay_s = 0.0;                     ///< τ: the wrench stream lags the poses
+  /// τ_f: a first-order low-pass before the ADC (0: none). Not a pure delay: its group delay is
+  /// τ_f / (1 + (ω τ_f)²) and its gain 1 / sqrt(1 + (ω τ_f)²) at ω.
+  double filter_time_constant_s = 0.0;
   Vector6d gain = Vector6d::Zero();         ///< γ: relative gain error per component
   Vector6d bias = Vector6d::Zero();         ///< b: constant offset (N, N m)
   Vector6d drift_per_s = Vector6d::Zero();  ///< ḃ: slowly drifting offset (N/s, N m/s)
@@ -145,6 +149,23 @@ struct SensorChain {
   Vector6d noise_std = Vector6d::Zero();   ///< std of e (N, N m)
   Vector6d resolution = Vector6d::Zero();  ///< quantisation step (0: none)
   unsigned seed = 1;
+};
+
+/// A first-order low-pass filter y' = (x - y) / τ_f of a wrench, integrated exactly for an input
+/// linear between the instants it is given (first-order hold): feed it at steps short against
+/// the input's changes. The first call settles it on its input.
+class FirstOrderLag {
+ public:
+  /// \throws std::invalid_argument unless τ_f > 0 and finite.
+  explicit FirstOrderLag(double time_constant_s);
+  /// The output at t for the input x at t; t must not decrease.
+  Vector6d at(double t_s, const Vector6d& x);
+
+ private:
+  double tau_s_;
+  bool started_ = false;
+  double t_s_ = 0.0;
+  Vector6d x_ = Vector6d::Zero(), y_ = Vector6d::Zero();
 };
 
 /// One output sample: what the rig reports (commanded pose and twist, measured wrench) and the
