@@ -364,6 +364,9 @@ TEST(OffTheSuite, AnAveragingSensorChainsDelayIsNamedAndCovered) { meet_the_rule
 //    filter is no delay at any single frequency (its group delay τ_f / (1 + (ω τ_f)²), its gain
 //    1 / sqrt(1 + (ω τ_f)²): 2.3 % short at 2.3 Hz for 15 ms), so the interval must widen to hold
 //    it; coverage is checked as above. HIL_FILTER_DRAWS=N: the full draw (i = 100..).
+// The CI draws pass (3 of 6 inside). The full draw (2026-12-03, docs/diagnosis.md "A filter's lag
+// instead of a pure delay") does not: 37 of 50 inside, mean z -1.43; on moves the delay is read
+// about a fifth of τ_f short and the interval does not widen.
 Drawn draw_filter(unsigned i) {
   const unsigned seed = 32'800'000u + i;
   Draws r(seed);
@@ -372,8 +375,8 @@ Drawn draw_filter(unsigned i) {
   sensor.delay_s = r.uniform(0.0, 0.010);
   sensor.filter_time_constant_s = r.uniform(0.002, 0.015);
   std::ostringstream o;
-  o << std::setprecision(3) << d.label << ", delay " << 1e3 * sensor.delay_s << " ms, first-order filter " << 1e3 * sensor.filter_time_constant_s
-    << " ms (truth " << 1e3 * *truth_of("time_offset_s", d.scenario, Fit{}) << " ms)";
+  o << std::setprecision(3) << d.label << ", delay " << 1e3 * sensor.delay_s << " ms, first-order filter "
+    << 1e3 * sensor.filter_time_constant_s << " ms (truth " << 1e3 * *truth_of("time_offset_s", d.scenario, Fit{}) << " ms)";
   d.label = o.str();
   return d;
 }

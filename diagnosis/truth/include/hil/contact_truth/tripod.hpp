@@ -135,8 +135,8 @@ struct SlipEvent {
 /// The force plate's sensor chain (see the file comment). Components in the order fx fy fz mx my mz.
 struct SensorChain {
   double rate_hz = 100.0;
-  int adc_subsamples = 10;                  ///< instants the ADC averages per output sample
-  double delay_s = 0.0;                     ///< τ: the wrench stream lags the poses
+  int adc_subsamples = 10;  ///< instants the ADC averages per output sample
+  double delay_s = 0.0;     ///< τ: the wrench stream lags the poses
   /// τ_f: a first-order low-pass before the ADC (0: none). Not a pure delay: its group delay is
   /// τ_f / (1 + (ω τ_f)²) and its gain 1 / sqrt(1 + (ω τ_f)²) at ω.
   double filter_time_constant_s = 0.0;
