@@ -325,6 +325,19 @@ TEST(FamilySuite, ADampingWhoseFeetLiftOffIsNotFittedLow) {
   EXPECT_TRUE(seen);
 }
 
+/// Draw i of a sensor chain off the suite's: the motion from seed seed_base + i (draw_motion), then
+/// `chain` draws the chain's settings from the same source, in its rule's order, and says them.
+Drawn draw_chain(unsigned seed_base, unsigned i, const std::function<std::string(Draws&, Drawn&)>& chain) {
+  const unsigned seed = seed_base + i;
+  Draws r(seed);
+  Drawn d = draw_motion(r, i, seed);
+  const std::string said = chain(r, d);
+  std::ostringstream o;
+  o << std::setprecision(3) << d.label << said << " (time_offset_s truth " << 1e3 * *truth_of("time_offset_s", d.scenario, Fit{}) << " ms)";
+  d.label = o.str();
+  return d;
+}
+
 // Off the suite's sensor chain (issue 32, items 4 and 6). Rule written and committed before any of
 // these draws ran (2026-12-01), the rule above with the cause time_offset, and:
 //  * Draw i: seed 32,700,000 + i, never used before; motion as draw_motion (i % 3); then, in this
@@ -336,19 +349,16 @@ TEST(FamilySuite, ADampingWhoseFeetLiftOffIsNotFittedLow) {
 //    trailing average is not a pure delay (at the kinks of moves), the interval must widen to hold
 //    it; coverage is checked as above. HIL_OFF_SUITE_DRAWS=N: the full draw.
 Drawn draw_off_suite(unsigned i) {
-  const unsigned seed = 32'700'000u + i;
-  Draws r(seed);
-  Drawn d = draw_motion(r, i, seed);
-  auto& sensor = d.scenario.sensor;
-  sensor.delay_s = r.uniform(0.003, 0.020);
-  sensor.adc_subsamples = std::min(20, 2 + static_cast<int>(r.uniform(0.0, 19.0)));
-  d.resolution = {"drawn", r.uniform(1e-5, 5e-5), r.uniform(1e-6, 5e-6)};
-  std::ostringstream o;
-  o << std::setprecision(3) << d.label << ", delay " << 1e3 * sensor.delay_s << " ms, ADC mean of " << sensor.adc_subsamples << " (truth "
-    << 1e3 * *truth_of("time_offset_s", d.scenario, Fit{}) << " ms), quantisation " << 1e6 * d.resolution.position_m << " um, "
-    << 1e3 * d.resolution.velocity_m_per_s << " mm/s";
-  d.label = o.str();
-  return d;
+  return draw_chain(32'700'000u, i, [](Draws& r, Drawn& d) {
+    auto& sensor = d.scenario.sensor;
+    sensor.delay_s = r.uniform(0.003, 0.020);
+    sensor.adc_subsamples = std::min(20, 2 + static_cast<int>(r.uniform(0.0, 19.0)));
+    d.resolution = {"drawn", r.uniform(1e-5, 5e-5), r.uniform(1e-6, 5e-6)};
+    std::ostringstream o;
+    o << std::setprecision(3) << ", delay " << 1e3 * sensor.delay_s << " ms, ADC mean of " << sensor.adc_subsamples << ", quantisation "
+      << 1e6 * d.resolution.position_m << " um, " << 1e3 * d.resolution.velocity_m_per_s << " mm/s";
+    return o.str();
+  });
 }
 
 TEST(OffTheSuite, AnAveragingSensorChainsDelayIsNamedAndCovered) { meet_the_rule("time_offset", "HIL_OFF_SUITE_DRAWS", draw_off_suite); }
@@ -368,17 +378,15 @@ TEST(OffTheSuite, AnAveragingSensorChainsDelayIsNamedAndCovered) { meet_the_rule
 // instead of a pure delay") does not: 37 of 50 inside, mean z -1.43; on moves the delay is read
 // about a fifth of τ_f short and the interval does not widen.
 Drawn draw_filter(unsigned i) {
-  const unsigned seed = 32'800'000u + i;
-  Draws r(seed);
-  Drawn d = draw_motion(r, i, seed);
-  auto& sensor = d.scenario.sensor;
-  sensor.delay_s = r.uniform(0.0, 0.010);
-  sensor.filter_time_constant_s = r.uniform(0.002, 0.015);
-  std::ostringstream o;
-  o << std::setprecision(3) << d.label << ", delay " << 1e3 * sensor.delay_s << " ms, first-order filter "
-    << 1e3 * sensor.filter_time_constant_s << " ms (truth " << 1e3 * *truth_of("time_offset_s", d.scenario, Fit{}) << " ms)";
-  d.label = o.str();
-  return d;
+  return draw_chain(32'800'000u, i, [](Draws& r, Drawn& d) {
+    auto& sensor = d.scenario.sensor;
+    sensor.delay_s = r.uniform(0.0, 0.010);
+    sensor.filter_time_constant_s = r.uniform(0.002, 0.015);
+    std::ostringstream o;
+    o << std::setprecision(3) << ", delay " << 1e3 * sensor.delay_s << " ms, first-order filter " << 1e3 * sensor.filter_time_constant_s
+      << " ms";
+    return o.str();
+  });
 }
 
 TEST(OffTheSuite, AFirstOrderFiltersLagIsNamedAndCovered) { meet_the_rule("time_offset", "HIL_FILTER_DRAWS", draw_filter); }
