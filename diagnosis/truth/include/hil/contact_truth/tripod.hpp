@@ -21,8 +21,8 @@
 /// Sensor chain per output sample k at t_k = k / rate: an optional first-order low-pass filter
 /// (an amplifier's anti-aliasing stage, y' = (x - y) / τ_f) on the true wrench, then the ADC
 /// averages it at `adc_subsamples` instants evenly spread over the period (t_k - τ - T, t_k - τ]
-/// (τ a delay of the wrench stream), then w = (1 + γ) ∘ w̄ + b + ḃ t_k + e (gain, bias, drifting offset, white
-/// Gaussian noise e), then quantisation to multiples of the resolution. The pose the robot reports
+/// (τ a delay of the wrench stream), then w = (1 + γ) ∘ w̄ + b + ḃ t_k + e (gain, bias, drifting
+/// offset, white Gaussian noise e), then quantisation to multiples of the resolution. The pose the robot reports
 /// is the commanded one; a slip event moves the true tripod against it from its time on.
 #include <Eigen/Core>
 #include <Eigen/Geometry>
