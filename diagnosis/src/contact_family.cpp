@@ -431,6 +431,32 @@ std::vector<ModelFamily::ModelForm> ContactFamily::model_forms() const {
                        (kappa < 0 ? "against" : "along") + " the normal",
                    std::move(m)});
   }
+  if (has("time_offset") && !lag_filter_) {
+    auto m = std::make_unique<ContactFamily>(*this);
+    m->lag_filter_ = true;
+    const auto it = std::find_if(nonlinear_.begin(), nonlinear_.end(), [](const Param& q) { return q.name == "time_offset_s"; });
+    m->nonlinear_.push_back({kLagFilter, "s", it->scale, true, 0.0, it->upper});
+    m->nonlinear_owner_.push_back(-1);
+    // Starts around the pure delay's optimum τ_p: the filter's cost is flat at τ_f = 0 to first
+    // order (a short filter is a short delay), and the delay's steps where the motion kinks stop a
+    // search along τ_d (delay_crossings). A pure-delay fit reads a filter as a delay of c τ_f, c
+    // between ln 2 (steps) and 1 (ramps): the starts lie about that valley, τ_d = τ_p - c τ_f.
+    const auto tau = static_cast<Eigen::Index>(it - nonlinear_.begin());
+    auto from = [tau](const Eigen::VectorXd& optimum) {
+      std::vector<Eigen::VectorXd> x;
+      const double tp = optimum(tau);
+      if (!(tp > 0)) return x;  // a lead: no causal filter leads
+      for (const double share : {0.1, 0.2, 0.35, 0.5, 0.75, 1.0, 1.4})
+        for (const double c : {0.6, 0.75, 0.9}) {
+          x.push_back(optimum);
+          x.back()(tau) = tp - c * share * tp;
+          x.back()(optimum.size() - 1) = share * tp;
+        }
+      return x;
+    };
+    out.push_back({"the wrench's lag a pure delay followed by a first-order low-pass filter, both fitted (time_offset_s their sum)",
+                   std::move(m), true, from});
+  }
   return out;
 }
 
@@ -805,6 +831,8 @@ void ContactFamily::design(const Eigen::VectorXd& phi, Eigen::MatrixXd& A, Famil
   ContactChannels ch;
   ch.x = d_.scene.design();
   for (const auto& b : terms_) b.term->channels(b.slots, phi, ch);
+  // The lag form: the model's wrench at the delayed poses, then filtered (below).
+  const double lag_s = lag_filter_ ? phi(phi.size() - 1) : 0.0;
   const double tau = ch.delay_s;
   const bool recompute = ch.recompute;
   const Eigen::VectorXd& x = ch.x;
@@ -850,8 +878,33 @@ void ContactFamily::design(const Eigen::VectorXd& phi, Eigen::MatrixXd& A, Famil
       base.full = std::move(full);
     }
   }
+  // A is linear in θ, so the filtered wrench is the design with each column filtered; the gains
+  // (a scaling) and the bias (a constant, which a settled filter passes) commute with it.
+  if (lag_s > 0) first_order_lag(d_.obs.t_s, lag_s, A);
   // Row scalings (sensor_gain) before constant columns (sensor_bias): the layout order.
   for (const auto& b : terms_) b.term->finish(b.slots, phi, A);
+}
+
+void first_order_lag(const std::vector<double>& t_s, double tau_s, Eigen::Ref<Eigen::MatrixXd> A) {
+  const std::size_t n = t_s.size();
+  if (!(tau_s > 0) || n < 2) return;
+  if (A.rows() % static_cast<Eigen::Index>(n) != 0) throw std::invalid_argument("first_order_lag: rows are not a multiple of the samples");
+  const Eigen::Index c = A.rows() / static_cast<Eigen::Index>(n);
+  // y' = (x - y) / τ with x linear between its samples (first-order hold): over a step h with slope
+  // s = (x_k - x_k-1) / h, y_k = x_k - s τ + e^(-h/τ) (y_k-1 - x_k-1 + s τ), exact. The first
+  // sample starts settled (y = x); a step that does not advance in time (another run) restarts it.
+  Eigen::MatrixXd prev = A.topRows(c);  // x_k-1
+  for (std::size_t k = 1; k < n; ++k) {
+    const double h = t_s[k] - t_s[k - 1];
+    auto row = A.middleRows(static_cast<Eigen::Index>(k) * c, c);
+    const Eigen::MatrixXd x = row;
+    if (h > 0) {
+      const double a = std::exp(-h / tau_s), b = tau_s / h;
+      const auto y_prev = A.middleRows(static_cast<Eigen::Index>(k - 1) * c, c);
+      row = x - b * (x - prev) + a * (y_prev - prev + b * (x - prev));
+    }
+    prev = x;
+  }
 }
 
 std::vector<Reported> ContactFamily::report(const Fit& f) const {
@@ -864,6 +917,10 @@ std::vector<Reported> ContactFamily::report(const Fit& f) const {
   const Eigen::Index p = static_cast<Eigen::Index>(linear_.size());
   // Each parameter's line as fitted, then as its effect reads it (a derived name, a nominal value).
   auto line = [&](bool linear, Eigen::Index j, const Param& q, double value, Eigen::Index cov_index) {
+    if (!linear && nonlinear_owner_[static_cast<std::size_t>(j)] < 0) {  // the lag form's filter
+      out.push_back({q.name, q.unit, value, std::sqrt(std::max(0.0, f.cov(cov_index, cov_index))), true});
+      return;
+    }
     const Bound& b = terms_[static_cast<std::size_t>((linear ? linear_owner_ : nonlinear_owner_)[static_cast<std::size_t>(j)])];
     const Eigen::Index index = j - (linear ? b.slots.linear : b.slots.nonlinear);
     const double var = std::max(0.0, f.cov(cov_index, cov_index)) + b.term->added_variance(linear, index);
@@ -875,6 +932,11 @@ std::vector<Reported> ContactFamily::report(const Fit& f) const {
   for (Eigen::Index j = 0; j < static_cast<Eigen::Index>(nonlinear_.size()); ++j)
     line(false, j, nonlinear_[static_cast<std::size_t>(j)], f.phi(j), p + j);
   for (const auto& b : terms_) b.term->report_derived(b.slots, p, f, out);
+  if (lag_filter_) {  // the chain's low-frequency group delay: the delay and the filter's lag
+    const double tau_f = f.phi(f.phi.size() - 1);
+    for (auto& r : out)
+      if (r.name == "time_offset_s") r.value += tau_f;
+  }
   return out;
 }
 

@@ -282,7 +282,8 @@ std::vector<Unidentifiable> unidentifiable_columns(const Eigen::MatrixXd& J, con
 /// is not repeated (a collinear direction does not change a prediction). `fixed`: parameters held
 /// at their nominal value (0).
 Fit fit_with(const ModelFamily& m, const Observations& obs, const std::vector<int>& train, const FitOptions& o, DesignCache& cache,
-             const Eigen::VectorXd* warm, bool statistics, const std::vector<bool>* fixed_in = nullptr, bool identify = false) {
+             const Eigen::VectorXd* warm, bool statistics, const std::vector<bool>* fixed_in = nullptr, bool identify = false,
+             const std::vector<Eigen::VectorXd>* own_starts = nullptr) {
   if (train.empty()) throw std::runtime_error(m.name() + ": no samples to fit");
   const auto lin = m.linear();
   const auto nl = m.nonlinear();
@@ -304,7 +305,7 @@ Fit fit_with(const ModelFamily& m, const Observations& obs, const std::vector<in
   Eigen::VectorXd phi = Eigen::VectorXd::Zero(q);
   Projected cur;
   bool first = true;
-  std::vector<Eigen::VectorXd> starts = m.starts();
+  std::vector<Eigen::VectorXd> starts = own_starts ? *own_starts : m.starts();
   if (warm) {
     if (warm->size() != q)
       throw std::logic_error(m.name() + ": a warm start of " + std::to_string(warm->size()) + " values for " + std::to_string(q) +
@@ -634,25 +635,51 @@ std::vector<Reported> values_reported(const ModelFamily& m, Fit f, const Fit& fu
 /// the alternatives move the estimate, they do not make the run less informative.
 /// The full model refitted under one alternative model form (ModelFamily::model_forms), warm-started
 /// from the full fit: what model_form_intervals measures the shifts on.
-Fit model_form_fit(const ModelFamily& form, const ModelFamily& m, const Score& s, const Observations& obs, const std::vector<int>& all,
-                   const FitOptions& o) {
-  DesignCache cache(form, obs.size());
-  const Eigen::VectorXd warm = mapped(form.nonlinear(), s.full.phi_names, s.full.phi);
-  const std::vector<bool> fixed = fixed_by_name(m, s.full.fixed, form);
-  return fit_with(form, obs, all, o, cache, &warm, false, &fixed);
+Fit model_form_fit(const ModelFamily::ModelForm& form, const ModelFamily& m, const Score& s, const Observations& obs,
+                   const std::vector<int>& all, const FitOptions& o) {
+  DesignCache cache(*form.model, obs.size());
+  const Eigen::VectorXd warm = mapped(form.model->nonlinear(), s.full.phi_names, s.full.phi);
+  const std::vector<bool> fixed = fixed_by_name(m, s.full.fixed, *form.model);
+  if (!form.refit_from) return fit_with(*form.model, obs, all, o, cache, &warm, false, &fixed);
+  const std::vector<Eigen::VectorXd> starts = form.refit_from(warm);
+  return fit_with(*form.model, obs, all, o, cache, &warm, false, &fixed, false, &starts);
 }
 
-/// Widens the full fit's intervals by the largest shift of each value under the model forms.
+/// Widens the full fit's intervals by the largest shift of each value under the model forms; a
+/// form the run decides against widens nothing, and one it decides for gives the values.
 void model_form_intervals(Score& s, const std::vector<ModelFamily::ModelForm>& forms, const std::vector<Fit>& fits) {
   if (forms.empty()) return;
   std::map<std::string, double> shift;
+  const double variance = s.full.sigma2 * s.full.variance_inflation;
+  // The form the run prefers, if any: the lowest RSS of those below the model's by the margin.
+  std::optional<std::size_t> preferred;
   for (std::size_t i = 0; i < forms.size(); ++i) {
+    const double excess = variance > 0 ? (fits[i].rss - s.full.rss) / variance : 0.0;
+    if (forms[i].decided_by_fit && excess < -kFormRejection && (!preferred || fits[i].rss < fits[*preferred].rss)) {
+      preferred = i;
+      s.model_form_preferred = fmt::format("{} (its weighted RSS {:.3g} long-run residual variances below the model's)",
+                                           forms[i].assumption, -excess);
+    }
+  }
+  // The others widen the intervals by their shifts from the model's values, unless the run rejects them.
+  for (std::size_t i = 0; i < forms.size(); ++i) {
+    const double excess = variance > 0 ? (fits[i].rss - s.full.rss) / variance : 0.0;
+    if (forms[i].decided_by_fit && !(excess <= kFormRejection)) {
+      s.model_forms_rejected.push_back(fmt::format("{} (its weighted RSS {:.3g} long-run residual variances above the model's)",
+                                                   forms[i].assumption, excess));
+      continue;
+    }
+    if (i == preferred) continue;
     for (const auto& r : values_reported(*forms[i].model, fits[i], s.full))
       for (const auto& q : s.full.reported)
         if (q.name == r.name && std::isfinite(r.value)) shift[q.name] = std::max(shift[q.name], std::abs(r.value - q.value));
     s.model_forms.push_back(forms[i].assumption);
   }
+  std::vector<Reported> values;
+  if (preferred) values = values_reported(*forms[*preferred].model, fits[*preferred], s.full);
   for (auto& r : s.full.reported) {
+    for (const auto& q : values)
+      if (q.name == r.name && std::isfinite(q.value)) r.value = q.value;
     const auto it = shift.find(r.name);
     if (it == shift.end()) continue;
     r.std_model_form = it->second / std::sqrt(3.0);
@@ -756,7 +783,7 @@ Score score(const ModelFamily& m, const Observations& obs, const CvOptions& o, c
   tell();
   parallel::run_tasks(tasks, workers, [&](std::size_t i, std::size_t w) {
     if (i < forms.size()) {
-      form_fits[i] = model_form_fit(*forms[i].model, m, s, obs, all, o.fit);
+      form_fits[i] = model_form_fit(forms[i], m, s, obs, all, o.fit);
     } else {
       if (w > 0 && !worker_cache[w]) worker_cache[w].emplace(m, n);
       run_fold(i - forms.size(), w > 0 ? *worker_cache[w] : cache);

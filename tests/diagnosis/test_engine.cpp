@@ -8,6 +8,7 @@
 #include <cmath>
 #include <limits>
 #include <memory>
+#include <numeric>
 #include <random>
 #include <set>
 #include <thread>
@@ -354,6 +355,125 @@ TEST(Engine, ModelFormsWidenTheIntervalsByTheLargestShiftAndKeepThePnr) {
   }
 }
 
+/// The line whose slope's regressor bends: t - 2 + curve (t - 2)².
+class BentLine : public Line {
+ public:
+  BentLine(const Observations& o, double curve) : Line(o), o_(o), curve_(curve) {}
+  void design(const Eigen::VectorXd& phi, Eigen::MatrixXd& A, FamilyData& data) const override {
+    Line::design(phi, A, data);
+    for (std::size_t k = 0; k < o_.size(); ++k)
+      for (int c = 0; c < 6; ++c) A(static_cast<Eigen::Index>(6 * k) + c, 1) += curve_ * std::pow(o_.t_s[k] - 2.0, 2);
+  }
+
+ private:
+  const Observations& o_;
+  double curve_;
+};
+
+/// Forms the run can decide: an origin moved (the same fit), a slight bend (within the noise) and
+/// a strong one (far outside it).
+class LineWithDecidableForms : public Line {
+ public:
+  explicit LineWithDecidableForms(const Observations& o) : Line(o), o_(o) {}
+  std::vector<ModelForm> model_forms() const override {
+    std::vector<ModelForm> out;
+    out.push_back({"origin moved by 0.2", std::make_unique<Line>(o_, 0.2), true});
+    out.push_back({"slightly bent", std::make_unique<BentLine>(o_, 1e-5), true});
+    out.push_back({"strongly bent", std::make_unique<BentLine>(o_, 0.3), true});
+    return out;
+  }
+
+ private:
+  const Observations& o_;
+};
+
+TEST(Engine, AModelFormTheRunRejectsWidensNothing) {
+  std::mt19937 rng(6);
+  std::normal_distribution<double> g(0, 1);
+  Observations o;
+  for (int k = 0; k < 400; ++k) o.t_s.push_back(0.01 * k);
+  o.y.resize(400, 6);
+  for (int k = 0; k < 400; ++k)
+    for (int c = 0; c < 6; ++c) o.y(k, c) = 1.0 + 0.5 * (o.t_s[static_cast<std::size_t>(k)] - 2.0) + 0.01 * g(rng);
+  const Score s = score(LineWithDecidableForms(o), o);
+  ASSERT_EQ(s.model_forms.size(), 2u);
+  EXPECT_EQ(s.model_forms[0], "origin moved by 0.2");
+  EXPECT_EQ(s.model_forms[1], "slightly bent");
+  ASSERT_EQ(s.model_forms_rejected.size(), 1u);
+  EXPECT_THAT(s.model_forms_rejected[0], HasSubstr("strongly bent"));
+  EXPECT_THAT(s.model_forms_rejected[0], HasSubstr("long-run residual variances above"));
+  // The strong bend moves the intercept more than the origin's 0.2 b = 0.1: not counted.
+  const Fit bent = fit(BentLine(o, 0.3), o, [] {
+    std::vector<int> all(400);
+    std::iota(all.begin(), all.end(), 0);
+    return all;
+  }());
+  for (const auto& r : s.full.reported)
+    if (r.name == "a") {
+      EXPECT_GT(std::abs(bent.theta(0) - r.value), 0.15);
+      EXPECT_NEAR(r.std_model_form, 0.2 * 0.5 / std::sqrt(3.0), 2e-3);
+    }
+  // Without the flag the same strong bend is covered, and widens the intercept's interval by it.
+  class Undecided : public Line {
+   public:
+    explicit Undecided(const Observations& o) : Line(o), o_(o) {}
+    std::vector<ModelForm> model_forms() const override {
+      std::vector<ModelForm> out;
+      out.push_back({"strongly bent", std::make_unique<BentLine>(o_, 0.3)});
+      return out;
+    }
+
+   private:
+    const Observations& o_;
+  };
+  const Score u = score(Undecided(o), o);
+  EXPECT_TRUE(u.model_forms_rejected.empty());
+  for (const auto& r : u.full.reported) {
+    if (r.name == "a") {
+      EXPECT_NEAR(r.std_model_form, std::abs(bent.theta(0) - r.value) / std::sqrt(3.0), 1e-6);
+    }
+  }
+}
+
+TEST(Engine, AModelFormTheRunPrefersGivesTheValues) {
+  // The data bend as BentLine(0.3) does; the model is straight, its decided form bent.
+  std::mt19937 rng(7);
+  std::normal_distribution<double> g(0, 1);
+  Observations o;
+  for (int k = 0; k < 400; ++k) o.t_s.push_back(0.01 * k);
+  o.y.resize(400, 6);
+  for (int k = 0; k < 400; ++k) {
+    const double x = o.t_s[static_cast<std::size_t>(k)] - 2.0;
+    for (int c = 0; c < 6; ++c) o.y(k, c) = 1.0 + 0.5 * (x + 0.3 * x * x) + 0.01 * g(rng);
+  }
+  class Straight : public Line {
+   public:
+    explicit Straight(const Observations& obs) : Line(obs), o_(obs) {}
+    std::vector<ModelForm> model_forms() const override {
+      std::vector<ModelForm> out;
+      out.push_back({"bent", std::make_unique<BentLine>(o_, 0.3), true});
+      return out;
+    }
+
+   private:
+    const Observations& o_;
+  };
+  const Score s = score(Straight(o), o);
+  EXPECT_TRUE(s.model_forms_rejected.empty());
+  EXPECT_THAT(s.model_form_preferred, HasSubstr("bent"));
+  EXPECT_THAT(s.model_form_preferred, HasSubstr("below the model's"));
+  for (const auto& r : s.full.reported) {
+    const double truth = r.name == "a" ? 1.0 : 0.5;
+    EXPECT_NEAR(r.value, truth, 0.01) << r.name;  // the bent refit's values
+    EXPECT_EQ(r.std_model_form, 0.0) << r.name;   // the run decided it: no widening
+  }
+  EXPECT_TRUE(s.model_forms.empty());
+  // The straight model alone is far off: the intercept absorbs the bend's mean.
+  std::vector<int> all(400);
+  std::iota(all.begin(), all.end(), 0);
+  EXPECT_GT(std::abs(fit(Line(o), o, all).theta(0) - 1.0), 0.05);
+}
+
 TEST(Engine, AScreenAfterTheFullFitSkipsTheFolds) {
   const auto o = sine_data(1.23, 2.5, 0.4, 0.05, 2);
   SineFamily m(o);
@@ -664,6 +784,121 @@ TEST(ContactFamily, NominalDesignTimesThetaIsTheForwardSimulation) {
     peak = std::max(peak, w.norm());
   }
   EXPECT_GT(peak, 10.0);  // the scene is in contact
+}
+
+TEST(FirstOrderLag, FollowsARampsAndASinusoidsClosedFormsAndRestartsOnANewRun) {
+  // Two columns, three rows per sample: a ramp, a constant, a sinusoid on the rows.
+  const double tau = 0.012, h = 0.001;
+  const int n = 2000;
+  std::vector<double> t(n);
+  for (int k = 0; k < n; ++k) t[static_cast<std::size_t>(k)] = 0.3 + h * k;
+  const double slope = 2.5, w = 2 * M_PI * 7.0;
+  Eigen::MatrixXd A(3 * n, 2);
+  for (int k = 0; k < n; ++k) {
+    const double tk = t[static_cast<std::size_t>(k)];
+    A(3 * k, 0) = slope * tk;
+    A(3 * k, 1) = 4.0;
+    A(3 * k + 1, 0) = std::sin(w * tk);
+    A(3 * k + 1, 1) = -1.0;
+    A(3 * k + 2, 0) = 0.0;
+    A(3 * k + 2, 1) = slope * tk;
+  }
+  const Eigen::MatrixXd x = A;
+  first_order_lag(t, tau, A);
+  const double gain = 1 / std::hypot(1.0, w * tau), phase = std::atan(w * tau);
+  for (int k = 0; k < n; ++k) {
+    const double s = t[static_cast<std::size_t>(k)] - t[0];
+    // The ramp from a settled start: y = x - slope τ (1 - e^(-s/τ)), exact for a first-order hold.
+    const double ramp = x(3 * k, 0) - slope * tau * (1 - std::exp(-s / tau));
+    EXPECT_NEAR(A(3 * k, 0), ramp, 1e-12 * (1 + std::abs(ramp))) << k;
+    EXPECT_NEAR(A(3 * k + 2, 1), ramp, 1e-12 * (1 + std::abs(ramp))) << k;
+    EXPECT_EQ(A(3 * k, 1), 4.0);
+    EXPECT_EQ(A(3 * k + 1, 1), -1.0);
+    EXPECT_EQ(A(3 * k + 2, 0), 0.0);
+    // The sinusoid, settled after 10 τ: gain 1/√(1 + ω²τ²), phase -atan(ωτ); the hold's error O(ω²h²).
+    if (s > 10 * tau) {
+      EXPECT_NEAR(A(3 * k + 1, 0), gain * std::sin(w * t[static_cast<std::size_t>(k)] - phase), 2e-4) << k;
+    }
+  }
+  // A lag of 0 or less changes nothing; a time that does not advance restarts the filter settled.
+  Eigen::MatrixXd B = x;
+  first_order_lag(t, 0.0, B);
+  EXPECT_EQ(B, x);
+  first_order_lag(t, -0.01, B);
+  EXPECT_EQ(B, x);
+  std::vector<double> two_runs = t;
+  for (int k = n / 2; k < n; ++k) two_runs[static_cast<std::size_t>(k)] -= 0.5 * n * h;
+  first_order_lag(two_runs, tau, B);
+  EXPECT_EQ(B.row(3 * (n / 2)), x.row(3 * (n / 2)));
+  EXPECT_NE(B.row(3 * (n / 2) - 3), x.row(3 * (n / 2) - 3));
+  Eigen::MatrixXd odd(3 * n + 1, 2);
+  EXPECT_THROW(first_order_lag(t, tau, odd), std::invalid_argument);
+}
+
+TEST(ContactFamily, TheDelaysLagFormFiltersTheDelayedDesignAndReportsTheSumOfBothLags) {
+  const auto r = test::scene_run("press_slide");
+  const auto d = data_of(r, {});
+  EXPECT_EQ(ContactFamily(d, {"viscous_friction"}).model_forms().size(), 2u);  // no delay: no lag form
+  const ContactFamily m(d, {"time_offset"});
+  auto forms = m.model_forms();
+  ASSERT_EQ(forms.size(), 3u);
+  for (std::size_t i = 0; i < 2; ++i) {
+    EXPECT_FALSE(forms[i].decided_by_fit);
+    EXPECT_FALSE(forms[i].refit_from);
+  }
+  EXPECT_TRUE(forms[2].decided_by_fit);
+  const auto* lag = dynamic_cast<const ContactFamily*>(forms[2].model.get());
+  ASSERT_NE(lag, nullptr);
+  EXPECT_TRUE(lag->has_lag_filter());
+  EXPECT_EQ(lag->model_forms().size(), 2u);  // no filter after a filter
+  EXPECT_EQ(lag->friction_lever(), 0.0);
+  EXPECT_THAT(forms[2].assumption, HasSubstr("first-order low-pass filter"));
+  const auto nl = lag->nonlinear();
+  ASSERT_EQ(nl.size(), 2u);
+  EXPECT_EQ(nl[0].name, "time_offset_s");
+  EXPECT_EQ(nl[1].name, ContactFamily::kLagFilter);
+  EXPECT_EQ(nl[1].lower, 0.0);
+  EXPECT_EQ(nl[1].upper, nl[0].upper);
+  auto design = [](const ModelFamily& f, const Eigen::VectorXd& p) {
+    Eigen::MatrixXd A;
+    f.design(p, A);
+    return A;
+  };
+  auto filtered = [&](double delay, double lag_s) {
+    Eigen::MatrixXd A = design(m, Eigen::VectorXd::Constant(1, delay));
+    first_order_lag(d.obs.t_s, lag_s, A);
+    return A;
+  };
+  // All a filter, half of it, none of it; a lead without a filter is the pure lead.
+  const Eigen::MatrixXd all = filtered(0.0, 0.008), half = filtered(0.004, 0.004), none = filtered(0.008, 0.0);
+  ASSERT_GT(all.norm(), 0.0);
+  EXPECT_LT((design(*lag, Eigen::Vector2d(0.0, 0.008)) - all).norm(), 1e-12 * all.norm());
+  EXPECT_LT((design(*lag, Eigen::Vector2d(0.004, 0.004)) - half).norm(), 1e-12 * all.norm());
+  EXPECT_LT((design(*lag, Eigen::Vector2d(0.008, 0.0)) - none).norm(), 1e-12 * all.norm());
+  EXPECT_GT((all - none).norm(), 1e-3 * all.norm());  // the forms differ on this run
+  EXPECT_EQ(design(*lag, Eigen::Vector2d(-0.004, 0.0)), design(m, Eigen::VectorXd::Constant(1, -0.004)));
+  // Reported: the group delay, the sum of both.
+  Fit f;
+  f.theta = Eigen::Vector2d(1e5, 2e4);
+  f.phi = Eigen::Vector2d(0.003, 0.005);
+  f.cov = Eigen::MatrixXd::Zero(4, 4);
+  bool seen = false;
+  for (const auto& q : lag->report(f))
+    if (q.name == "time_offset_s") {
+      EXPECT_DOUBLE_EQ(q.value, 0.008);
+      seen = true;
+    }
+  EXPECT_TRUE(seen);
+  // The refit's starts: about the pure delay's reading of a delay and a filter; none from a lead.
+  const auto starts = forms[2].refit_from(Eigen::Vector2d(0.008, 0.0));
+  ASSERT_FALSE(starts.empty());
+  for (const auto& x : starts) {
+    EXPECT_GT(x(1), 0.0);
+    // The delay a pure-delay fit would read: between the filter's step reading (ln 2) and its ramp's (1).
+    EXPECT_GE(x(0) + x(1), 0.008 + 0.05 * x(1));
+    EXPECT_LE(x(0) + 0.5 * x(1), 0.008);
+  }
+  EXPECT_TRUE(forms[2].refit_from(Eigen::Vector2d(-0.004, 0.0)).empty());
 }
 
 TEST(ContactFamily, TheFrictionsModelFormsMoveItsLineOfActionAlongTheNormalOnly) {

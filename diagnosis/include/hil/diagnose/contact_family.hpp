@@ -114,6 +114,12 @@ constexpr int kRateHalfWindow = 8;
 /// than max(3, min_levels) distinct values, not on such a grid, or a non-finite value.
 double quantum_of(std::vector<double> values, std::size_t min_levels = 3);
 
+/// A first-order low-pass filter y' = (x - y) / τ applied along the samples to every column of A
+/// (rows: c per sample, sample after sample; c = rows / t_s.size()), in place, the input linear
+/// between samples (exact for it). The first sample starts settled; τ <= 0 leaves A as it is.
+/// \throws std::invalid_argument when the rows are not a multiple of the samples.
+void first_order_lag(const std::vector<double>& t_s, double tau_s, Eigen::Ref<Eigen::MatrixXd> A);
+
 /// The variance of the bias a quantiser of `step` leaves in the mean of a signal dithered by
 /// Gaussian noise of std σ, over an unknown position of the signal on the grid: the quantiser's
 /// mean error is the Fourier series Σ_k (-1)^k (step/πk) e^{-2π²k²σ²/step²} sin(2πk x/step)
@@ -198,9 +204,20 @@ class ContactFamily : public ModelFamily {
   /// the normal from the centroid: a convex interference's centroid lies between 1/4 and 3/4 of its
   /// depth from either side (Grünbaum), so that range holds every point of the interference on the
   /// normal through the centroid (docs/diagnosis.md, "Model-form intervals").
+  /// With time_offset, a third form: the wrench's lag a pure delay τ_d (time_offset_s) followed
+  /// by a first-order low-pass filter of time constant τ_f >= 0 (kLagFilter; a sensor's
+  /// anti-aliasing filter), both fitted; it reports time_offset_s as the chain's low-frequency
+  /// group delay τ_d + τ_f, the pure delay's meaning. Where the force steps (friction reversing at a
+  /// robot's corners) a filter's step response is read as a pure delay of only τ_f ln 2
+  /// (docs/diagnosis.md, "A filter's lag instead of a pure delay"). The form nests the model
+  /// (τ_f = 0), so its refit fits at least as well; one that does not has failed and is rejected
+  /// (ModelForm::decided_by_fit).
   std::vector<ModelForm> model_forms() const override;
   /// κ: the tangential forces act at the centroid + κ δ e_n (0: the contact paper's model).
   double friction_lever() const { return friction_lever_; }
+  /// Whether φ ends with kLagFilter, the time constant of a first-order filter after the delay.
+  bool has_lag_filter() const { return lag_filter_; }
+  static constexpr const char* kLagFilter = "time_offset_filter_s";
   const std::set<std::string>& extensions() const { return ext_; }
   /// The measured kinematics at time t (time_offset's pose at t - τ): windowed-sinc (Lanczos, 8
   /// lobes) interpolation of the samples, which keeps a quantised pose stream's noise level at every
@@ -254,6 +271,7 @@ class ContactFamily : public ModelFamily {
   std::vector<int> linear_owner_, nonlinear_owner_;  ///< per θ / φ entry: its term (-1: nominal)
   bool moves_contacts_ = false, needs_rates_ = false;
   double friction_lever_ = 0.0;
+  bool lag_filter_ = false;
 
   // Contacts recomputed for φ (docs/diagnosis.md, "Cost"). mindist on every pair of every sample is
   // what a design costs; most pairs are provably apart or unchanged, and are skipped:

@@ -86,6 +86,12 @@ class FamilyData {
 
 /// A separable model family: prediction = A(φ) θ, 6 rows per sample (row 6k + c).
 /// Thread-safe: every member is const and keeps nothing; per-evaluator state lives in FamilyData.
+/// A model form the run can decide is rejected when its refit's weighted RSS exceeds the model's by
+/// more than this many long-run residual variances, and preferred when it falls below by more:
+/// χ² of one degree of freedom at 0.99 (a form that nests the model with one parameter more, or
+/// has the same parameters; the one that fits worse by that much is the wrong form).
+constexpr double kFormRejection = 6.63;
+
 class ModelFamily {
  public:
   virtual ~ModelFamily() = default;
@@ -130,6 +136,19 @@ class ModelFamily {
   struct ModelForm {
     std::string assumption;
     std::unique_ptr<ModelFamily> model;
+    /// The run can tell this form from the family's own (e.g. a filter's lag from a pure delay where
+    /// the force steps): it widens the intervals only while its refit's weighted RSS exceeds the
+    /// full fit's by at most kFormRejection long-run residual variances (σ² times the variance
+    /// inflation); where it falls below it by more than that, the run prefers it: the values are
+    /// its refit's (the best such form's), and its shift, decided by the run, widens nothing.
+    /// false: the run rarely decides it, always covered, the values the model's.
+    bool decided_by_fit = false;
+    /// The refit's starts instead of the form's own (ModelFamily::starts), given the model's optimum
+    /// mapped to the form's parameters (itself always a start): where a parameter the form adds sits
+    /// at a stationary point at its nominal value (a filter's time constant of 0 moves the cost only
+    /// to second order), a refit from the optimum stays there. The best of them, then its
+    /// starts_near, then Levenberg-Marquardt. Empty function: the form's own starts.
+    std::function<std::vector<Eigen::VectorXd>(const Eigen::VectorXd& optimum)> refit_from = {};
   };
   virtual std::vector<ModelForm> model_forms() const { return {}; }
   /// What the family located from the data on every sample (its effects' Effect::locates_events). Default: none.
@@ -247,6 +266,12 @@ struct Score {
   std::vector<std::vector<std::string>> fold_phi_names;
   /// The alternative assumptions the intervals account for (ModelFamily::model_forms).
   std::vector<std::string> model_forms;
+  /// The alternatives the run rejects (ModelForm::decided_by_fit), each with its excess RSS in
+  /// long-run residual variances: they widen nothing.
+  std::vector<std::string> model_forms_rejected;
+  /// The alternative the run prefers (ModelForm::decided_by_fit), with its RSS's fall in long-run
+  /// residual variances: the reported values are its refit's. Empty: the model's own.
+  std::string model_form_preferred;
   double seconds = 0.0;
 };
 
