@@ -24,6 +24,10 @@
 //  * Fourth full draw of contact_damping (rule added 2026-12-03, before it ran, after quantum_of
 //    saw steps below the smallest gap and through zero): HIL_FAMILY_FIRST=400, i = 400..449, never
 //    drawn before, the same rules.
+//  * After the delay's lag form (a pure delay followed by a fitted first-order filter, the values
+//    a form the run prefers; rule added 2026-12-03, before these ran): HIL_FAMILY_FIRST=500, i =
+//    500..549, never drawn before, the same rules, for time_offset (the pure delay: that the form
+//    breaks nothing), the averaging sensor chain and the first-order filter (OffTheSuite).
 //  * Per effect, of n draws, at most ceil(10 %) may fail each of:
 //     - named: the effect named first (clean: `none`);
 //     - single: no second cause.
