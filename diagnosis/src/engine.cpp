@@ -646,22 +646,11 @@ Fit model_form_fit(const ModelFamily::ModelForm& form, const ModelFamily& m, con
 }
 
 /// Widens the full fit's intervals by the largest shift of each value under the model forms; a
-/// form the run decides against widens nothing, and one it decides for gives the values.
+/// form the run decides against widens nothing.
 void model_form_intervals(Score& s, const std::vector<ModelFamily::ModelForm>& forms, const std::vector<Fit>& fits) {
   if (forms.empty()) return;
   std::map<std::string, double> shift;
   const double variance = s.full.sigma2 * s.full.variance_inflation;
-  // The form the run prefers, if any: the lowest RSS of those below the model's by the margin.
-  std::optional<std::size_t> preferred;
-  for (std::size_t i = 0; i < forms.size(); ++i) {
-    const double excess = variance > 0 ? (fits[i].rss - s.full.rss) / variance : 0.0;
-    if (forms[i].decided_by_fit && excess < -kFormRejection && (!preferred || fits[i].rss < fits[*preferred].rss)) {
-      preferred = i;
-      s.model_form_preferred = fmt::format("{} (its weighted RSS {:.3g} long-run residual variances below the model's)",
-                                           forms[i].assumption, -excess);
-    }
-  }
-  // The others widen the intervals by their shifts from the model's values, unless the run rejects them.
   for (std::size_t i = 0; i < forms.size(); ++i) {
     const double excess = variance > 0 ? (fits[i].rss - s.full.rss) / variance : 0.0;
     if (forms[i].decided_by_fit && !(excess <= kFormRejection)) {
@@ -669,17 +658,12 @@ void model_form_intervals(Score& s, const std::vector<ModelFamily::ModelForm>& f
                                                    forms[i].assumption, excess));
       continue;
     }
-    if (i == preferred) continue;
     for (const auto& r : values_reported(*forms[i].model, fits[i], s.full))
       for (const auto& q : s.full.reported)
         if (q.name == r.name && std::isfinite(r.value)) shift[q.name] = std::max(shift[q.name], std::abs(r.value - q.value));
     s.model_forms.push_back(forms[i].assumption);
   }
-  std::vector<Reported> values;
-  if (preferred) values = values_reported(*forms[*preferred].model, fits[*preferred], s.full);
   for (auto& r : s.full.reported) {
-    for (const auto& q : values)
-      if (q.name == r.name && std::isfinite(q.value)) r.value = q.value;
     const auto it = shift.find(r.name);
     if (it == shift.end()) continue;
     r.std_model_form = it->second / std::sqrt(3.0);

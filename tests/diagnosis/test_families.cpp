@@ -28,6 +28,10 @@
 //    a form the run prefers; rule added 2026-12-03, before these ran): HIL_FAMILY_FIRST=500, i =
 //    500..549, never drawn before, the same rules, for time_offset (the pure delay: that the form
 //    breaks nothing), the averaging sensor chain and the first-order filter (OffTheSuite).
+//  * After the lag form was made to widen only (rule added 2026-12-03, before these ran; the draw
+//    above, i = 500..549, took the values of a form the run preferred, and failed):
+//    HIL_FAMILY_FIRST=600, i = 600..649, never drawn before, the same rules, for the first-order
+//    filter (OffTheSuite) and time_offset.
 //  * Per effect, of n draws, at most ceil(10 %) may fail each of:
 //     - named: the effect named first (clean: `none`);
 //     - single: no second cause.

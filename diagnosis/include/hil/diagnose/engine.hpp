@@ -87,9 +87,9 @@ class FamilyData {
 /// A separable model family: prediction = A(φ) θ, 6 rows per sample (row 6k + c).
 /// Thread-safe: every member is const and keeps nothing; per-evaluator state lives in FamilyData.
 /// A model form the run can decide is rejected when its refit's weighted RSS exceeds the model's by
-/// more than this many long-run residual variances, and preferred when it falls below by more:
-/// χ² of one degree of freedom at 0.99 (a form that nests the model with one parameter more, or
-/// has the same parameters; the one that fits worse by that much is the wrong form).
+/// more than this many long-run residual variances: χ² of one degree of freedom at 0.99 (a form
+/// that has the model's parameters, or nests it with one more; one that fits worse by that much is
+/// the wrong form, or for a nested one a failed refit).
 constexpr double kFormRejection = 6.63;
 
 class ModelFamily {
@@ -139,9 +139,9 @@ class ModelFamily {
     /// The run can tell this form from the family's own (e.g. a filter's lag from a pure delay where
     /// the force steps): it widens the intervals only while its refit's weighted RSS exceeds the
     /// full fit's by at most kFormRejection long-run residual variances (σ² times the variance
-    /// inflation); where it falls below it by more than that, the run prefers it: the values are
-    /// its refit's (the best such form's), and its shift, decided by the run, widens nothing.
-    /// false: the run rarely decides it, always covered, the values the model's.
+    /// inflation). It is never taken for the model's values where it fits better: a form's better
+    /// fit on a run whose model is wrong elsewhere too is no evidence for it (docs/diagnosis.md,
+    /// "Forms the run decides"). false: the run rarely decides it, always covered.
     bool decided_by_fit = false;
     /// The refit's starts instead of the form's own (ModelFamily::starts), given the model's optimum
     /// mapped to the form's parameters (itself always a start): where a parameter the form adds sits
@@ -269,9 +269,6 @@ struct Score {
   /// The alternatives the run rejects (ModelForm::decided_by_fit), each with its excess RSS in
   /// long-run residual variances: they widen nothing.
   std::vector<std::string> model_forms_rejected;
-  /// The alternative the run prefers (ModelForm::decided_by_fit), with its RSS's fall in long-run
-  /// residual variances: the reported values are its refit's. Empty: the model's own.
-  std::string model_form_preferred;
   double seconds = 0.0;
 };
 
