@@ -56,6 +56,9 @@
 // After the damping's clip at lift-off and its twist-level interval (2026-12-03), the damping's
 // third draw (i = 300..349) passes: 49 of 50 inside, mean z -0.19 (se 0.11), mean z² 0.60. After
 // quantum_of's change its fourth (i = 400..449) passes: 49 of 50, mean z -0.17 (se 0.11), z² 0.67.
+// The first-order filter's draw (i = 100..149) failed (37 of 50 inside, mean z -1.43); with the
+// delay's lag form widening the interval (i = 600..649): 45 of 47 inside, z² 1.23, still biased
+// (mean z -0.42, se 0.15: the moves read the filter's lag short, now inside their intervals).
 //
 // Label `blind`: minutes under sanitizers.
 #include <gtest/gtest.h>
