@@ -46,6 +46,23 @@ Diagnosed diagnose_scenario(const ct::Scenario& sc, const TripodRigOptions& rig,
   return run;
 }
 
+double linear_damping_of(const ct::Scenario& s) {
+  const auto n = static_cast<std::size_t>(std::floor(s.duration_s * s.sensor.rate_hz + 1e-9));
+  double num = 0.0, den = 0.0;
+  std::vector<ct::FootContact> feet;
+  for (std::size_t k = 0; k < n; ++k) {
+    ct::plate_wrench(s.plate, s.tripod, s.law, ct::true_state(s, static_cast<double>(k) / s.sensor.rate_hz), &feet);
+    for (const auto& f : feet) {
+      if (!f.in_contact) continue;
+      const double rate2 = f.penetration_rate_m_per_s * f.penetration_rate_m_per_s;
+      const double dashpot = s.law.damping_exponent == 0.0 ? 1.0 : std::pow(f.penetration_m / s.law.delta_ref_m, s.law.damping_exponent);
+      num += s.law.damping_n_s_per_m * dashpot * rate2;
+      den += rate2;
+    }
+  }
+  return den > 0.0 ? num / den : s.law.damping_n_s_per_m;
+}
+
 std::optional<double> truth_of(const std::string& name, const ct::Scenario& s, const Fit& f) {
   const char* comp[6] = {"fx", "fy", "fz", "mx", "my", "mz"};
   auto index = [&](const std::string& n) {
@@ -80,7 +97,7 @@ std::optional<double> truth_of(const std::string& name, const ct::Scenario& s, c
     return s.sensor.delay_s + (n - 1.0) / (2.0 * n * s.sensor.rate_hz) + s.sensor.filter_time_constant_s;
   }
   if (name == "viscous_n_s_per_m") return s.law.viscous_n_s_per_m;
-  if (name == "damping_n_s_per_m") return s.law.damping_n_s_per_m;
+  if (name == "damping_n_s_per_m") return s.law.damping_exponent == 0.0 ? s.law.damping_n_s_per_m : linear_damping_of(s);
   if (name == "stiffness_exponent") return s.law.exponent;
   // The truth's surface is at o_P, level in P: the rig's declared values are what may be off.
   if (name == kPlateHeight || name == kPlateTiltX || name == kPlateTiltY) return 0.0;

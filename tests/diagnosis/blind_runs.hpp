@@ -103,6 +103,12 @@ struct Diagnosed {
 /// kStickBelow_m_per_s, the pose and twist reported at `r`.
 Diagnosed diagnose_scenario(const ct::Scenario& sc, const TripodRigOptions& rig, const Resolution& r);
 
+/// A dashpot D (δ/δ_ref)^q δ̇ (Hunt-Crossley's for q = p) is no linear D' δ̇ (issue 32, item 4's
+/// form mismatches). Its truth for a linear damping: the least-squares D' over the run's feet in
+/// contact at its sample times, D Σ (δ/δ_ref)^q δ̇² / Σ δ̇², from the truth's own contact states
+/// (D itself when q = 0).
+double linear_damping_of(const ct::Scenario& s);
+
 /// The true value of a reported parameter, if the scenario defines it, in hil's parameterisation.
 /// sensor_gain: hil's gains are relative to the reference component (the one K absorbs, without a
 /// gain entry); a friction component's gain fixed as not identifiable (collinear with μ and the

@@ -402,6 +402,36 @@ Drawn draw_filter(unsigned i) {
 
 TEST(OffTheSuite, AFirstOrderFiltersLagIsNamedAndCovered) { meet_the_rule("time_offset", "HIL_FILTER_DRAWS", draw_filter); }
 
+// Hunt-Crossley damping instead of a linear dashpot (issue 32, item 4's form mismatches). Rule
+// written and committed (2026-12-03) before any of these draws ran: the rule above with the cause
+// contact_damping, and:
+//  * Draw i: seed 32,900,000 + i, never used before; motion as draw_motion (i % 3); then D uniform
+//    in 2,000-6,000 N s/m at the trajectory's mean depth (δ_ref = d0) and the dashpot
+//    D (δ/δ_ref) δ̇: Hunt-Crossley's for the truth's linear spring (q = p = 1), no damping force
+//    at first touch, the most at the deepest point; friction on the total normal force; the
+//    suite's fine resolution.
+//  * The truth of damping_n_s_per_m is the least-squares linear dashpot over the run's feet in
+//    contact (truth_of, linear_damping_of); coverage is checked as above: where no linear dashpot
+//    is the truth, the interval must widen to hold the best one. HIL_HUNT_CROSSLEY_DRAWS=N: the
+//    full draw (i = 100..).
+Drawn draw_hunt_crossley(unsigned i) {
+  const unsigned seed = 32'900'000u + i;
+  Draws r(seed);
+  Drawn d = draw_motion(r, i, seed);
+  auto& law = d.scenario.law;
+  law.damping_n_s_per_m = r.uniform(2000.0, 6000.0);
+  law.delta_ref_m = d.scenario.trajectory.depth_m;
+  law.damping_exponent = 1.0;
+  law.friction_on_total_normal = true;
+  std::ostringstream o;
+  o << std::setprecision(4) << d.label << ", Hunt-Crossley damping " << law.damping_n_s_per_m << " N s/m at " << 1e6 * law.delta_ref_m
+    << " um (damping_n_s_per_m truth " << linear_damping_of(d.scenario) << ")";
+  d.label = o.str();
+  return d;
+}
+
+TEST(OffTheSuite, HuntCrossleyDampingIsNamedAndCovered) { meet_the_rule("contact_damping", "HIL_HUNT_CROSSLEY_DRAWS", draw_hunt_crossley); }
+
 INSTANTIATE_TEST_SUITE_P(Issue32, Families,
                          ::testing::Values(Effect::none, Effect::bias, Effect::gain, Effect::delay, Effect::viscous, Effect::damping,
                                            Effect::stiffness, Effect::geometric),

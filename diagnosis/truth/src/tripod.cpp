@@ -23,6 +23,7 @@ std::string law_problems(const ContactLaw& l) {
   if (!finite_positive(l.exponent)) o << "law.exponent must be > 0 (got " << l.exponent << "); ";
   if (!finite_positive(l.delta_ref_m)) o << "law.delta_ref_m must be > 0 (got " << l.delta_ref_m << "); ";
   if (!finite_non_negative(l.damping_n_s_per_m)) o << "law.damping_n_s_per_m must be >= 0 (got " << l.damping_n_s_per_m << "); ";
+  if (!finite_non_negative(l.damping_exponent)) o << "law.damping_exponent must be >= 0 (got " << l.damping_exponent << "); ";
   if (!finite_non_negative(l.mu)) o << "law.mu must be >= 0 (got " << l.mu << "); ";
   if (!finite_positive(l.slip_regularisation_m_per_s))
     o << "law.slip_regularisation_m_per_s must be > 0 (got " << l.slip_regularisation_m_per_s << "); ";
@@ -162,7 +163,8 @@ Vector6d wrench_unchecked(const Eigen::Isometry3d& T_wp, const Tripod& tripod, c
     c.penetration_rate_m_per_s = -n.dot(v);
     if (c.penetration_m > 0.0) {
       const double elastic = law.stiffness_n_per_m * law.delta_ref_m * std::pow(c.penetration_m / law.delta_ref_m, law.exponent);
-      c.normal_n = std::max(0.0, elastic + law.damping_n_s_per_m * c.penetration_rate_m_per_s);
+      const double dashpot = law.damping_exponent == 0.0 ? 1.0 : std::pow(c.penetration_m / law.delta_ref_m, law.damping_exponent);
+      c.normal_n = std::max(0.0, elastic + law.damping_n_s_per_m * dashpot * c.penetration_rate_m_per_s);
       c.in_contact = c.normal_n > 0.0;
       const double bound = law.friction_on_total_normal ? c.normal_n : (c.in_contact ? elastic : 0.0);
       const Vector3d u = v - n.dot(v) * n;

@@ -169,6 +169,26 @@ TEST(TripodLaw, DampingAddsToTheNormalForceAndFrictionFollowsTheChosenBound) {
   EXPECT_EQ(w.norm(), 0.0);
 }
 
+TEST(TripodLaw, HuntCrossleyDampingGrowsWithThePenetration) {
+  const Plate plate;
+  const Tripod tri = one_foot();
+  ContactLaw law = coulomb(0.3, 1e-7);
+  law.damping_n_s_per_m = 3000.0;
+  law.damping_exponent = 1.0;
+  law.delta_ref_m = 2e-4;
+  BodyState s = pressed(plate, 0.0, 0.0, 1e-4);  // half of δ_ref
+  s.v_world_m_per_s = {0.0, 0.0, -2e-3};
+  const double elastic = law.stiffness_n_per_m * 1e-4;
+  EXPECT_NEAR(plate_wrench(plate, tri, law, s)(2), -(elastic + 0.5 * 3000.0 * 2e-3), 1e-9);
+  // Deeper, the same rate: twice the dashpot's force per unit rate at twice the depth.
+  s = pressed(plate, 0.0, 0.0, 4e-4);
+  s.v_world_m_per_s = {0.0, 0.0, -2e-3};
+  EXPECT_NEAR(plate_wrench(plate, tri, law, s)(2), -(law.stiffness_n_per_m * 4e-4 + 2.0 * 3000.0 * 2e-3), 1e-9);
+  // q = 1.5: (δ/δ_ref)^1.5.
+  law.damping_exponent = 1.5;
+  EXPECT_NEAR(plate_wrench(plate, tri, law, s)(2), -(law.stiffness_n_per_m * 4e-4 + std::pow(2.0, 1.5) * 3000.0 * 2e-3), 1e-9);
+}
+
 TEST(TripodLaw, ViscousFrictionAndThePowerLaw) {
   const Plate plate;
   const Tripod tri = one_foot();
@@ -551,6 +571,7 @@ TEST(BadInput, EveryProblemIsNamed) {
       {"law.exponent", [](Scenario& x) { x.law.exponent = 0.0; }},
       {"law.delta_ref_m", [](Scenario& x) { x.law.delta_ref_m = -1e-4; }},
       {"law.damping_n_s_per_m", [](Scenario& x) { x.law.damping_n_s_per_m = -1.0; }},
+      {"law.damping_exponent", [](Scenario& x) { x.law.damping_exponent = -0.5; }},
       {"law.viscous_n_s_per_m", [](Scenario& x) { x.law.viscous_n_s_per_m = std::nan(""); }},
       {"tripod.feet_body_m must list", [](Scenario& x) { x.tripod.feet_body_m.clear(); }},
       {"tripod.feet_body_m[1]", [](Scenario& x) { x.tripod.feet_body_m[1].x() = std::nan(""); }},

@@ -10,7 +10,9 @@
 /// body (its feet at fixed points of B). Per foot i at p_i (W), with n the plate normal (W):
 ///   penetration   δ_i  = max(0, -n·(p_i - o_P))                        (m)
 ///   its rate      δ̇_i  = -n·v_i, v_i = v_B + ω_B × (p_i - o_B)          (m/s)
-///   normal force  N_i  = max(0, K δ_ref (δ_i/δ_ref)^p + D δ̇_i)  while δ_i > 0   (N)
+///   normal force  N_i  = max(0, K δ_ref (δ_i/δ_ref)^p + D (δ_i/δ_ref)^q δ̇_i)  while δ_i > 0   (N)
+///                 (q = 0: Kelvin-Voigt, a linear dashpot; q = p: Hunt-Crossley's damping, which
+///                 grows from nothing at first touch)
 ///   friction      F_i  = -μ(|u_i|) N'_i u_i / sqrt(|u_i|² + ε²) - c_v u_i,  u_i the tangential velocity,
 ///                 μ(s) = μ + (μ_rest - μ) exp(-(s / v_s)²) (Stribeck; μ alone without a speed v_s)
 ///                 N'_i = N_i (friction on the total normal force, Kelvin-Voigt / Hunt-Crossley)
@@ -55,7 +57,8 @@ struct ContactLaw {
   double stiffness_n_per_m = 2e5;             ///< K
   double exponent = 1.0;                      ///< p (1: linear)
   double delta_ref_m = 1e-4;                  ///< δ_ref of the power law
-  double damping_n_s_per_m = 0.0;             ///< D
+  double damping_n_s_per_m = 0.0;             ///< D (at δ = δ_ref when q != 0)
+  double damping_exponent = 0.0;              ///< q: 0 Kelvin-Voigt, p Hunt-Crossley
   bool friction_on_total_normal = true;       ///< N' = N (true) or the elastic part only (false)
   double mu = 0.3;                            ///< Coulomb coefficient
   double slip_regularisation_m_per_s = 1e-4;  ///< ε: below it friction grows linearly with speed
