@@ -457,6 +457,26 @@ std::vector<ModelFamily::ModelForm> ContactFamily::model_forms() const {
     out.push_back({"the wrench's lag a pure delay followed by a first-order low-pass filter, both fitted (time_offset_s their sum)",
                    std::move(m), true, from});
   }
+  if (has("contact_damping") && damping_depth_m_ == 0.0) {
+    // δ̄ = Σ δ δ̇² / Σ δ̇² over the run's contacts (design geometry, measured poses, the rates the
+    // columns use): then Σ D (δ/δ̄) δ̇² / Σ δ̇² = D, the form's D is its best linear dashpot.
+    double num = 0.0, den = 0.0;
+    for (std::size_t k = 0; k < d_.contacts.size(); ++k) {
+      cid::Kinematics k_rate = d_.kin[k];
+      k_rate.v_world_ee = d_.v_rate_world[k];
+      for (const auto& c : d_.contacts[k]) {
+        const double rate = cid::relative_velocity(d_.scene, k_rate, c.point).dot(c.normal);
+        num += c.delta * rate * rate;
+        den += rate * rate;
+      }
+    }
+    if (den > 0.0 && num > 0.0) {
+      auto m = std::make_unique<ContactFamily>(*this);
+      m->damping_depth_m_ = num / den;
+      out.push_back({"Hunt-Crossley's dashpot D (δ/δ̄) δ̇ instead of a linear one (δ̄ the run's rate-weighted mean interference)",
+                     std::move(m), true});
+    }
+  }
   return out;
 }
 
@@ -558,14 +578,15 @@ void ContactFamily::columns(const std::vector<cid::ContactPoint>& cs, const cid:
     // pushes nothing and does not pull, so it bears no friction either (issue 32: a damping column
     // D δ̇ wherever the contact exists predicted a pull there, and the fit lowered D).
     double normal = de;
+    const double dashpot = damping_depth_m_ > 0.0 ? c.delta / damping_depth_m_ : 1.0;  // the Hunt-Crossley form's δ / δ̄
     if (ch.damping_time_s != 0.0) {
-      normal += ch.damping_time_s * -cid::relative_velocity(d_.scene, k_rate, c.point).dot(c.normal);
+      normal += ch.damping_time_s * dashpot * -cid::relative_velocity(d_.scene, k_rate, c.point).dot(c.normal);
       if (normal <= 0.0) continue;
     }
     const Eigen::Vector3d pt = c.point + friction_lever_ * c.delta * c.normal;  // the tangential forces' point
     out.col(0) += plate_wrench_of(T, normal * c.normal, c.point);
     out.col(1) += plate_wrench_of(T, de * c.tangent, pt);
-    const ContactAt at{d_, c, k_rate, pt};
+    const ContactAt at{d_, c, k_rate, pt, dashpot};
     for (const auto& b : terms_) b.term->contact_columns(b.slots, at, out);
   }
 }

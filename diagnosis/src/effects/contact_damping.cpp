@@ -27,7 +27,8 @@ class Term : public ContactTerm {
   void contact_columns(const ContactSlots& s, const ContactAt& at, Eigen::Ref<Eigen::MatrixXd> rows) const override {
     const auto& c = at.contact;
     const double rate = -contact_id::relative_velocity(at.data.scene, at.rate_kinematics, c.point).dot(c.normal);
-    rows.col(s.linear) += plate_wrench_of(at.data.scene.T_world_fp, rate * c.tangent, at.friction_point);  // zero while sticking
+    rows.col(s.linear) += plate_wrench_of(at.data.scene.T_world_fp, at.damping_scale * rate * c.tangent,
+                                          at.friction_point);  // zero while sticking
   }
   /// τ_D's line as D = K τ_D (N s/m), its variance by the delta method from the joint covariance of
   /// K and τ_D. Fixed as not identifiable, the line keeps τ_D's name, so the report drops it.

@@ -50,6 +50,9 @@ struct ContactAt {
   const contact_id::ContactPoint& contact;
   const contact_id::Kinematics& rate_kinematics;  ///< the ee's kinematics, linear velocity the penetration-rate one
   const Eigen::Vector3d& friction_point;          ///< where the tangential forces act (world)
+  /// The dashpot's factor at this contact: δ / δ̄ in contact_damping's Hunt-Crossley form
+  /// (ContactFamily::model_forms), else 1.
+  double damping_scale = 1.0;
 };
 
 /// What an effect may use when it binds to a run.

@@ -212,11 +212,22 @@ class ContactFamily : public ModelFamily {
   /// (docs/diagnosis.md, "A filter's lag instead of a pure delay"). The form nests the model
   /// (τ_f = 0), so its refit fits at least as well; one that does not has failed and is rejected
   /// (ModelForm::decided_by_fit).
+  /// With contact_damping, a fourth: Hunt-Crossley's dashpot instead of a linear one, the damping
+  /// force D (δ/δ̄) δ̇ (and the friction's share likewise), no force at first touch and the most at
+  /// the deepest point. δ̄ is the run's interference weighted by the squared penetration rates,
+  /// Σ δ δ̇² / Σ δ̇² over its contacts, so that the form's D is the linear dashpot that matches
+  /// its damping force best on this run: the two forms report the same quantity. They differ where
+  /// the feet lift off (the linear dashpot's force is clipped there, Hunt-Crossley's vanishes):
+  /// a linear fit of a Hunt-Crossley contact read D 2-4 % high (docs/diagnosis.md, "Hunt-Crossley
+  /// damping"). The run often tells the two apart: a form that fits worse is rejected
+  /// (ModelForm::decided_by_fit).
   std::vector<ModelForm> model_forms() const override;
   /// κ: the tangential forces act at the centroid + κ δ e_n (0: the contact paper's model).
   double friction_lever() const { return friction_lever_; }
   /// Whether φ ends with kLagFilter, the time constant of a first-order filter after the delay.
   bool has_lag_filter() const { return lag_filter_; }
+  /// δ̄ of the Hunt-Crossley form (0: a linear dashpot, the family's own form).
+  double damping_depth_m() const { return damping_depth_m_; }
   static constexpr const char* kLagFilter = "time_offset_filter_s";
   const std::set<std::string>& extensions() const { return ext_; }
   /// The measured kinematics at time t (time_offset's pose at t - τ): windowed-sinc (Lanczos, 8
@@ -272,6 +283,7 @@ class ContactFamily : public ModelFamily {
   bool moves_contacts_ = false, needs_rates_ = false;
   double friction_lever_ = 0.0;
   bool lag_filter_ = false;
+  double damping_depth_m_ = 0.0;
 
   // Contacts recomputed for φ (docs/diagnosis.md, "Cost"). mindist on every pair of every sample is
   // what a design costs; most pairs are provably apart or unchanged, and are skipped:
