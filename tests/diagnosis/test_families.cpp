@@ -64,6 +64,11 @@
 // (mean z -0.42, se 0.15: the moves read the filter's lag short, now inside their intervals).
 // time_offset's own draw then (i = 600..649): 50 of 50 inside, z² 0.55, biased (mean z +0.31, se
 // 0.10; two-tone +0.58: the friction's lever, as in the first draw).
+// After contact_damping's Hunt-Crossley form the damping's draw i = 700..749 passes (47 of 49 inside,
+// mean z +0.09, z² 0.76). Hunt-Crossley damping (OffTheSuite below): i = 100..149 before the form 46
+// of 50 inside, biased (+0.49: two-tone runs whose feet lift off read D 2-5 % high); after it, i =
+// 200..249 49 of 49 inside and the exponent drawn 49 of 49, both still biased (+0.25, +0.24: the form
+// widens only) and too wide (z² 0.23, 0.21: the moves' folds spread 8-12 %).
 //
 // Label `blind`: minutes under sanitizers.
 #include <gtest/gtest.h>
