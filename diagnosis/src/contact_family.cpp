@@ -474,7 +474,10 @@ std::vector<ModelFamily::ModelForm> ContactFamily::model_forms() const {
       auto m = std::make_unique<ContactFamily>(*this);
       m->damping_depth_m_ = num / den;
       out.push_back({"Hunt-Crossley's dashpot D (δ/δ̄) δ̇ instead of a linear one (δ̄ the run's rate-weighted mean interference)",
-                     std::move(m), true});
+                     std::move(m),
+                     true,
+                     {},
+                     true});
     }
   }
   return out;

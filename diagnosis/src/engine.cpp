@@ -651,8 +651,14 @@ void model_form_intervals(Score& s, const std::vector<ModelFamily::ModelForm>& f
   if (forms.empty()) return;
   std::map<std::string, double> shift;
   const double variance = s.full.sigma2 * s.full.variance_inflation;
+  std::size_t taken = forms.size();
+  double margin = kFormRejection;  // the best-fitting form the run prefers by more than this is taken
   for (std::size_t i = 0; i < forms.size(); ++i) {
     const double excess = variance > 0 ? (fits[i].rss - s.full.rss) / variance : 0.0;
+    if (forms[i].taken_when_preferred && -excess > margin) {
+      margin = -excess;
+      taken = i;
+    }
     if (forms[i].decided_by_fit && !(excess <= kFormRejection)) {
       s.model_forms_rejected.push_back(fmt::format("{} (its weighted RSS {:.3g} long-run residual variances above the model's)",
                                                    forms[i].assumption, excess));
@@ -670,6 +676,12 @@ void model_form_intervals(Score& s, const std::vector<ModelFamily::ModelForm>& f
     if (r.std_asymptotic == 0.0) r.std_asymptotic = r.std;
     r.std = std::hypot(r.std, r.std_model_form);
   }
+  if (taken == forms.size()) return;
+  for (const auto& r : values_reported(*forms[taken].model, fits[taken], s.full))
+    for (auto& q : s.full.reported)
+      if (q.name == r.name && std::isfinite(r.value)) q.value = r.value;
+  s.model_form_taken = fmt::format("{} (its weighted RSS {:.3g} long-run residual variances below the model's)", forms[taken].assumption,
+                                   margin);
 }
 
 }  // namespace

@@ -468,6 +468,43 @@ TEST(Engine, AModelFormThatFitsBetterOnlyWidens) {
   }
 }
 
+TEST(Engine, AModelFormThatMayBeTakenGivesItsValuesWhereTheRunPrefersIt) {
+  // As above, the form flagged taken_when_preferred: where the data bend, its values are reported
+  // (the interval still widened by the shift to the model's); where they do not, the model's.
+  class Straight : public Line {
+   public:
+    explicit Straight(const Observations& obs) : Line(obs), o_(obs) {}
+    std::vector<ModelForm> model_forms() const override {
+      std::vector<ModelForm> out;
+      out.push_back({"bent", std::make_unique<BentLine>(o_, 0.3), true, {}, true});
+      return out;
+    }
+
+   private:
+    const Observations& o_;
+  };
+  std::vector<int> all(400);
+  std::iota(all.begin(), all.end(), 0);
+  for (const bool bends : {true, false}) {
+    const Observations o = line_data(7, bends ? 0.3 : 0.0);
+    const Score s = score(Straight(o), o);
+    const Fit straight = fit(Line(o), o, all), bent = fit(BentLine(o, 0.3), o, all);
+    if (bends) {
+      EXPECT_THAT(s.model_form_taken, HasSubstr("bent"));
+      EXPECT_THAT(s.model_form_taken, HasSubstr("long-run residual variances below"));
+    } else {
+      EXPECT_EQ(s.model_form_taken, "");  // the bend rejected: it fits far worse
+    }
+    for (const auto& r : s.full.reported) {
+      const Eigen::Index j = r.name == "a" ? 0 : 1;
+      EXPECT_NEAR(r.value, (bends ? bent : straight).theta(j), 1e-9) << r.name;
+      if (bends) {
+        EXPECT_NEAR(r.std_model_form, std::abs(bent.theta(j) - straight.theta(j)) / std::sqrt(3.0), 1e-6) << r.name;
+      }
+    }
+  }
+}
+
 TEST(Engine, AScreenAfterTheFullFitSkipsTheFolds) {
   const auto o = sine_data(1.23, 2.5, 0.4, 0.05, 2);
   SineFamily m(o);

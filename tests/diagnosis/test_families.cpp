@@ -35,6 +35,9 @@
 //  * After contact_damping's Hunt-Crossley form (rule added 2026-12-03, before these ran):
 //    HIL_FAMILY_FIRST=700, i = 700..749, never drawn before, the same rules, for contact_damping
 //    (that a linear dashpot's runs keep their intervals).
+//  * After the Hunt-Crossley form gives the values where the run prefers it (rule added
+//    2026-12-03, before these ran): HIL_FAMILY_FIRST=800, i = 800..849, never drawn before, the
+//    same rules, for contact_damping.
 //  * Per effect, of n draws, at most ceil(10 %) may fail each of:
 //     - named: the effect named first (clean: `none`);
 //     - single: no second cause.
@@ -427,6 +430,10 @@ TEST(OffTheSuite, AFirstOrderFiltersLagIsNamedAndCovered) { meet_the_rule("time_
 //  * After contact_damping's Hunt-Crossley form (rule added 2026-12-03, before these ran; the
 //    draw i = 100..149 failed on bias, mean z +0.49): HIL_FAMILY_FIRST=200, i = 200..249, never
 //    drawn before, the same rules.
+//  * After that form gives the values where the run prefers it (rule added 2026-12-03, before
+//    these ran; the draw i = 200..249 was covered but still biased, +0.25): HIL_FAMILY_FIRST=300,
+//    i = 300..349, never drawn before, the same rules; for the rule below, HIL_FAMILY_FIRST=200,
+//    i = 200..249.
 // A second rule, written with the one above's second draw and before either ran: the dashpot's
 // exponent drawn too, so that no form of the candidate is the truth's law.
 //  * Draw i: seed 33,000,000 + i, never used before; as above, then, after D, q uniform in
@@ -474,6 +481,7 @@ TEST(FamilySuite, ALinearDashpotReadsAHuntCrossleyContactHighOnlyWhereTheFeetLif
     ASSERT_NE(hc, nullptr);
     ASSERT_GT(hc->damping_depth_m(), 0.0);
     EXPECT_TRUE(forms.back().decided_by_fit);
+    EXPECT_TRUE(forms.back().taken_when_preferred);
     const Fit linear = fit(m, data.obs, all), form = fit(*forms.back().model, data.obs, all);
     auto D = [](const Fit& f) {
       for (const auto& q : f.reported)

@@ -153,6 +153,7 @@ void print_summary(std::ostream& out, const RunDiagnosis& r) {
            "     with the model forms' shifts added; PNR = |value - nominal| / asymptotic std)\n";
     for (const auto& f : ext.model_forms) out << "    model form covered: " << f << "\n";
     for (const auto& f : ext.model_forms_rejected) out << "    model form rejected by the run: " << f << "\n";
+    if (!ext.model_form_taken.empty()) out << "    values of the model form the run prefers: " << ext.model_form_taken << "\n";
     for (const auto& q : ext.full.reported)
       if (q.extension) out << fmt::format("    {:<28} {}  (PNR {:.1f})\n", q.name, fmt_value(q.value, q.std, q.unit), q.pnr());
     if (!ext.full.unidentifiable.empty())
@@ -264,6 +265,7 @@ nlohmann::json to_json(const RunDiagnosis& r) {
                    {"unidentifiable", unidentifiable_json(ext.full)},
                    {"model_forms", ext.model_forms},
                    {"model_forms_rejected", ext.model_forms_rejected},
+                   {"model_form_taken", ext.model_form_taken.empty() ? nlohmann::json() : nlohmann::json(ext.model_form_taken)},
                    {"residuals", res(d.extended_residuals)}};
   add_events(j["extended"]["parameters"], located_events(r, extended_set(r)));
   j["gain_percent"] = d.gain_percent;

@@ -220,7 +220,8 @@ class ContactFamily : public ModelFamily {
   /// the feet lift off (the linear dashpot's force is clipped there, Hunt-Crossley's vanishes):
   /// a linear fit of a Hunt-Crossley contact read D 2-4 % high (docs/diagnosis.md, "Hunt-Crossley
   /// damping"). The run often tells the two apart: a form that fits worse is rejected
-  /// (ModelForm::decided_by_fit).
+  /// (ModelForm::decided_by_fit), and one it prefers gives the values (taken_when_preferred):
+  /// widening alone left Hunt-Crossley runs' D 2-4 % high inside their intervals.
   std::vector<ModelForm> model_forms() const override;
   /// κ: the tangential forces act at the centroid + κ δ e_n (0: the contact paper's model).
   double friction_lever() const { return friction_lever_; }

@@ -139,9 +139,7 @@ class ModelFamily {
     /// The run can tell this form from the family's own (e.g. a filter's lag from a pure delay where
     /// the force steps): it widens the intervals only while its refit's weighted RSS exceeds the
     /// full fit's by at most kFormRejection long-run residual variances (σ² times the variance
-    /// inflation). It is never taken for the model's values where it fits better: a form's better
-    /// fit on a run whose model is wrong elsewhere too is no evidence for it (docs/diagnosis.md,
-    /// "Forms the run decides"). false: the run rarely decides it, always covered.
+    /// inflation). false: the run rarely decides it, always covered.
     bool decided_by_fit = false;
     /// The refit's starts instead of the form's own (ModelFamily::starts), given the model's optimum
     /// mapped to the form's parameters (itself always a start): where a parameter the form adds sits
@@ -149,6 +147,13 @@ class ModelFamily {
     /// to second order), a refit from the optimum stays there. The best of them, then its
     /// starts_near, then Levenberg-Marquardt. Empty function: the form's own starts.
     std::function<std::vector<Eigen::VectorXd>(const Eigen::VectorXd& optimum)> refit_from = {};
+    /// Where its refit's weighted RSS falls more than kFormRejection long-run residual variances
+    /// below the full fit's, the form's values are reported instead of the model's (the interval,
+    /// widened by the shift, still holds the model's reading). Off by default: a form's better fit
+    /// on a run whose model is wrong elsewhere too is no evidence for it (the delay's lag form was
+    /// preferred by hundreds of variances on pure delays; docs/diagnosis.md, "Forms the run
+    /// decides"). For a form the run's other misfits do not pull towards, shown on fresh draws.
+    bool taken_when_preferred = false;
   };
   virtual std::vector<ModelForm> model_forms() const { return {}; }
   /// What the family located from the data on every sample (its effects' Effect::locates_events). Default: none.
@@ -269,6 +274,8 @@ struct Score {
   /// The alternatives the run rejects (ModelForm::decided_by_fit), each with its excess RSS in
   /// long-run residual variances: they widen nothing.
   std::vector<std::string> model_forms_rejected;
+  /// The form whose values are reported (ModelForm::taken_when_preferred), with its RSS margin; empty: the model's own.
+  std::string model_form_taken;
   double seconds = 0.0;
 };
 
