@@ -2,7 +2,6 @@
 #include <hil/parallel/run_tasks.hpp>
 #include <hil/solver/levenberg_marquardt.hpp>
 
-#include <Eigen/Eigenvalues>
 #include <Eigen/QR>
 #include <Eigen/SVD>
 #include <algorithm>
@@ -284,7 +283,7 @@ std::vector<Unidentifiable> unidentifiable_columns(const Eigen::MatrixXd& J, con
 /// at their nominal value (0).
 Fit fit_with(const ModelFamily& m, const Observations& obs, const std::vector<int>& train, const FitOptions& o, DesignCache& cache,
              const Eigen::VectorXd* warm, bool statistics, const std::vector<bool>* fixed_in = nullptr, bool identify = false,
-             const std::vector<Eigen::VectorXd>* own_starts = nullptr, Eigen::MatrixXd* jacobian = nullptr) {
+             const std::vector<Eigen::VectorXd>* own_starts = nullptr) {
   if (train.empty()) throw std::runtime_error(m.name() + ": no samples to fit");
   const auto lin = m.linear();
   const auto nl = m.nonlinear();
@@ -457,7 +456,6 @@ Fit fit_with(const ModelFamily& m, const Observations& obs, const std::vector<in
       J = full_jacobian(ev, nl, cur.theta, phi, f.fixed);
     }
   }
-  if (jacobian) *jacobian = J;
   Eigen::VectorXd cs = J.colwise().norm().transpose();
   for (Eigen::Index j = 0; j < cs.size(); ++j)
     if (!(cs(j) > 0)) cs(j) = 1.0;
@@ -599,185 +597,27 @@ double t975(int dof) {
   return dof <= 20 ? q[dof - 1] : 1.96 + 2.4 / dof;
 }
 
-/// The same for fractional degrees of freedom (Satterthwaite's), linear between the whole ones.
-double t975(double dof) {
-  if (!(dof >= 1.0)) return t975(0);
-  const int lo = static_cast<int>(std::floor(dof));
-  const double t = dof - lo;
-  return t > 0 ? (1 - t) * t975(lo) + t * t975(lo + 1) : t975(lo);
-}
-
 /// Intervals that hold when the model is not exactly right or the residuals are not white: the
-/// spread of the folds' estimates measures what the asymptotic formula assumes away (misfit,
-/// autocorrelation beyond its lags, a cost with several minima). `about_full`: the folds' values are
-/// information-weighted (information_weighted) and var = Σ (x_i - x̂)² about the full fit's value x̂;
-/// otherwise plain (delete-a-block jackknife, var = (g-1)/g Σ (x_i - x̄)²). Both are the same where
-/// the blocks are equally informative, up to the centre. With g - 1 degrees of freedom ±1.96 std would cover too
-/// rarely, so it is scaled by t_{0.975, g-1} / 1.96. The reported std is the larger of the two; the
-/// PNR keeps the asymptotic one (Reported::pnr).
-void honest_intervals(Score& s, const std::map<std::string, std::vector<double>>& by_name, std::size_t folds, bool about_full,
-                      const std::map<std::string, double>& dof = {}) {
+/// spread of the folds' estimates (delete-a-block jackknife, g blocks: var = (g-1)/g Σ (x_i - x̄)²)
+/// measures what the asymptotic formula assumes away (misfit, autocorrelation beyond its lags,
+/// a multimodal cost). With g - 1 degrees of freedom its ±1.96 std would cover too rarely, so it
+/// is scaled by t_{0.975, g-1} / 1.96. The reported std is the larger of the two; the PNR keeps
+/// the asymptotic one (Reported::pnr).
+void honest_intervals(Score& s, const std::map<std::string, std::vector<double>>& by_name, std::size_t folds) {
   if (folds < 3) return;
   const double g = static_cast<double>(folds);
+  const double widen = t975(static_cast<int>(folds) - 1) / 1.96;
   for (auto& r : s.full.reported) {
-    const auto nu = dof.find(r.name);
-    const double widen = (nu != dof.end() ? t975(nu->second) : t975(static_cast<int>(folds) - 1)) / 1.96;
     const auto it = by_name.find(r.name);
     if (!r.fold_comparable || it == by_name.end() || it->second.size() != folds) continue;
     const Eigen::Map<const Eigen::VectorXd> v(it->second.data(), static_cast<Eigen::Index>(folds));
     if (!v.allFinite()) continue;
-    const double var = about_full ? (v.array() - r.value).square().sum() : (g - 1.0) / g * (v.array() - v.mean()).square().sum();
+    const double var = (g - 1.0) / g * (v.array() - v.mean()).square().sum();
     r.std_folds = widen * std::sqrt(var);
     r.std_asymptotic = r.std;
     r.std = std::max(r.std, r.std_folds);
   }
 }
-
-/// The folds' estimates information-weighted (the bias-reduced, "CR2" block-clustered sandwich of
-/// Bell and McCaffrey), with the degrees of freedom their spread has. Fold i's p_i = (θ, φ) becomes
-/// p̂ + S⁻¹ M_i^½ S (p_i - p̂): S = A^½, A = JᵀJ of the full fit at its optimum, M_i = S⁻¹ A_i S⁻¹,
-/// A_i the same without the samples the fold leaves out. For linear least squares
-/// A_i (p_i - p̂) = -J_bᵀ r_b (b the left-out rows), and this is the block's influence on the full
-/// estimate scaled by (I - H_bb)^-½: halfway (geometrically) between the infinitesimal jackknife's
-/// (I) and the plain jackknife's (I - H_bb)^-1, which divides by the fold's own information. Where
-/// one block alone informs a parameter (a run's only fast presses, a damping) the fold without it
-/// hardly determines it, and the plain jackknife's deviation swamped the interval (ACU 2a's
-/// damping: ± 1,594 N s/m for an error of 54). Where the blocks are equally informative (A_i = c A)
-/// it is the plain jackknife's √c (p_i - p̂). A fold on another minimum (a delay's plateau) still
-/// moves by its step, scaled by its share of the information.
-///
-/// With unequally informative blocks a spread of g of them has fewer than g - 1 degrees of freedom
-/// (a slope's information sits in the end blocks): per reported value x (gradient γ in p), block i
-/// adds E (x_i - x̂)² ∝ w_i = γᵀ A⁺ (A - A_i) A⁺ γ, and the spread's Satterthwaite degrees of
-/// freedom are ν = (g - 1)/g (Σ w_i)² / Σ w_i², g - 1 for equal blocks, ν ≥ 1.
-std::vector<Reported> values_reported(const ModelFamily& m, Fit f, const Fit& full);
-
-class BlockSandwich {
- public:
-  BlockSandwich(const Fit& full, const Eigen::MatrixXd& J, std::size_t samples) : full_(full), J_(J), samples_(samples) {
-    const Eigen::Index p = full.theta.size(), q = full.phi.size();
-    if (J.cols() != p + q || J.rows() != static_cast<Eigen::Index>(6 * samples)) return;
-    A_ = J.transpose() * J;
-    // On the parameters the full fit kept, in units of their columns' norms (conditioning).
-    for (Eigen::Index j = 0; j < p + q; ++j)
-      if (!full.is_fixed(j) && A_(j, j) > 0) free_.push_back(j);
-    const Eigen::Index f = static_cast<Eigen::Index>(free_.size());
-    if (f == 0) return;
-    scale_.resize(f);
-    for (Eigen::Index a = 0; a < f; ++a) scale_(a) = std::sqrt(A_(free_[static_cast<std::size_t>(a)], free_[static_cast<std::size_t>(a)]));
-    As_ = scaled(A_);
-    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> ea(As_);
-    const Eigen::VectorXd la = ea.eigenvalues();
-    const double floor = 1e-12 * std::max(la.maxCoeff(), 0.0);
-    Eigen::VectorXd sq(f), inv(f);
-    for (Eigen::Index a = 0; a < f; ++a) {
-      sq(a) = la(a) > floor ? std::sqrt(la(a)) : 0.0;
-      inv(a) = la(a) > floor ? 1.0 / std::sqrt(la(a)) : 0.0;
-    }
-    S_ = ea.eigenvectors() * sq.asDiagonal() * ea.eigenvectors().transpose();
-    S_inv_ = ea.eigenvectors() * inv.asDiagonal() * ea.eigenvectors().transpose();
-    valid_ = true;
-  }
-
-  /// Fold `fold` (fitted on `train`) information-weighted; nullopt where its parameters are not the
-  /// full fit's (a restricted model).
-  std::optional<Fit> moved(const Fit& fold, const std::vector<int>& train) {
-    const Eigen::Index p = full_.theta.size(), q = full_.phi.size();
-    if (!valid_ || fold.theta.size() != p || fold.phi.size() != q || fold.phi_names != full_.phi_names) return std::nullopt;
-    std::vector<bool> kept(samples_, false);
-    for (int k : train) kept[static_cast<std::size_t>(k)] = true;
-    Eigen::MatrixXd A_kept = A_;
-    for (std::size_t k = 0; k < samples_; ++k)
-      if (!kept[k]) {
-        const auto rows = J_.middleRows(static_cast<Eigen::Index>(6 * k), 6);
-        A_kept.noalias() -= rows.transpose() * rows;
-      }
-    const Eigen::MatrixXd Ks = scaled(A_kept);
-    const Eigen::Index f = static_cast<Eigen::Index>(free_.size());
-    Eigen::VectorXd dp(f);
-    for (Eigen::Index a = 0; a < f; ++a) {
-      const Eigen::Index i = free_[static_cast<std::size_t>(a)];
-      dp(a) = scale_(a) * (i < p ? fold.theta(i) - full_.theta(i) : fold.phi(i - p) - full_.phi(i - p));
-    }
-    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> em(S_inv_ * Ks * S_inv_);
-    const Eigen::VectorXd root = em.eigenvalues().cwiseMax(0.0).cwiseSqrt();
-    const Eigen::VectorXd d = S_inv_ * (em.eigenvectors() * root.asDiagonal() * em.eigenvectors().transpose()) * (S_ * dp);
-    if (!d.allFinite()) return std::nullopt;
-    const Eigen::MatrixXd A_pinv = S_inv_ * S_inv_;
-    removed_.push_back(A_pinv * (As_ - Ks) * A_pinv);
-    return at(d);
-  }
-
-  /// ν per reported value of `m` (the folds given to `moved` so far); absent: not computed.
-  std::map<std::string, double> dof(const ModelFamily& m) const {
-    std::map<std::string, double> out;
-    if (!valid_ || removed_.size() < 2) return out;
-    const Eigen::Index f = static_cast<Eigen::Index>(free_.size());
-    const auto base = values_of(m, Eigen::VectorXd::Zero(f));
-    std::map<std::string, Eigen::VectorXd> gradient;
-    for (Eigen::Index a = 0; a < f; ++a) {
-      // A step of a thousandth of the asymptotic std, about which the values are smooth.
-      const Eigen::Index i = free_[static_cast<std::size_t>(a)];
-      const double sd = std::sqrt(std::max(0.0, full_.cov(i, i)));
-      const double h = sd > 0 ? 1e-3 * sd * scale_(a) : 1e-6;
-      Eigen::VectorXd e = Eigen::VectorXd::Zero(f);
-      e(a) = h;
-      const auto up = values_of(m, e), down = values_of(m, -e);
-      for (const auto& [name, v] : base) {
-        const auto u = up.find(name), w = down.find(name);
-        if (u == up.end() || w == down.end()) continue;
-        auto& g = gradient.try_emplace(name, Eigen::VectorXd::Zero(f)).first->second;
-        g(a) = (u->second - w->second) / (2 * h);
-      }
-    }
-    const double g = static_cast<double>(removed_.size());
-    for (const auto& [name, grad] : gradient) {
-      if (!grad.allFinite()) continue;
-      double sum = 0.0, sum_sq = 0.0;
-      for (const auto& B : removed_) {
-        const double w = grad.dot(B * grad);
-        sum += w;
-        sum_sq += w * w;
-      }
-      if (sum > 0 && sum_sq > 0) out[name] = std::clamp((g - 1.0) / g * sum * sum / sum_sq, 1.0, g - 1.0);
-    }
-    return out;
-  }
-
- private:
-  Eigen::MatrixXd scaled(const Eigen::MatrixXd& M) const {
-    const Eigen::Index f = static_cast<Eigen::Index>(free_.size());
-    Eigen::MatrixXd out(f, f);
-    for (Eigen::Index a = 0; a < f; ++a)
-      for (Eigen::Index b = 0; b < f; ++b)
-        out(a, b) = M(free_[static_cast<std::size_t>(a)], free_[static_cast<std::size_t>(b)]) / (scale_(a) * scale_(b));
-    return out;
-  }
-  /// The full fit moved by d (scaled units, on the free parameters).
-  Fit at(const Eigen::VectorXd& d) const {
-    const Eigen::Index p = full_.theta.size();
-    Fit out = full_;
-    for (Eigen::Index a = 0; a < d.size(); ++a) {
-      const Eigen::Index i = free_[static_cast<std::size_t>(a)];
-      (i < p ? out.theta(i) : out.phi(i - p)) += d(a) / scale_(a);
-    }
-    return out;
-  }
-  std::map<std::string, double> values_of(const ModelFamily& m, const Eigen::VectorXd& d) const {
-    std::map<std::string, double> out;
-    for (const auto& r : values_reported(m, at(d), full_)) out[r.name] = r.value;
-    return out;
-  }
-
-  const Fit& full_;
-  const Eigen::MatrixXd& J_;
-  std::size_t samples_;
-  bool valid_ = false;
-  Eigen::MatrixXd A_, As_, S_, S_inv_;
-  std::vector<Eigen::Index> free_;
-  Eigen::VectorXd scale_;
-  std::vector<Eigen::MatrixXd> removed_;  ///< per fold, A⁺ (A - A_i) A⁺ (scaled)
-};
 
 /// The values `m` reports for a fit made without statistics (a fold's, a model form's): its
 /// covariance zero, its unidentifiable directions the full fit's. Only the values are meaningful.
@@ -857,8 +697,7 @@ Score score(const ModelFamily& m, const Observations& obs, const CvOptions& o, c
   const auto nl = m.nonlinear();
   std::optional<Eigen::VectorXd> from;
   if (extends) from = mapped(nl, extends->full.phi_names, extends->full.phi);
-  Eigen::MatrixXd J_full;  // for the folds' information weights
-  s.full = fit_with(m, obs, all, o.fit, cache, from ? &*from : nullptr, true, nullptr, false, nullptr, &J_full);
+  s.full = fit_with(m, obs, all, o.fit, cache, from ? &*from : nullptr, true);
   s.train_error = relative_error(obs, predict_with(cache.get(s.full.phi), s.full, n), all);
   const double rows = static_cast<double>(s.full.rows);
   const double rank = static_cast<double>(s.full.rank);
@@ -947,12 +786,7 @@ Score score(const ModelFamily& m, const Observations& obs, const CvOptions& o, c
     }
     tell();
   });
-  // The full fit's Jacobian without the columns it fixed: the folds' information weights.
-  for (Eigen::Index j = 0; j < J_full.cols(); ++j)
-    if (s.full.is_fixed(j)) J_full.col(j).setZero();
-  BlockSandwich sandwich(s.full, J_full, n);
-  std::map<std::string, std::vector<double>> by_name, by_name_weighted;
-  bool weighted = true;  // every plain-grid fold information-weighted
+  std::map<std::string, std::vector<double>> by_name;
   std::size_t folds_unshifted = 0;
   double pooled_sq = 0.0;
   std::size_t next = 0;
@@ -967,10 +801,6 @@ Score score(const ModelFamily& m, const Observations& obs, const CvOptions& o, c
       // The fold's estimates of what the full fit reports (derived quantities included): the
       // intervals' spread is that of the plain grid's folds (a shifted grid's overlap them).
       for (const auto& r : values_reported(fd.own ? *fd.own : m, fd.fit, s.full)) by_name[r.name].push_back(r.value);
-      const auto w = fd.own ? std::nullopt : sandwich.moved(fd.fit, fd.train);
-      weighted = weighted && w.has_value();
-      if (w)
-        for (const auto& r : values_reported(m, *w, s.full)) by_name_weighted[r.name].push_back(r.value);
       ++folds_unshifted;
     }
     const double e = relative_error(obs, held_out, all);
@@ -979,8 +809,7 @@ Score score(const ModelFamily& m, const Observations& obs, const CvOptions& o, c
     else s.cv_shifted.push_back(std::move(held_out));
   }
   s.cv_error = std::sqrt(pooled_sq / offsets);
-  if (weighted) honest_intervals(s, by_name_weighted, folds_unshifted, true, sandwich.dof(m));
-  else honest_intervals(s, by_name, folds_unshifted, false);
+  honest_intervals(s, by_name, folds_unshifted);
   model_form_intervals(s, forms, form_fits);
   s.full.invalid = m.check(s.full);
   s.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

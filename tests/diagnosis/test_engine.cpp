@@ -302,54 +302,6 @@ TEST(Engine, IntervalsCoverTheTruthUnderStronglyCorrelatedErrorsOverManySeeds) {
   EXPECT_LT(covered_a_asymptotic, 0.85 * seeds) << covered_a_asymptotic << " of " << seeds;
 }
 
-/// y_c = a + b u(t), u a pulse train inside one fifth of the run only (a run's only fast presses):
-/// one fold's training samples hardly inform b. The plain jackknife took that fold's estimate at
-/// face value and widened b's interval to about b itself; the information-weighted spread does not.
-class OneBlockInforms : public ModelFamily {
- public:
-  explicit OneBlockInforms(const Observations& o) : o_(o) {}
-  std::string name() const override { return "one_block"; }
-  std::vector<Param> linear() const override { return {{"a", "", 1, false}, {"b", "", 1, true}}; }
-  static double u(double t_s) { return t_s >= 1.7 && t_s < 2.3 ? std::sin(40.0 * t_s) : 0.0; }
-  void design(const Eigen::VectorXd&, Eigen::MatrixXd& A, FamilyData&) const override {
-    A.setZero(static_cast<Eigen::Index>(6 * o_.size()), 2);
-    for (std::size_t k = 0; k < o_.size(); ++k)
-      for (int c = 0; c < 6; ++c) {
-        A(static_cast<Eigen::Index>(6 * k) + c, 0) = 1.0;
-        A(static_cast<Eigen::Index>(6 * k) + c, 1) = u(o_.t_s[k]);
-      }
-  }
-
- private:
-  const Observations& o_;
-};
-
-TEST(Engine, AParameterOneBlockAloneInformsKeepsAnIntervalOfItsNoise) {
-  const int seeds = 40;
-  int covered = 0, narrow = 0;
-  for (int seed = 0; seed < seeds; ++seed) {
-    std::mt19937 rng(7000 + static_cast<unsigned>(seed));
-    std::normal_distribution<double> g(0, 1);
-    Observations o;
-    for (int k = 0; k < 400; ++k) o.t_s.push_back(0.01 * k);
-    o.y.resize(400, 6);
-    for (int k = 0; k < 400; ++k)
-      for (int c = 0; c < 6; ++c) o.y(k, c) = 1.0 + 0.2 * OneBlockInforms::u(o.t_s[static_cast<std::size_t>(k)]) + 0.01 * g(rng);
-    OneBlockInforms m(o);
-    const Score s = score(m, o);
-    const Reported* b = nullptr;
-    for (const auto& r : s.full.reported)
-      if (r.name == "b") b = &r;
-    ASSERT_NE(b, nullptr);
-    covered += std::abs(b->value - 0.2) <= 1.96 * b->std;
-    // The asymptotic std is about 0.01 / sqrt(6 * 60 / 2) = 7e-4; a spread of the fold that cannot
-    // see b (fixed at 0) would be about 0.2 itself.
-    narrow += b->std < 5.0 * b->std_asymptotic;
-  }
-  EXPECT_GE(covered, 0.85 * seeds) << covered << " of " << seeds;
-  EXPECT_GE(narrow, 0.9 * seeds) << narrow << " of " << seeds;
-}
-
 /// 400 samples at 100 Hz of 1 + 0.5 (x + bend x²), x = t - 2, on every component, with white noise
 /// of std 0.01 from `seed`.
 Observations line_data(unsigned seed, double bend = 0.0) {

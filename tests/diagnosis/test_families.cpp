@@ -38,10 +38,6 @@
 //  * After the Hunt-Crossley form gives the values where the run prefers it (rule added
 //    2026-12-03, before these ran): HIL_FAMILY_FIRST=800, i = 800..849, never drawn before, the
 //    same rules, for contact_damping.
-//  * After the folds' spread is information-weighted (CR2 with Satterthwaite's degrees of freedom,
-//    engine.cpp BlockSandwich; rule added 2026-12-03, before these ran): HIL_FAMILY_FIRST=900,
-//    i = 900..949, never drawn before, the same rules, for sensor_bias, sensor_gain,
-//    viscous_friction, geometric_offset, contact_damping, time_offset and nonlinear_stiffness.
 //  * Per effect, of n draws, at most ceil(10 %) may fail each of:
 //     - named: the effect named first (clean: `none`);
 //     - single: no second cause.
