@@ -38,6 +38,11 @@
 //  * After the Hunt-Crossley form gives the values where the run prefers it (rule added
 //    2026-12-03, before these ran): HIL_FAMILY_FIRST=800, i = 800..849, never drawn before, the
 //    same rules, for contact_damping.
+//  * With the folds' spread information-weighted (CR2 with Satterthwaite's degrees of freedom;
+//    rule committed in 395f5b2 before these ran, the engine change then reverted, kept on branch
+//    experiment/cr2-folds-spread): HIL_FAMILY_FIRST=900, i = 900..949, for sensor_bias,
+//    sensor_gain, viscous_friction, geometric_offset, contact_damping, time_offset and
+//    nonlinear_stiffness. Drawn: i = 900..949 is used; a later draw takes other indices.
 //  * Per effect, of n draws, at most ceil(10 %) may fail each of:
 //     - named: the effect named first (clean: `none`);
 //     - single: no second cause.
