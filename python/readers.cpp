@@ -211,6 +211,7 @@ py::dict devices_dict(const fmt_::DevicesSpec& dev) {
     }
     x["signals"] = signals;
     x["saturation_limits"] = array(fp.saturation_limits);
+    x["gain_tolerance"] = fp.gain_tolerance;
     d["force_plate"] = x;
   }
   if (dev.robot) {

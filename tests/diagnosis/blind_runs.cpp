@@ -19,7 +19,8 @@ ct::Scenario clean_scenario() {
 
 Diagnosed diagnose_scenario(const ct::Scenario& sc, const TripodRigOptions& rig, const Resolution& r) {
   const cid::Scene scene = tripod_scene(sc.plate, sc.tripod, rig);
-  const auto data = make_contact_data(scene, kStickBelow_m_per_s, to_measurements(ct::simulate(sc), {r.position_m, r.velocity_m_per_s}));
+  auto data = make_contact_data(scene, kStickBelow_m_per_s, to_measurements(ct::simulate(sc), {r.position_m, r.velocity_m_per_s}));
+  data.plate_gain_tolerance = rig.plate_gain_tolerance;
   const ModelFactory make = [&data](const std::set<std::string>& x) { return std::make_unique<ContactFamily>(data, x); };
   Diagnosed run{diagnose(make, contact_extensions(), data.obs, contact_context(data)), ""};
   const auto& d = run.d;

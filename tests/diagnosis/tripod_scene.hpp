@@ -40,6 +40,8 @@ struct TripodRigOptions {
   /// Prior std of the declared uncertainties (plate height, tilts about P x and y through o_P).
   double height_prior_std_m = 5e-5;
   double tilt_prior_std_rad = 2e-3;
+  /// The plate's declared calibration tolerance (force_plate.gain_tolerance of a rig file).
+  double plate_gain_tolerance = 0.15;
 };
 
 /// Names of the declared uncertainties, in Scene::uncertainties order.

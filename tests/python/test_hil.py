@@ -110,6 +110,7 @@ def test_read_rig():
     fp, robot_dev = rig["devices"]["force_plate"], rig["devices"]["robot"]
     assert fp["protocol"] == "ati_netcanoem" and fp["base_id"] == 0
     np.testing.assert_array_equal(fp["saturation_limits"], [660, 660, 1980, 60, 60, 60])
+    assert fp["gain_tolerance"] == 0.15
     assert robot_dev["port"] == 5020 and robot_dev["register_map"] == "ur"
 
 

@@ -2,6 +2,10 @@
 // the component with the largest measured signal: its gain is absorbed by K.
 #include <hil/diagnose/contact_family.hpp>
 
+#include <fmt/format.h>
+
+#include <cmath>
+
 namespace hil::diagnose {
 namespace {
 
@@ -30,6 +34,15 @@ class Term : public ContactTerm {
     }
   }
   bool derives_from_data() const override { return true; }
+  // A calibrated plate's components agree in scale to a few percent (ATI states 1-2 % of full
+  // scale per axis): a run that needs one component tens of percent off is explained by something
+  // else (friction that falls with speed reads as fx and fy scaled down against mz), or the plate
+  // is misconfigured, which the lab must fix, not the diagnosis absorb.
+  std::string check_line(const Reported& q) const override {
+    if (q.name.rfind("gain_", 0) != 0 || !(std::abs(q.value) - 2.0 * q.std > d_.plate_gain_tolerance)) return "";
+    return fmt::format("{} = {:.3f} ± {:.3f} is beyond the plate's calibration tolerance ± {:.2f} (force_plate.gain_tolerance)", q.name,
+                       q.value, q.std, d_.plate_gain_tolerance);
+  }
 
  private:
   const ContactData& d_;

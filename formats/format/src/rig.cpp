@@ -320,7 +320,8 @@ CanSignalSpec read_signal(const YNode& n) {
 
 ForcePlateDeviceSpec read_force_plate(const YNode& n) {
   n.only({"protocol", "interface", "base_id", "host", "port", "calibration_xml", "counts_per_force", "counts_per_torque", "force_unit",
-          "torque_unit", "serial_device", "baud", "slave", "allowed_writes", "rate_hz", "sensor_pose", "signals", "saturation_limits"});
+          "torque_unit", "serial_device", "baud", "slave", "allowed_writes", "rate_hz", "sensor_pose", "signals", "saturation_limits",
+          "gain_tolerance"});
   ForcePlateDeviceSpec d;
   d.protocol = n.str("protocol", d.protocol);
   // Rig files written before the board was named for what it is (the protocol is NETCANOEM's).
@@ -420,6 +421,10 @@ ForcePlateDeviceSpec read_force_plate(const YNode& n) {
   if (n.has("saturation_limits")) {
     d.saturation_limits = n.child("saturation_limits").nums();
     if (d.saturation_limits.size() != 6) n.child("saturation_limits").fail("expected 6 limits fx fy fz mx my mz");
+  }
+  if (n.has("gain_tolerance")) {
+    d.gain_tolerance = n.child("gain_tolerance").num_positive();
+    if (d.gain_tolerance >= 1.0) n.child("gain_tolerance").fail("a relative scale error, > 0 and < 1 (0.15 is 15 %)");
   }
   return d;
 }

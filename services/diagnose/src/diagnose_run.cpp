@@ -151,6 +151,7 @@ RunDiagnosis diagnose_run(const format::Run& full_run, const Options& o) {
       r.contact = std::make_unique<dg::ContactData>(dg::make_contact_data(scene, model.v_tm, models::measurements(run.samples),
                                                                           rig.model.contact->force_scale_n,
                                                                           rig.model.contact->moment_scale_nm, o.damping_rates));
+      if (rig.devices.force_plate) r.contact->plate_gain_tolerance = rig.devices.force_plate->gain_tolerance;
       r.context = dg::contact_context(*r.contact);
       for (const auto& u : r.contact->unfit_uncertainties) r.notes.push_back("geometric_offset does not fit " + u);
       r.notes.push_back("contact_damping takes its " + r.contact->rate_source());

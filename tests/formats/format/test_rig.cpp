@@ -126,6 +126,15 @@ TEST(Rig, NetCanOemDefaultsToTheFactoryBaseIdAndReadsItsEarlierName) {
   EXPECT_TRUE(fails_with(parse(kRig + "devices:\n  force_plate: {base_id: 0x80}\n"), 0, "devices.force_plate.base_id", "0..127"));
 }
 
+TEST(Rig, ThePlatesCalibrationToleranceDefaultsTo15PercentAndMustBeARelativeError) {
+  EXPECT_DOUBLE_EQ(parse_rig(kRig + "devices:\n  force_plate: {}\n", "rig.yaml").devices.force_plate->gain_tolerance, 0.15);
+  EXPECT_DOUBLE_EQ(parse_rig(kRig + "devices:\n  force_plate: {gain_tolerance: 0.05}\n", "rig.yaml").devices.force_plate->gain_tolerance,
+                   0.05);
+  EXPECT_TRUE(fails_with(parse(kRig + "devices:\n  force_plate: {gain_tolerance: 0}\n"), 0, "devices.force_plate.gain_tolerance", ""));
+  EXPECT_TRUE(fails_with(parse(kRig + "devices:\n  force_plate: {gain_tolerance: 15}\n"), 0, "devices.force_plate.gain_tolerance",
+                         "a relative scale error"));
+}
+
 TEST(Rig, Ft300SectionsAndTheirMistakes) {
   const std::string head = kRig + "devices:\n  force_plate:\n    protocol: robotiq_ft300\n";
   const auto ro = parse_rig(head + "    serial_device: /dev/ttyUSB0\n", "rig.yaml");

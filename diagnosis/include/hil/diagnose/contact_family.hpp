@@ -54,6 +54,9 @@ struct ContactData {
   /// whatever the number of samples (quantisation_bias_variance): step²/12 without dither, far less
   /// when the sensor's noise dithers the quantiser.
   Vector6d quantisation_bias_variance = Vector6d::Zero();
+  /// The plate's calibration tolerance (format::ForcePlateDeviceSpec::gain_tolerance): a
+  /// `sensor_gain` fit whose gain lies beyond it by more than two std is not physical.
+  double plate_gain_tolerance = 0.15;
   /// The ee's linear velocity (world) contact_damping takes its penetration rates from, per sample.
   /// Per axis either the reported twist or, where both streams are quantised and the reported
   /// twist's step is the coarser noise, the least-squares slope of the reported positions over

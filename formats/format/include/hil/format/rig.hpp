@@ -153,6 +153,10 @@ struct ForcePlateDeviceSpec {
   Pose T_fp_sensor;                       ///< sensor frame in the force-plate frame
   std::vector<CanSignalSpec> signals;     ///< declarative protocol only
   std::vector<double> saturation_limits;  ///< |fx..mz| limits (N, N·m); empty = unknown
+  /// The calibration's scale accuracy: the largest relative error of one component's scale against
+  /// another's that the lab trusts the plate to. The diagnosis does not explain a run by a
+  /// `sensor_gain` beyond it (docs/diagnosis.md, "A plate's calibration tolerance").
+  double gain_tolerance = 0.15;
 };
 
 /// One quantity read from the robot controller's registers.
