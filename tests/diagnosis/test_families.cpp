@@ -6,10 +6,10 @@
 //  * Effects: clean (no effect); sensor_bias, sensor_gain, time_offset, viscous_friction,
 //    contact_damping (friction on the total normal force, the truth's Kelvin-Voigt law),
 //    nonlinear_stiffness, geometric_offset (the rig declares the plate's height off).
-//  * Draw i of effect e: seed 32,600,000 + 1000 e + i, never used before. Its motion family is
-//    i % 3: two-tone sinusoidal normal motion on a circle (smooth sums of sinusoids), moves with
-//    stops (piecewise-linear), moves with stops on trapezoidal speed profiles (the ramp drawn in
-//    10-50 % of each move). Speeds, stops, amplitudes, yaw, ramp, the effect's magnitudes and the
+//  * Draw i of effect e: seed 32,600,000 + 1000 e + i (i >= 1000: 36,600,000 + 10,000 e + i), never
+//    used before. Its motion family is i % 3: two-tone sinusoidal normal motion on a circle (smooth
+//    sums of sinusoids), moves with stops (piecewise-linear), moves with stops on trapezoidal speed
+//    profiles (the ramp drawn in 10-50 % of each move). Speeds, stops, amplitudes, yaw, ramp, the effect's magnitudes and the
 //    noise all come from the seed (draw() below: the order of the draws is part of the rule).
 //  * Fine velocity resolution (2e-5 m/s): straight moves at the paper's 2e-4 m/s carry structure
 //    of their own (test_unexplained's QuantisedTwist).
@@ -152,7 +152,9 @@ Drawn draw_motion(Draws& r, unsigned i, unsigned seed) {
 }
 
 Drawn draw(Effect e, unsigned i) {
-  const unsigned seed = 32'600'000u + 1000u * static_cast<unsigned>(e) + i;
+  // i >= 1000 would reach the next effect's seeds under 1000 e + i: its own range there.
+  const unsigned k = static_cast<unsigned>(e);
+  const unsigned seed = i < 1000u ? 32'600'000u + 1000u * k + i : 36'600'000u + 10'000u * k + i;
   Draws r(seed);
   Drawn d = draw_motion(r, i, seed);
   ct::Scenario& sc = d.scenario;
