@@ -183,6 +183,70 @@ TEST(EffectRegistry, AnEffectInjectedAtZeroMagnitudeChangesNoSimulatedSample) {
 
 // --- fitted, reported, checked, named ------------------------------------------------------------
 
+// --- physical validity of the built-in candidates' fits --------------------------------------------
+
+/// The fit of `candidate` on a scene's run with `injected` hidden in it (hil's own injection:
+/// the check's own inputs, not a blind test).
+struct Checked {
+  ContactData data;
+  Fit fit;
+};
+Checked fitted(const std::string& scene, const std::string& candidate, const std::string& injected, const TruthValues& truth) {
+  const auto r = test::scene_run(scene);
+  Effects e;
+  inject_effect(injected, truth, e);
+  Checked c{make_contact_data(r.scene, r.model.v_tm, test::measure(r, e, 11), r.force_scale_n, r.moment_scale_nm), {}};
+  std::vector<int> all(c.data.obs.size());
+  for (std::size_t k = 0; k < all.size(); ++k) all[k] = static_cast<int>(k);
+  c.fit = fit(ContactFamily(c.data, {candidate}), c.data.obs, all);
+  return c;
+}
+Reported& line_of(Fit& f, const std::string& name) {
+  const auto it = std::find_if(f.reported.begin(), f.reported.end(), [&](const Reported& q) { return q.name == name; });
+  if (it == f.reported.end()) throw std::runtime_error("no line " + name);
+  return *it;
+}
+
+// The friction the damping adds lies between none and the Coulomb friction of the whole damping
+// force (0 <= damping_friction <= μ D): a fit of a real damping whose friction follows the total
+// normal force passes; the same fit with the friction column beyond μ D, or negative, is refused.
+TEST(EffectChecks, TheDampingsFrictionLiesBetweenNoneAndTheCoulombFrictionOfTheDampingForce) {
+  // ACU test 2a: its feet slide while they press (press_slide's do not, and its friction column is
+  // not identifiable).
+  auto c = fitted("acu_2a", "contact_damping", "contact_damping", {{"damping_n_s_per_m", 4000.0}, {"damping_friction", 1.0}});
+  const ContactFamily fam(c.data, {"contact_damping"});
+  Fit& f = c.fit;
+  const double mu = line_of(f, "mu").value, D = line_of(f, "damping_n_s_per_m").value;
+  EXPECT_NEAR(D, 4000.0, 400.0);
+  EXPECT_EQ(fam.check(f), "") << "df " << line_of(f, "damping_friction_n_s_per_m").value << ", mu D " << mu * D;
+  Reported& df = line_of(f, "damping_friction_n_s_per_m");
+  df.value = 3.0 * mu * D;
+  EXPECT_THAT(fam.check(f), HasSubstr("exceeds the Coulomb friction of the damping force"));
+  df.value = -10.0 * df.std - 1.0;
+  EXPECT_THAT(fam.check(f), HasSubstr("is negative"));
+  df.value = 0.0;  // friction on the elastic force only
+  EXPECT_EQ(fam.check(f), "");
+}
+
+// A gain beyond the plate's calibration tolerance (ContactData::plate_gain_tolerance) by more than
+// two std is not physical; within it, or with the tolerance declared wider, it is.
+TEST(EffectChecks, APlateGainBeyondItsCalibrationToleranceIsRefused) {
+  auto c = fitted("press_slide", "sensor_gain", "sensor_gain", {{"gain_fx", 0.05}});
+  Fit& f = c.fit;
+  EXPECT_EQ(ContactFamily(c.data, {"sensor_gain"}).check(f), "");
+  Reported* g = nullptr;
+  for (auto& q : f.reported)
+    if (q.name.rfind("gain_", 0) == 0 && !g) g = &q;
+  ASSERT_NE(g, nullptr);
+  g->value = -(0.15 + 2.0 * g->std + 0.01);
+  EXPECT_THAT(ContactFamily(c.data, {"sensor_gain"}).check(f), HasSubstr("beyond the plate's calibration tolerance ± 0.15"));
+  g->value = -(0.15 + 2.0 * g->std - 0.01);
+  EXPECT_EQ(ContactFamily(c.data, {"sensor_gain"}).check(f), "");
+  g->value = -0.4;
+  c.data.plate_gain_tolerance = 0.5;
+  EXPECT_EQ(ContactFamily(c.data, {"sensor_gain"}).check(f), "");
+}
+
 TEST(EffectRegistry, AToyEffectIsFittedReportedCheckedAndNamed) {
   const auto r = test::scene_run("press_slide");
   Effects e;

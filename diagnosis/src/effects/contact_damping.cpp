@@ -8,6 +8,8 @@
 // elastic force only) keeps the family separable.
 #include <hil/diagnose/contact_family.hpp>
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
 
@@ -44,6 +46,30 @@ class Term : public ContactTerm {
   }
   std::string check_line(const Reported& q) const override {
     return q.name == "damping_n_s_per_m" && q.value < -2.0 * q.std ? q.name + " = " + std::to_string(q.value) + " is negative" : "";
+  }
+  /// The friction the damping adds lies between none (friction on the elastic force only) and the
+  /// Coulomb friction of the whole damping force: 0 <= damping_friction <= μ D within two of the
+  /// reported std (the folds' spread and the twist levels' shift included; the std of the
+  /// difference bounded by the sum of the two, as their covariance across folds is not known). A fit
+  /// that uses the friction column with no damping force behind it (D ~ 0, damping_friction
+  /// thousands of N s/m) stands in for something else, e.g. a friction that falls with the sliding
+  /// speed (issue 32's Stribeck draws).
+  std::string check(const ContactSlots&, Eigen::Index, const Fit& f) const override {
+    const Reported *df = nullptr, *D = nullptr, *mu = nullptr;
+    for (const auto& q : f.reported) {
+      if (q.name == "damping_friction_n_s_per_m") df = &q;
+      if (q.name == "damping_n_s_per_m") D = &q;
+      if (q.name == "mu") mu = &q;
+    }
+    if (!df) return "";
+    if (df->value < -2.0 * df->std) return fmt::format("{} = {:.4g} ± {:.2g} is negative", df->name, df->value, df->std);
+    if (!D || !mu) return "";
+    const double mu_D = mu->value * D->value, mu_D_std = std::hypot(mu->value * D->std, D->value * mu->std);
+    if (df->value - mu_D > 2.0 * (df->std + mu_D_std))
+      return fmt::format("{} = {:.4g} ± {:.2g} exceeds the Coulomb friction of the damping force, μ D = {:.4g} ± {:.2g}: friction with "
+                         "no normal force behind it",
+                         df->name, df->value, df->std, mu_D, mu_D_std);
+    return "";
   }
 
  private:
