@@ -45,6 +45,11 @@
 //    nonlinear_stiffness. Drawn: i = 900..949 is used; a later draw takes other indices. Coverage
 //    held for all; the failures were the earlier draws' and the stiffness exponent's widths (mean
 //    z² 0.41), which the plain jackknife gives on the same draws too (docs/diagnosis.md).
+//  * With contact_damping's friction bound (0 <= damping_friction <= μ D, commit 0baf016; the same
+//    rules): HIL_FAMILY_FIRST=1000, i = 1000..1049 in the seeds' own range for i >= 1000, for
+//    contact_damping (named 47: the bound refused two real dampings, a delay named instead) and
+//    OffTheSuite's Hunt-Crossley damping. The bound was replaced (μ_D >= 0, and no friction without
+//    a damping force; the same rules) and drawn on i = 1050..1099 (docs/diagnosis.md).
 //  * Per effect, of n draws, at most ceil(10 %) may fail each of:
 //     - named: the effect named first (clean: `none`);
 //     - single: no second cause.

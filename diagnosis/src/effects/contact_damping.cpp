@@ -47,28 +47,25 @@ class Term : public ContactTerm {
   std::string check_line(const Reported& q) const override {
     return q.name == "damping_n_s_per_m" && q.value < -2.0 * q.std ? q.name + " = " + std::to_string(q.value) + " is negative" : "";
   }
-  /// The friction the damping adds lies between none (friction on the elastic force only) and the
-  /// Coulomb friction of the whole damping force: 0 <= damping_friction <= μ D within two of the
-  /// reported std (the folds' spread and the twist levels' shift included; the std of the
-  /// difference bounded by the sum of the two, as their covariance across folds is not known). A fit
-  /// that uses the friction column with no damping force behind it (D ~ 0, damping_friction
-  /// thousands of N s/m) stands in for something else, e.g. a friction that falls with the sliding
-  /// speed (issue 32's Stribeck draws).
+  /// The friction the damping adds is μ_D D with 0 <= μ_D: not negative beyond two std, and none
+  /// where there is no damping force (D within two std of 0) to carry it. A fit that uses the
+  /// friction column with no damping force behind it (D ~ 0, damping_friction thousands of N s/m)
+  /// stands in for something else, e.g. a friction that falls with the sliding speed (issue 32's
+  /// Stribeck draws). The tighter bound μ_D <= μ (the Coulomb friction of the damping force) was
+  /// tried and not kept: on damping runs of the independent truth, whose friction follows the total
+  /// normal force with one μ, the fit reads μ_D 3-4 % above μ (the model form; asymptotic std 1 %),
+  /// and the bound refused real dampings, which a delay then stood in for (docs/diagnosis.md).
   std::string check(const ContactSlots&, Eigen::Index, const Fit& f) const override {
-    const Reported *df = nullptr, *D = nullptr, *mu = nullptr;
+    const Reported *df = nullptr, *D = nullptr;
     for (const auto& q : f.reported) {
       if (q.name == "damping_friction_n_s_per_m") df = &q;
       if (q.name == "damping_n_s_per_m") D = &q;
-      if (q.name == "mu") mu = &q;
     }
     if (!df) return "";
     if (df->value < -2.0 * df->std) return fmt::format("{} = {:.4g} ± {:.2g} is negative", df->name, df->value, df->std);
-    if (!D || !mu) return "";
-    const double mu_D = mu->value * D->value, mu_D_std = std::hypot(mu->value * D->std, D->value * mu->std);
-    if (df->value - mu_D > 2.0 * (df->std + mu_D_std))
-      return fmt::format("{} = {:.4g} ± {:.2g} exceeds the Coulomb friction of the damping force, μ D = {:.4g} ± {:.2g}: friction with "
-                         "no normal force behind it",
-                         df->name, df->value, df->std, mu_D, mu_D_std);
+    if (D && df->value > 2.0 * df->std && std::abs(D->value) < 2.0 * D->std)
+      return fmt::format("{} = {:.4g} ± {:.2g} with no damping force to carry it (D = {:.4g} ± {:.2g})", df->name, df->value, df->std,
+                         D->value, D->std);
     return "";
   }
 
