@@ -233,7 +233,7 @@ TEST(EffectChecks, TheDampingsFrictionIsNotNegativeAndNeedsADampingForce) {
 }
 
 // A gain beyond the plate's calibration tolerance (ContactData::plate_gain_tolerance) by more than
-// two std is not physical; within it, or with the tolerance declared wider, it is.
+// two of its reported std is not physical; within it, or with the tolerance declared wider, it is.
 TEST(EffectChecks, APlateGainBeyondItsCalibrationToleranceIsRefused) {
   auto c = fitted("press_slide", "sensor_gain", "sensor_gain", {{"gain_fx", 0.05}});
   Fit& f = c.fit;
@@ -243,6 +243,11 @@ TEST(EffectChecks, APlateGainBeyondItsCalibrationToleranceIsRefused) {
     if (q.name.rfind("gain_", 0) == 0 && !g) g = &q;
   ASSERT_NE(g, nullptr);
   g->value = -(0.15 + 2.0 * g->std + 0.01);
+  // In the candidates' screen (no folds yet: std_folds 0) the bound is not checked; on the reported
+  // std, once the folds' spread is in it, it is.
+  ASSERT_EQ(g->std_folds, 0.0);
+  EXPECT_EQ(ContactFamily(c.data, {"sensor_gain"}).check(f), "");
+  g->std_folds = g->std;
   EXPECT_THAT(ContactFamily(c.data, {"sensor_gain"}).check(f), HasSubstr("beyond the plate's calibration tolerance ± 0.15"));
   g->value = -(0.15 + 2.0 * g->std - 0.01);
   EXPECT_EQ(ContactFamily(c.data, {"sensor_gain"}).check(f), "");
