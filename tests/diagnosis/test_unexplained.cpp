@@ -217,16 +217,21 @@ std::string judge(Hidden h, const Diagnosis& d) {
 
 class BlindDraws : public ::testing::TestWithParam<Hidden> {};
 
-// Stribeck friction first passed 1 of 8 CI draws (2026-11-28): on moves with stops the feet slide
-// fast along the sides (μ, in fx and fy) and slowly at the stops, where the yaw twists them (μ_rest,
-// in mz). sensor_gain's per-component gains, relative to mz, stood in for the friction's speed
-// dependence: gain_fx = gain_fy = -21 ... -40 %, held-out gain 65-80 %. Since 2026-12-04 a gain
-// beyond the plate's calibration tolerance (force_plate.gain_tolerance, 15 % by default; a
-// calibrated plate's components agree to a few percent) is not physical, so it is not named
-// (PlateCalibration below). The rule did not change; the full draw of the change ran on
-// i = 1000..1049 (HIL_UNEXPLAINED_FIRST=1000) of the seeds' own range for i >= 1000 (the first run
-// of it, on the old formula, drew other effects' seeds), docs/diagnosis.md.
-std::string known_failure(Hidden) { return ""; }
+// Known failure. Stribeck friction first passed 1 of 8 CI draws (2026-11-28): on moves with stops
+// the feet slide fast along the sides (μ, in fx and fy) and slowly at the stops, where the yaw
+// twists them (μ_rest, in mz). sensor_gain's per-component gains, relative to mz, stand in for the
+// friction's speed dependence: gain_fx = gain_fy = -21 ... -40 %, held-out gain 65-80 %. Since
+// 2026-12-04 a gain beyond the plate's calibration tolerance (force_plate.gain_tolerance, 15 %) by
+// two reported std is not physical. Checked in the candidates' screen (asymptotic std) it fixed
+// these draws (i = 1000..1049 and 1100..1149: 50 of 50) but refused a real gain (the CI gain draw
+// 32,602,004); checked on the reported std it does not refuse them: the folds' spread of the gains
+// is 0.3-0.5, as each fold re-derives its reference component (i = 1150..1199: 39 of 50 pass,
+// sensor_gain named in 11). The fold spread must compare gains against one reference first
+// (docs/diagnosis.md, "A plate's calibration tolerance").
+std::string known_failure(Hidden h) {
+  if (h == Hidden::stribeck) return "Stribeck friction on moves with stops is named sensor_gain (39 of 50 pass on i = 1150..1199)";
+  return "";
+}
 
 TEST_P(BlindDraws, MeetTheirRule) {
   const Hidden h = GetParam();
