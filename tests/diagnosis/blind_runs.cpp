@@ -66,26 +66,30 @@ double linear_damping_of(const ct::Scenario& s) {
 
 std::optional<double> truth_of(const std::string& name, const ct::Scenario& s, const Fit& f) {
   const char* comp[6] = {"fx", "fy", "fz", "mx", "my", "mz"};
-  auto index = [&](const std::string& n) {
-    for (int c = 0; c < 6; ++c)
-      if (n == std::string("gain_") + comp[c]) return c;
-    return -1;
+  // The gains neither reported nor fixed as unidentifiable are references: a gain is relative to its
+  // group's (fx, fy and mz carry the friction, fz, mx and my the normal force; sensor_gain's
+  // contact term has one in each), else to the other group's; a friction gain fixed as
+  // unidentifiable is its group's reference.
+  auto friction = [](int k) { return k == 0 || k == 1 || k == 5; };
+  auto fixed = [&](int c) {
+    for (const auto& u : f.unidentifiable)
+      if (u.name == std::string("gain_") + comp[c]) return true;
+    return false;
   };
-  int ref = -1;
-  for (int c = 0; c < 6; ++c) {
-    bool listed = false;
+  auto unlisted = [&](int c) {
+    bool listed = fixed(c);
     for (const auto& q : f.reported) listed = listed || q.name == std::string("gain_") + comp[c];
-    for (const auto& u : f.unidentifiable) listed = listed || u.name == std::string("gain_") + comp[c];
-    if (!listed) ref = c;
-  }
+    return !listed;
+  };
   for (int c = 0; c < 6; ++c) {
     if (name == std::string("bias_") + comp[c]) return s.sensor.bias(c);
-    if (name == std::string("gain_") + comp[c] && ref >= 0) {
-      // fx, fy and mz carry the friction: relative to the one of them fixed, if any.
-      auto friction = [](int k) { return k == 0 || k == 1 || k == 5; };
-      int r = ref;
-      for (const auto& u : f.unidentifiable)
-        if (friction(index(u.name)) && friction(c)) r = index(u.name);
+    if (name == std::string("gain_") + comp[c]) {
+      int r = -1;
+      for (int k = 0; k < 6; ++k)
+        if (k != c && unlisted(k) && (r < 0 || (friction(k) == friction(c) && friction(r) != friction(c)))) r = k;
+      if (r < 0) return std::nullopt;
+      for (int k = 0; k < 6; ++k)
+        if (k != c && fixed(k) && friction(k) && friction(c)) r = k;
       return (1.0 + s.sensor.gain(c)) / (1.0 + s.sensor.gain(r)) - 1.0;
     }
   }

@@ -1199,18 +1199,42 @@ TEST_P(ExactRecovery, OfTheInjectedParameter) {
   EXPECT_NEAR(f.reported[0].value, r.model.K, (eff == "time_offset" ? 1e-2 : 1e-6) * r.model.K);
 }
 
-INSTANTIATE_TEST_SUITE_P(Effects, ExactRecovery,
-                         ::testing::Values(Exact{"viscous_friction", "viscous_n_s_per_m", 3000.0, 1e-6},
-                                           Exact{"contact_damping", "damping_n_s_per_m", 4000.0, 1e-6},
-                                           // press_slide never slides while the penetration changes
-                                           Exact{"contact_damping", "damping_friction_n_s_per_m", 4000.0, 1e-6, "acu_2a"},
-                                           Exact{"sensor_bias", "bias_fx", 3.0, 1e-6}, Exact{"sensor_gain", "gain_fx", 0.1, 1e-6},
-                                           Exact{"nonlinear_stiffness", "stiffness_exponent", 1.4, 1e-6},
-                                           Exact{"geometric_offset", "block_top_z", 1.5e-4, 1e-4},
-                                           // the generator delays the 50 Hz wrench by interpolation,
-                                           // the family re-evaluates the contact at interpolated poses
-                                           Exact{"time_offset", "time_offset_s", 0.03, 0.1}),
-                         [](const auto& i) { return std::string(i.param.param); });
+INSTANTIATE_TEST_SUITE_P(
+    Effects, ExactRecovery,
+    ::testing::Values(Exact{"viscous_friction", "viscous_n_s_per_m", 3000.0, 1e-6},
+                      Exact{"contact_damping", "damping_n_s_per_m", 4000.0, 1e-6},
+                      // press_slide never slides while the penetration changes
+                      Exact{"contact_damping", "damping_friction_n_s_per_m", 4000.0, 1e-6, "acu_2a"},
+                      Exact{"sensor_bias", "bias_fx", 3.0,
+                            1e-6},  // fz and fx are the references (the largest signal of the normal and of the friction group)
+                      Exact{"sensor_gain", "gain_my", 0.1, 1e-6}, Exact{"nonlinear_stiffness", "stiffness_exponent", 1.4, 1e-6},
+                      Exact{"geometric_offset", "block_top_z", 1.5e-4, 1e-4},
+                      // the generator delays the 50 Hz wrench by interpolation,
+                      // the family re-evaluates the contact at interpolated poses
+                      Exact{"time_offset", "time_offset_s", 0.03, 0.1}),
+    [](const auto& i) { return std::string(i.param.param); });
+
+// sensor_gain's gains are relative to a reference in each group of the plate's components: the
+// one with the largest signal among fz, mx and my (the normal force's: K takes the common scale)
+// and among fx, fy and mz (the friction's: μK takes the common scale). A friction that is off by a
+// common factor, as one falling with speed reads, is then μ's, not a miscalibrated plate's.
+TEST(SensorGain, HasAReferenceInEachGroupOfThePlatesComponents) {
+  const std::vector<std::string> normal{"gain_fz", "gain_mx", "gain_my"}, friction{"gain_fx", "gain_fy", "gain_mz"};
+  for (const char* scene : {"press_slide", "acu_2a"}) {
+    const auto r = test::scene_run(scene);
+    const auto d = data_of(r, {});
+    std::vector<std::string> gains;
+    for (const auto& q : ContactFamily(d, {"sensor_gain"}).nonlinear())
+      if (q.name.rfind("gain_", 0) == 0) gains.push_back(q.name);
+    auto missing = [&](const std::vector<std::string>& group) {
+      return std::count_if(group.begin(), group.end(),
+                           [&](const std::string& g) { return std::find(gains.begin(), gains.end(), g) == gains.end(); });
+    };
+    EXPECT_EQ(gains.size(), 4u) << scene;
+    EXPECT_EQ(missing(normal), 1) << scene;
+    EXPECT_EQ(missing(friction), 1) << scene;
+  }
+}
 
 // time_offset's pose at t - τ (ContactFamily::kinematics_at): exact at the samples, a smooth
 // motion to 2e-8 m between them (a linear blend of the neighbours is 5e-6 m off on this one), and a

@@ -1,9 +1,18 @@
-// sensor_gain: γ_c per plate component but the reference, w_meas,c = (1 + γ_c) w_c. The reference is
-// the component with the largest measured signal: its gain is absorbed by K.
+// sensor_gain: γ_c per plate component but two references, w_meas,c = (1 + γ_c) w_c. The plate's
+// components fall in two groups: fz, mx and my carry the normal force (K), fx, fy and mz the
+// friction (μK). A common scale of all six is K's and μK's, a common scale of one group is μ's
+// (or K's) but for the normal force's tangential share and the moments of a friction acting above
+// the plate's origin (both small on a level plate): so each group has a reference (the
+// component with its largest measured signal), and the other gains are relative to their group's.
+// Fitted free, the friction group's common scale is a near-null direction the fits wander along to
+// the search bound (CI draw 32,602,004: fx, fy and mz at -0.48 to -0.5 for true relative gains
+// under 3 %, the folds split between that and the truth), and a friction that falls with speed
+// reads as it (Stribeck: fx and fy -0.19, mz -0.38).
 #include <hil/diagnose/contact_family.hpp>
 
 #include <fmt/format.h>
 
+#include <array>
 #include <cmath>
 
 namespace hil::diagnose {
@@ -12,23 +21,28 @@ namespace {
 class Term : public ContactTerm {
  public:
   Term(const ContactData& d, const std::vector<int>& samples) : d_(d) {
-    Eigen::Index ref = 0;
     hil::Vector6d energy = hil::Vector6d::Zero();
     for (int k : samples) energy += d.obs.y.row(k).transpose().cwiseProduct(d.obs.weight).cwiseAbs2();
-    energy.maxCoeff(&ref);
-    reference_ = static_cast<int>(ref);
+    auto largest = [&](const std::array<int, 3>& group) {
+      int best = group[0];
+      for (int c : group)
+        if (energy(c) > energy(best)) best = c;
+      return best;
+    };
+    references_ = {largest(kNormalGroup), largest(kFrictionGroup)};
   }
+  bool reference(int c) const { return c == references_[0] || c == references_[1]; }
   std::vector<Param> nonlinear() const override {
     std::vector<Param> p;
     for (int c = 0; c < 6; ++c)
-      if (c != reference_) p.push_back({"gain_" + d_.obs.component[static_cast<std::size_t>(c)], "", 0.01, true, -0.5, 0.5});
+      if (!reference(c)) p.push_back({"gain_" + d_.obs.component[static_cast<std::size_t>(c)], "", 0.01, true, -0.5, 0.5});
     return p;
   }
   void finish(const ContactSlots& s, const Eigen::VectorXd& phi, Eigen::MatrixXd& A) const override {
     const auto n = static_cast<Eigen::Index>(d_.obs.size());
     Eigen::Index g = s.nonlinear;
     for (int c = 0; c < 6; ++c) {
-      if (c == reference_) continue;
+      if (reference(c)) continue;
       const double scale = 1.0 + phi(g++);
       for (Eigen::Index k = 0; k < n; ++k) A.row(6 * k + c) *= scale;
     }
@@ -50,8 +64,9 @@ class Term : public ContactTerm {
   }
 
  private:
+  static constexpr std::array<int, 3> kNormalGroup{2, 3, 4}, kFrictionGroup{0, 1, 5};
   const ContactData& d_;
-  int reference_ = 2;
+  std::array<int, 2> references_{2, 0};
 };
 
 /// The plate reads (1 + γ_c) w_c per component.
