@@ -984,6 +984,16 @@ double max_min_eigenvalue(const Matrix6d& C, const std::vector<Matrix6d>& free_d
   return best;
 }
 
+std::vector<std::string> ContactFamily::notes() const {
+  std::vector<const Bound*> ordered;
+  for (const auto& b : terms_) ordered.push_back(&b);
+  std::stable_sort(ordered.begin(), ordered.end(), [](const Bound* a, const Bound* b) { return a->report_rank < b->report_rank; });
+  std::vector<std::string> out;
+  for (const Bound* b : ordered)
+    if (auto n = b->term->note(); !n.empty()) out.push_back(std::move(n));
+  return out;
+}
+
 std::string ContactFamily::check(const Fit& f) const {
   for (const auto& q : f.reported) {
     if (q.name == "K" && !(q.value > 0)) return "K = " + std::to_string(q.value) + " N/m is not positive";

@@ -109,6 +109,10 @@ class Diagnose(unittest.TestCase):
         self.assertIn("gain_fy", fixed)
         self.assertTrue(fixed["gain_fy"])
         self.assertNotIn("gain_fy", gain["parameters"])
+        # What its gains are relative to is said: fz (the block's friction loads my, so the friction's
+        # common scale is not μ's alone: one reference).
+        self.assertIn("sensor_gain's gains are relative to fz, the largest signal (their common scale is K's; the friction's "
+                      "common scale is seen apart from μ on this run)", d["notes"])
         with open(os.path.join(rep, "index.html")) as f:
             html = f.read()
         self.assertIn("<section id='verdict' class='verdict cause'>", html)  # the verdict first

@@ -1214,25 +1214,21 @@ INSTANTIATE_TEST_SUITE_P(
                       Exact{"time_offset", "time_offset_s", 0.03, 0.1}),
     [](const auto& i) { return std::string(i.param.param); });
 
-// sensor_gain's gains are relative to a reference in each group of the plate's components: the
-// one with the largest signal among fz, mx and my (the normal force's: K takes the common scale)
-// and among fx, fy and mz (the friction's: μK takes the common scale). A friction that is off by a
-// common factor, as one falling with speed reads, is then μ's, not a miscalibrated plate's.
-TEST(SensorGain, HasAReferenceInEachGroupOfThePlatesComponents) {
-  const std::vector<std::string> normal{"gain_fz", "gain_mx", "gain_my"}, friction{"gain_fx", "gain_fy", "gain_mz"};
+// sensor_gain's gains are relative to the component with the largest signal (its scale is K's).
+// Where the normal force loads fx (ACU 2a's V-guide) or the friction loads my (the press bench's
+// block, above the plate's origin), the friction's common scale is seen apart from μ: one
+// reference, and the note says so. (On a level plate each group has one: test_unexplained.cpp.)
+TEST(SensorGain, HasOneReferenceWhereTheNormalForceAndTheFrictionShareComponents) {
   for (const char* scene : {"press_slide", "acu_2a"}) {
     const auto r = test::scene_run(scene);
     const auto d = data_of(r, {});
+    const ContactFamily m(d, {"sensor_gain"});
     std::vector<std::string> gains;
-    for (const auto& q : ContactFamily(d, {"sensor_gain"}).nonlinear())
+    for (const auto& q : m.nonlinear())
       if (q.name.rfind("gain_", 0) == 0) gains.push_back(q.name);
-    auto missing = [&](const std::vector<std::string>& group) {
-      return std::count_if(group.begin(), group.end(),
-                           [&](const std::string& g) { return std::find(gains.begin(), gains.end(), g) == gains.end(); });
-    };
-    EXPECT_EQ(gains.size(), 4u) << scene;
-    EXPECT_EQ(missing(normal), 1) << scene;
-    EXPECT_EQ(missing(friction), 1) << scene;
+    EXPECT_EQ(gains, (std::vector<std::string>{"gain_fx", "gain_fy", "gain_mx", "gain_my", "gain_mz"})) << scene;
+    ASSERT_EQ(m.notes().size(), 1u) << scene;
+    EXPECT_THAT(m.notes()[0], HasSubstr("sensor_gain's gains are relative to fz, the largest signal")) << scene;
   }
 }
 

@@ -50,6 +50,9 @@
 //    contact_damping (named 47: the bound refused two real dampings, a delay named instead) and
 //    OffTheSuite's Hunt-Crossley damping. The bound was replaced (μ_D >= 0, and no friction without
 //    a damping force; the same rules) and drawn on i = 1050..1099 (docs/diagnosis.md).
+//  * With the plate's calibration tolerance on the reported std (92cf86c): i = 1000..1049 for
+//    sensor_gain; with sensor_gain's two references (31722a4; the same rules): i = 1100..1149 for
+//    sensor_gain (docs/diagnosis.md, "The plate's two groups of components").
 //  * Per effect, of n draws, at most ceil(10 %) may fail each of:
 //     - named: the effect named first (clean: `none`);
 //     - single: no second cause.

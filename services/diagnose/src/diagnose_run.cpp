@@ -155,6 +155,13 @@ RunDiagnosis diagnose_run(const format::Run& full_run, const Options& o) {
       r.context = dg::contact_context(*r.contact);
       for (const auto& u : r.contact->unfit_uncertainties) r.notes.push_back("geometric_offset does not fit " + u);
       r.notes.push_back("contact_damping takes its " + r.contact->rate_source());
+      // What the candidates' values are relative to on this run (a candidate the run cannot have
+      // says so in its verdict instead).
+      for (const auto& c : candidates) try {
+          for (auto& n : dg::ContactFamily(*r.contact, {c}).notes()) r.notes.push_back(std::move(n));
+        } catch (const std::runtime_error&) {
+          // not applicable to this run: its verdict says why
+        }
       const dg::ContactData* d = r.contact.get();
       make = [d](const std::set<std::string>& e) { return std::make_unique<dg::ContactFamily>(*d, e); };
     } else {

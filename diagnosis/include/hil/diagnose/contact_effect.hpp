@@ -134,6 +134,9 @@ class ContactTerm {
   }
   /// It derives choices from the data: a fold's family rebinds it on its training samples.
   virtual bool derives_from_data() const { return false; }
+  /// What a reader needs to read its values on this run (e.g. what sensor_gain's gains are relative
+  /// to), shown with the run's notes. Empty: nothing.
+  virtual std::string note() const { return ""; }
 };
 
 // ---------------------------------------------------------------------------------------------

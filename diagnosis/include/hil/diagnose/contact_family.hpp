@@ -199,7 +199,9 @@ class ContactFamily : public ModelFamily {
   /// K > 0, μ >= 0, c_v >= 0, D >= 0 (each within two standard deviations), p > 0, and a positive
   /// semi-definite compliance.
   std::string check(const Fit& f) const override;
-  /// With robot_compliance or sensor_gain: the family with its basis and reference chosen from `train`.
+  /// Its effects' notes on this run (ContactTerm::note), in the registry's order.
+  std::vector<std::string> notes() const;
+  /// With robot_compliance or sensor_gain: the family with its basis and references chosen from `train`.
   std::unique_ptr<ModelFamily> restricted(const std::vector<int>& train) const override;
   /// Where the friction acts is a model form the data rarely decide: hil's contact point is the
   /// centroid of the interference, a real contact's friction acts at its surface or, on a point
