@@ -53,6 +53,9 @@
 //  * With the plate's calibration tolerance on the reported std (92cf86c): i = 1000..1049 for
 //    sensor_gain; with sensor_gain's two references (31722a4; the same rules): i = 1100..1149 for
 //    sensor_gain (docs/diagnosis.md, "The plate's two groups of components").
+//  * With the friction's lever forms' values taken where the run prefers them (rule added
+//    2026-12-04, before these ran; the same rules): HIL_FAMILY_FIRST=1150, i = 1150..1199, never
+//    drawn before, for sensor_bias, geometric_offset, time_offset and sensor_gain.
 //  * Per effect, of n draws, at most ceil(10 %) may fail each of:
 //     - named: the effect named first (clean: `none`);
 //     - single: no second cause.
