@@ -30,6 +30,13 @@
 namespace hil::diagnose::test {
 namespace {
 
+/// The reported value named `name` (NaN if none).
+double value(const std::vector<Reported>& reported, const std::string& name) {
+  for (const auto& q : reported)
+    if (q.name == name) return q.value;
+  return std::numeric_limits<double>::quiet_NaN();
+}
+
 struct CleanCase {
   Motion motion;
   Resolution resolution;
@@ -341,12 +348,7 @@ TEST(PlateCalibration, OnALevelPlateTheFrictionsCommonScaleIsMus) {
     std::iota(every.begin(), every.end(), 0);
     const Fit f0 = fit(ContactFamily(plain, {}), plain.obs, every);
     const Fit f1 = fit(ContactFamily(d1, {"sensor_gain"}), d1.obs, every);
-    auto value = [](const Fit& f, const std::string& name) {
-      for (const auto& q : f.reported)
-        if (q.name == name) return q.value;
-      return std::numeric_limits<double>::quiet_NaN();
-    };
-    EXPECT_NEAR(value(f1, "mu") / value(f0, "mu"), 0.8, 0.02) << m->name;
+    EXPECT_NEAR(value(f1.reported, "mu") / value(f0.reported, "mu"), 0.8, 0.02) << m->name;
     for (const auto& q : f1.reported)
       if (q.name.rfind("gain_", 0) == 0) {
         EXPECT_NEAR(q.value, 0.0, 0.02) << m->name << " " << q.name;
@@ -377,11 +379,6 @@ TEST(PlateCalibration, APointFootsFrictionIsTakenAtItsTipWhereTheRunShowsIt) {
     std::vector<int> every(data.obs.size());
     std::iota(every.begin(), every.end(), 0);
     const Fit centroid = fit(family, data.obs, every);
-    auto value = [](const std::vector<Reported>& rs, const std::string& name) {
-      for (const auto& q : rs)
-        if (q.name == name) return q.value;
-      return std::numeric_limits<double>::quiet_NaN();
-    };
     for (const auto& [name, truth] : {std::pair{"bias_mx", 0.03}, std::pair{"bias_my", -0.02}}) {
       const double taken = value(s.full.reported, name) - truth, model = value(centroid.reported, name) - truth;
       // The tip's reading at least five times nearer the truth than the centroid's.
