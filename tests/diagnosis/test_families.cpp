@@ -56,6 +56,12 @@
 //  * With the friction's lever forms' values taken where the run prefers them (rule added
 //    2026-12-04, before these ran; the same rules): HIL_FAMILY_FIRST=1150, i = 1150..1199, never
 //    drawn before, for sensor_bias, geometric_offset, time_offset and sensor_gain.
+//  * The motion's centre drawn (rule added 2026-12-04, before these ran): from i = 1200 on, the
+//    centre of the circle or the moves' square is drawn uniform in ±1 mm on x and y, after every
+//    other draw of the index. Before, every moves draw stopped at the same points of the reported
+//    positions' 2 µm grid, so each draw's stops carried the same quantisation error (measured on
+//    plate_height, docs/diagnosis.md). HIL_FAMILY_FIRST=1200, i = 1200..1249, never drawn before,
+//    the same rules, for geometric_offset.
 //  * Per effect, of n draws, at most ceil(10 %) may fail each of:
 //     - named: the effect named first (clean: `none`);
 //     - single: no second cause.
@@ -203,6 +209,14 @@ Drawn draw(Effect e, unsigned i) {
       d.rig.declared_plate_height_m = r.sign() * r.uniform(1e-5, 3e-5);
       o << ", declared plate height " << 1e6 * d.rig.declared_plate_height_m << " um";
       break;
+  }
+  // From i = 1200 on, the motion's centre too, last (the draws before it keep their values): the
+  // moves' stops at the same points of the positions' 2 µm grid in every draw gave every draw the
+  // same quantisation error at its stops.
+  if (i >= 1200u) {
+    sc.trajectory.centre_x_m = r.uniform(-1e-3, 1e-3);
+    sc.trajectory.centre_y_m = r.uniform(-1e-3, 1e-3);
+    o << ", centre (" << 1e6 * sc.trajectory.centre_x_m << ", " << 1e6 * sc.trajectory.centre_y_m << ") um";
   }
   d.label = o.str();
   return d;
