@@ -211,9 +211,9 @@ Drawn draw(Effect e, unsigned i) {
       o << ", declared plate height " << 1e6 * d.rig.declared_plate_height_m << " um";
       break;
   }
-  // From i = 1200 on, the motion's centre too, last (the draws before it keep their values): the
-  // moves' stops at the same points of the positions' 2 µm grid in every draw gave every draw the
-  // same quantisation error at its stops.
+  // From i = 1200 on, the motion's centre too, last (the draws before it keep their values), so that
+  // no two draws share the reported positions' grid phase. Drawn for a lead on plate_height's bias
+  // (the moves' stops on the same grid points in every draw) that did not hold: docs/diagnosis.md.
   if (i >= 1200u) {
     sc.trajectory.centre_x_m = r.uniform(-1e-3, 1e-3);
     sc.trajectory.centre_y_m = r.uniform(-1e-3, 1e-3);
