@@ -488,6 +488,37 @@ std::vector<ModelFamily::ModelForm> ContactFamily::model_forms() const {
   return out;
 }
 
+std::vector<ModelFamily::ErrorInVariable> ContactFamily::errors_in_variables() const {
+  std::vector<ErrorInVariable> out;
+  if (lag_filter_) return out;  // a model form's refit: never scored on its own
+  const Eigen::VectorXd xd = d_.scene.design();
+  for (int a = 0; a < 3; ++a) {
+    const double step = d_.position_quantum_m(a);
+    if (!(step > 0)) continue;
+    const double sd = step / std::sqrt(12.0);
+    ErrorInVariable v{fmt::format("the reported ee position along world {} (quantised to {:.3g} um)", "xyz"[a], 1e6 * step), sd, {}, {}};
+    for (const double sign : {1.0, -1.0}) {
+      auto shifted = std::make_shared<ContactData>(d_);
+      cid::MindistWorkspace ws;
+      shifted->samples_in_contact = 0;
+      for (std::size_t k = 0; k < shifted->kin.size(); ++k) {
+        shifted->kin[k].T_world_ee.translation()(a) += sign * sd;
+        cid::mindist(shifted->scene, shifted->kin[k], xd, shifted->v_tm, shifted->contacts[k], ws);
+        if (!shifted->contacts[k].empty()) ++shifted->samples_in_contact;
+      }
+      // Its effects bound to the shifted data (a choice they derive from it is made anew, and a
+      // family whose parameters then differ gets no correction: errors_in_variables_bias).
+      std::unique_ptr<ContactFamily> m(new ContactFamily(*shifted, ext_, samples_, nullptr));
+      m->owned_ = std::move(shifted);
+      m->friction_lever_ = friction_lever_;
+      m->damping_depth_m_ = damping_depth_m_;
+      (sign > 0 ? v.plus : v.minus) = std::move(m);
+    }
+    out.push_back(std::move(v));
+  }
+  return out;
+}
+
 ContactFamily::ContactFamily(const ContactData& d, std::set<std::string> extensions, const std::vector<int>& samples)
     : ContactFamily(d, std::move(extensions), samples, nullptr) {}
 
@@ -501,7 +532,7 @@ ContactFamily::ContactFamily(const ContactData& d, std::vector<std::shared_ptr<c
 
 ContactFamily::ContactFamily(const ContactData& d, std::set<std::string> extensions, const std::vector<int>& samples,
                              std::shared_ptr<const PairTable> pairs)
-    : d_(d), ext_(std::move(extensions)), pairs_(std::move(pairs)) {
+    : d_(d), samples_(samples), ext_(std::move(extensions)), pairs_(std::move(pairs)) {
   std::vector<int> used = samples;
   if (used.empty()) {
     used.resize(d.obs.size());

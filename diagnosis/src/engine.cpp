@@ -213,6 +213,25 @@ Eigen::MatrixXd full_jacobian(Evaluator& ev, const std::vector<Param>& nl, const
   return J;
 }
 
+/// (JᵀJ)⁺ by the SVD of J with unit-norm columns (never the normal equations), singular values
+/// below 1e-9 of the largest dropped; `rank` counts those kept.
+Eigen::MatrixXd normal_pinv(const Eigen::MatrixXd& J, int& rank) {
+  Eigen::VectorXd cs = J.colwise().norm().transpose();
+  for (Eigen::Index j = 0; j < cs.size(); ++j)
+    if (!(cs(j) > 0)) cs(j) = 1.0;
+  Eigen::JacobiSVD<Eigen::MatrixXd> svd(J * cs.cwiseInverse().asDiagonal(), Eigen::ComputeThinV);
+  const Eigen::VectorXd sv = svd.singularValues();
+  const double tol = 1e-9 * (sv.size() ? sv(0) : 0.0);
+  rank = 0;
+  Eigen::MatrixXd inv = Eigen::MatrixXd::Zero(J.cols(), J.cols());
+  for (Eigen::Index i = 0; i < sv.size(); ++i)
+    if (sv(i) > tol) {
+      ++rank;
+      inv += svd.matrixV().col(i) * svd.matrixV().col(i).transpose() / (sv(i) * sv(i));
+    }
+  return cs.cwiseInverse().asDiagonal() * inv * cs.cwiseInverse().asDiagonal();
+}
+
 /// Identifiability before (and after) estimation: the columns of J taken in order (nominal
 /// parameters first, then the extension's), each kept when its unit-norm column lies farther than
 /// `sine` from the span of those kept before it (Gram-Schmidt with reorthogonalisation: a
@@ -456,21 +475,9 @@ Fit fit_with(const ModelFamily& m, const Observations& obs, const std::vector<in
       J = full_jacobian(ev, nl, cur.theta, phi, f.fixed);
     }
   }
-  Eigen::VectorXd cs = J.colwise().norm().transpose();
-  for (Eigen::Index j = 0; j < cs.size(); ++j)
-    if (!(cs(j) > 0)) cs(j) = 1.0;
-  Eigen::JacobiSVD<Eigen::MatrixXd> svd(J * cs.cwiseInverse().asDiagonal(), Eigen::ComputeThinV);
-  const Eigen::VectorXd sv = svd.singularValues();
-  const double tol = 1e-9 * (sv.size() ? sv(0) : 0.0);
-  f.rank = 0;
-  Eigen::MatrixXd inv = Eigen::MatrixXd::Zero(p + q, p + q);
-  for (Eigen::Index i = 0; i < sv.size(); ++i)
-    if (sv(i) > tol) {
-      ++f.rank;
-      inv += svd.matrixV().col(i) * svd.matrixV().col(i).transpose() / (sv(i) * sv(i));
-    }
+  const Eigen::MatrixXd inv = normal_pinv(J, f.rank);
   f.sigma2 = f.rows > f.rank ? f.rss / static_cast<double>(f.rows - f.rank) : 0.0;
-  f.cov = f.sigma2 * (cs.cwiseInverse().asDiagonal() * inv * cs.cwiseInverse().asDiagonal());
+  f.cov = f.sigma2 * inv;
   // Residuals of neighbouring samples are correlated (unmodelled structure, filtering): inflate the
   // covariance by the long-run variance factor 1 + 2 Σ w_l ρ_l (Bartlett weights, per component,
   // averaged by residual variance) so that intervals do not claim the precision of white noise.
@@ -517,6 +524,53 @@ Eigen::MatrixXd predict(const ModelFamily& m, const Fit& f, std::size_t samples)
   Eigen::MatrixXd A;
   m.design(f.phi, A);
   return predict_with(A, f, samples);
+}
+
+Eigen::VectorXd errors_in_variables_bias(const ModelFamily& m, const Observations& obs, const Fit& f, const std::vector<int>& train,
+                                         int threads) {
+  const Eigen::Index p = f.theta.size(), q = f.phi.size();
+  Eigen::VectorXd bias = Eigen::VectorXd::Zero(p + q);
+  const auto vars = m.errors_in_variables();
+  if (vars.empty() || train.empty()) return bias;
+  const auto lin = m.linear();
+  const auto nl = m.nonlinear();
+  const auto same_parameters = [&](const ModelFamily& o) {
+    const auto a = o.linear(), b = o.nonlinear();
+    if (a.size() != lin.size() || b.size() != nl.size()) return false;
+    for (std::size_t j = 0; j < a.size(); ++j)
+      if (a[j].name != lin[j].name) return false;
+    for (std::size_t j = 0; j < b.size(); ++j)
+      if (b[j].name != nl[j].name) return false;
+    return true;
+  };
+  std::vector<bool> fixed = f.fixed;
+  fixed.resize(static_cast<std::size_t>(p + q), false);
+  // The families: the fitted one (index 0), then each variable's + and - shift.
+  std::vector<const ModelFamily*> family{&m};
+  for (const auto& v : vars) {
+    if (!v.plus || !v.minus || !same_parameters(*v.plus) || !same_parameters(*v.minus) || !(v.std > 0)) return bias;
+    family.push_back(v.plus.get());
+    family.push_back(v.minus.get());
+  }
+  // G = Jᵀ r of each family at the fit's (θ, φ), and the fitted family's J.
+  std::vector<Eigen::VectorXd> g(family.size());
+  Eigen::MatrixXd J0;
+  parallel::run_tasks(family.size(), parallel::worker_count(family.size(), threads), [&](std::size_t i, std::size_t) {
+    DesignCache cache(*family[i], obs.size());
+    Evaluator ev(cache, obs, train);
+    ev.fixed_theta.assign(fixed.begin(), fixed.begin() + p);
+    Eigen::MatrixXd J = full_jacobian(ev, nl, f.theta, f.phi, fixed);
+    const Eigen::VectorXd r = ev.b() - J.leftCols(p) * f.theta;
+    g[i] = J.transpose() * r;
+    if (i == 0) J0 = std::move(J);
+  });
+  Eigen::VectorXd curvature = Eigen::VectorXd::Zero(p + q);  // ½ Σ_v σ_v² ∂²G/∂x_v²
+  for (std::size_t v = 0; v < vars.size(); ++v) curvature += 0.5 * (g[1 + 2 * v] + g[2 + 2 * v] - 2.0 * g[0]);
+  int rank = 0;
+  bias = normal_pinv(J0, rank) * curvature;
+  for (Eigen::Index j = 0; j < p + q; ++j)
+    if (fixed[static_cast<std::size_t>(j)]) bias(j) = 0.0;
+  return bias;
 }
 
 double relative_error(const Observations& obs, const Eigen::MatrixXd& prediction, const std::vector<int>& samples) {
@@ -684,6 +738,30 @@ void model_form_intervals(Score& s, const std::vector<ModelFamily::ModelForm>& f
                                    margin);
 }
 
+/// The reported values corrected for the errors in the family's variables (errors_in_variables_bias):
+/// θ and φ stay the least-squares optimum (the predictions and residuals are its); each reported
+/// value moves by what the corrected (θ, φ) change in it, a model form's taken values too.
+void correct_errors_in_variables(Score& s, const ModelFamily& m, const Observations& obs, const std::vector<int>& all, int threads) {
+  const auto vars = m.errors_in_variables();
+  if (vars.empty()) return;
+  const Eigen::VectorXd bias = errors_in_variables_bias(m, obs, s.full, all, threads);
+  if (!bias.allFinite() || bias.isZero(0.0)) return;
+  Fit corrected = s.full;
+  corrected.theta -= bias.head(s.full.theta.size());
+  corrected.phi -= bias.tail(s.full.phi.size());
+  const auto before = values_reported(m, s.full, s.full);
+  const auto after = values_reported(m, corrected, s.full);
+  for (std::size_t i = 0; i < before.size() && i < after.size(); ++i)
+    for (auto& r : s.full.reported)
+      if (r.name == before[i].name && after[i].name == r.name) {
+        const double d = after[i].value - before[i].value;
+        if (!std::isfinite(d)) continue;
+        r.value += d;
+        r.errors_in_variables = d;
+      }
+  for (const auto& v : vars) s.errors_in_variables.push_back(fmt::format("{} (error std {:.3g})", v.variable, v.std));
+}
+
 }  // namespace
 
 Score score(const ModelFamily& m, const Observations& obs, const CvOptions& o, const Score* extends) {
@@ -811,6 +889,7 @@ Score score(const ModelFamily& m, const Observations& obs, const CvOptions& o, c
   s.cv_error = std::sqrt(pooled_sq / offsets);
   honest_intervals(s, by_name, folds_unshifted);
   model_form_intervals(s, forms, form_fits);
+  if (o.errors_in_variables) correct_errors_in_variables(s, m, obs, all, o.threads);
   s.full.invalid = m.check(s.full);
   s.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return s;

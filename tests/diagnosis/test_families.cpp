@@ -63,6 +63,11 @@
 //    plate_height, docs/diagnosis.md). HIL_FAMILY_FIRST=1200, i = 1200..1249, never drawn before,
 //    the same rules, for geometric_offset. Drawn: plate_height still biased (+0.42, se 0.115; on
 //    the two-tone draws, which never stop, too): the stops were not the cause (docs/diagnosis.md).
+//  * With the reported values corrected for the reported positions' errors in the variables
+//    (ContactFamily::errors_in_variables; rule added 2026-12-04, before these ran; the same rules):
+//    HIL_FAMILY_FIRST=1250, i = 1250..1299, never drawn before, for geometric_offset (plate_height's
+//    bias, which the correction is for), and sensor_bias, nonlinear_stiffness and contact_damping
+//    (that it breaks nothing where the parameters are not the plate's geometry).
 //  * Per effect, of n draws, at most ceil(10 %) may fail each of:
 //     - named: the effect named first (clean: `none`);
 //     - single: no second cause.

@@ -44,6 +44,7 @@ nlohmann::json params_json(const dg::Fit& f, bool extension_only) {
                  {"std_asymptotic", q.std_asymptotic > 0 ? q.std_asymptotic : q.std},
                  {"std_folds", q.std_folds},
                  {"std_model_form", q.std_model_form},
+                 {"errors_in_variables", q.errors_in_variables},
                  {"unit", q.unit},
                  {"pnr", q.pnr()},
                  {"extension", q.extension}};
@@ -154,6 +155,7 @@ void print_summary(std::ostream& out, const RunDiagnosis& r) {
     for (const auto& f : ext.model_forms) out << "    model form covered: " << f << "\n";
     for (const auto& f : ext.model_forms_rejected) out << "    model form rejected by the run: " << f << "\n";
     if (!ext.model_form_taken.empty()) out << "    values of the model form the run prefers: " << ext.model_form_taken << "\n";
+    for (const auto& v : ext.errors_in_variables) out << "    values corrected for the errors in: " << v << "\n";
     for (const auto& q : ext.full.reported)
       if (q.extension) out << fmt::format("    {:<28} {}  (PNR {:.1f})\n", q.name, fmt_value(q.value, q.std, q.unit), q.pnr());
     if (!ext.full.unidentifiable.empty())
@@ -266,6 +268,7 @@ nlohmann::json to_json(const RunDiagnosis& r) {
                    {"model_forms", ext.model_forms},
                    {"model_forms_rejected", ext.model_forms_rejected},
                    {"model_form_taken", ext.model_form_taken.empty() ? nlohmann::json() : nlohmann::json(ext.model_form_taken)},
+                   {"errors_in_variables", ext.errors_in_variables},
                    {"residuals", res(d.extended_residuals)}};
   add_events(j["extended"]["parameters"], located_events(r, extended_set(r)));
   j["gain_percent"] = d.gain_percent;

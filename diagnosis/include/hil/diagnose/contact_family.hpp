@@ -228,6 +228,12 @@ class ContactFamily : public ModelFamily {
   /// (ModelForm::decided_by_fit), and one it prefers gives the values (taken_when_preferred):
   /// widening alone left Hunt-Crossley runs' D 2-4 % high inside their intervals.
   std::vector<ModelForm> model_forms() const override;
+  /// The reported ee positions, per world axis whose quantum the run shows (ContactData::
+  /// position_quantum_m): an error uniform over the step, std step / √12. The interference is
+  /// the plate's height less the ee's, so that error attenuates K and moves the plate's height
+  /// (by mean δ var(e) / var(δ): +0.4 std over the family suite at 2 µm, +1.3 at 8 µm;
+  /// docs/diagnosis.md, "Errors in the variables"). The orientation and the twist are not included.
+  std::vector<ErrorInVariable> errors_in_variables() const override;
   /// κ: the tangential forces act at the centroid + κ δ e_n (0: the contact paper's model).
   double friction_lever() const { return friction_lever_; }
   /// Whether φ ends with kLagFilter, the time constant of a first-order filter after the delay.
@@ -280,6 +286,9 @@ class ContactFamily : public ModelFamily {
   Eigen::Vector3d rate_velocity_at(const SincWeights& w) const;
   cid::Kinematics kinematics_at(const SincWeights& w) const;
   const ContactData& d_;
+  /// The data d_ refers to when the family made it itself (errors_in_variables' shifted poses).
+  std::shared_ptr<const ContactData> owned_;
+  std::vector<int> samples_;  ///< the samples its data-derived choices come from (empty: all)
   std::set<std::string> ext_;
   std::vector<Param> linear_, nonlinear_;
   /// The effects in their parameters' layout order (ContactEffect::layout_order): designs, reports

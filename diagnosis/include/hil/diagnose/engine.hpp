@@ -51,6 +51,9 @@ struct Reported {
   /// the family's alternative assumptions (ModelFamily::model_forms), taken as uniform over ± that
   /// shift (shift / √3). `std` includes it in quadrature; the PNR does not.
   double std_model_form = 0.0;
+  /// The correction for errors in the variables already in `value` (ModelFamily::errors_in_variables):
+  /// value minus the least-squares estimate's (0: none). The std is the least-squares estimate's.
+  double errors_in_variables = 0.0;
   /// false: the value's meaning depends on data-derived choices a fold makes anew (e.g. the
   /// coordinates of a compliance basis chosen from its samples), so the folds cannot measure its spread.
   bool fold_comparable = true;
@@ -156,6 +159,19 @@ class ModelFamily {
     bool taken_when_preferred = false;
   };
   virtual std::vector<ModelForm> model_forms() const { return {}; }
+  /// A regressor the family takes from a measurement whose error has a known variance (errors in
+  /// the variables: e.g. a pose quantised to a known step, whose error is uniform over the step):
+  /// the same family with that measurement shifted by + and - the error's std on every sample.
+  /// Least squares reads such an error as part of the signal and biases the fit to second order in
+  /// the std (a slope attenuated by var(error) / var(regressor)); score() removes that bias
+  /// (errors_in_variables_bias). The shifted families must have the family's parameters.
+  struct ErrorInVariable {
+    std::string variable;  ///< what is measured and how it errs, for the report
+    double std = 0.0;      ///< the error's standard deviation, in the variable's unit
+    std::unique_ptr<ModelFamily> plus, minus;
+  };
+  /// Default: none (the regressors are exact).
+  virtual std::vector<ErrorInVariable> errors_in_variables() const { return {}; }
   /// What the family located from the data on every sample (its effects' Effect::locates_events). Default: none.
   virtual std::vector<LocatedEvent> located_events() const { return {}; }
 };
@@ -207,6 +223,19 @@ struct FitOptions {
 
 /// Fits `m` on the samples `train` (indices into obs). \throws std::runtime_error if the design is zero.
 Fit fit(const ModelFamily& m, const Observations& obs, const std::vector<int>& train, const FitOptions& o = {});
+/// The first-order bias of a least-squares fit's (θ, φ) that the errors in the family's variables
+/// leave (ModelFamily::errors_in_variables), to be subtracted. The fit solves G(θ, φ; x) = Jᵀ r = 0
+/// with the regressors x measured as x + e; to second order in e, E[G(θ*; x + e)] is
+/// ½ Σ_v σ_v² ∂²G/∂x_v², and the bias (JᵀJ)⁺ times it. The second derivative along each variable
+/// is the central difference over ± σ_v (a shift common to every sample: each sample's score depends
+/// on its own regressors only, so the sum's curvature is the curvature of the sum), which is also
+/// the expectation under a two-point error of that variance, so a design that switches (a contact
+/// that lifts off) is averaged, not differentiated. Fixed parameters get 0. Zero when the family
+/// declares no errors, or when a shifted family's parameters differ from the family's.
+/// \param threads as CvOptions::threads.
+Eigen::VectorXd errors_in_variables_bias(const ModelFamily& m, const Observations& obs, const Fit& f, const std::vector<int>& train,
+                                         int threads = 0);
+
 /// N x 6 prediction of the fitted model on every sample.
 Eigen::MatrixXd predict(const ModelFamily& m, const Fit& f, std::size_t samples);
 
@@ -230,6 +259,9 @@ struct CvOptions {
   /// Refit the full model under the family's alternative model forms and widen the intervals by
   /// the shifts (after the folds; a screened model is not refitted).
   bool model_forms = true;
+  /// Correct the full fit's reported values for the errors in the family's variables
+  /// (ModelFamily::errors_in_variables, errors_in_variables_bias; a screened model is not corrected).
+  bool errors_in_variables = true;
   /// Repeated blocked CV: the folds are run once per offset of the block grid, i/offsets of a block
   /// for i = 0 .. offsets - 1 (the block holding the run's end then also holds its start), and the
   /// held-out error is pooled over them. One offset is plain blocked CV. Why more: a model whose
@@ -276,6 +308,8 @@ struct Score {
   std::vector<std::string> model_forms_rejected;
   /// The form whose values are reported (ModelForm::taken_when_preferred), with its RSS margin; empty: the model's own.
   std::string model_form_taken;
+  /// The measurements whose errors the reported values are corrected for (Reported::errors_in_variables).
+  std::vector<std::string> errors_in_variables;
   double seconds = 0.0;
 };
 
