@@ -491,30 +491,45 @@ std::vector<ModelFamily::ModelForm> ContactFamily::model_forms() const {
 std::vector<ModelFamily::ErrorInVariable> ContactFamily::errors_in_variables() const {
   std::vector<ErrorInVariable> out;
   if (lag_filter_) return out;  // a model form's refit: never scored on its own
-  const Eigen::VectorXd xd = d_.scene.design();
+  const std::size_t n = d_.kin.size();
   for (int a = 0; a < 3; ++a) {
     const double step = d_.position_quantum_m(a);
     if (!(step > 0)) continue;
-    const double sd = step / std::sqrt(12.0);
-    ErrorInVariable v{fmt::format("the reported ee position along world {} (quantised to {:.3g} um)", "xyz"[a], 1e6 * step), sd, {}, {}};
-    for (const double sign : {1.0, -1.0}) {
-      auto shifted = std::make_shared<ContactData>(d_);
+    // The correction is an expectation over where the true position lies within its step. Along a
+    // held position (kHoldSamples or more equal reported values in a row) that is one unknown
+    // offset for the whole hold, a first-order error the correction cannot represent; a run whose
+    // press holds at a value on the grid has no error there at all. An axis held for more than
+    // kHeldShare of the run is not declared.
+    std::size_t held = 0, same = 1;
+    for (std::size_t k = 1; k <= n; ++k) {
+      if (k < n && d_.kin[k].T_world_ee.translation()(a) == d_.kin[k - 1].T_world_ee.translation()(a)) {
+        ++same;
+        continue;
+      }
+      if (same >= kHoldSamples) held += same;
+      same = 1;
+    }
+    if (static_cast<double>(held) > kHeldShare * static_cast<double>(n)) continue;
+    auto shifted = [this, a](double by_m) {
+      auto data = std::make_shared<ContactData>(d_);
+      const Eigen::VectorXd xd = data->scene.design();
       cid::MindistWorkspace ws;
-      shifted->samples_in_contact = 0;
-      for (std::size_t k = 0; k < shifted->kin.size(); ++k) {
-        shifted->kin[k].T_world_ee.translation()(a) += sign * sd;
-        cid::mindist(shifted->scene, shifted->kin[k], xd, shifted->v_tm, shifted->contacts[k], ws);
-        if (!shifted->contacts[k].empty()) ++shifted->samples_in_contact;
+      data->samples_in_contact = 0;
+      for (std::size_t k = 0; k < data->kin.size(); ++k) {
+        data->kin[k].T_world_ee.translation()(a) += by_m;
+        cid::mindist(data->scene, data->kin[k], xd, data->v_tm, data->contacts[k], ws);
+        if (!data->contacts[k].empty()) ++data->samples_in_contact;
       }
       // Its effects bound to the shifted data (a choice they derive from it is made anew, and a
       // family whose parameters then differ gets no correction: errors_in_variables_bias).
-      std::unique_ptr<ContactFamily> m(new ContactFamily(*shifted, ext_, samples_, nullptr));
-      m->owned_ = std::move(shifted);
+      std::unique_ptr<ContactFamily> m(new ContactFamily(*data, ext_, samples_, nullptr));
+      m->owned_ = std::move(data);
       m->friction_lever_ = friction_lever_;
       m->damping_depth_m_ = damping_depth_m_;
-      (sign > 0 ? v.plus : v.minus) = std::move(m);
-    }
-    out.push_back(std::move(v));
+      return std::unique_ptr<ModelFamily>(std::move(m));
+    };
+    out.push_back({fmt::format("the reported ee position along world {} (quantised to {:.3g} um)", "xyz"[a], 1e6 * step),
+                   step / std::sqrt(12.0), shifted});
   }
   return out;
 }

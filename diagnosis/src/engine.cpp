@@ -526,12 +526,13 @@ Eigen::MatrixXd predict(const ModelFamily& m, const Fit& f, std::size_t samples)
   return predict_with(A, f, samples);
 }
 
-Eigen::VectorXd errors_in_variables_bias(const ModelFamily& m, const Observations& obs, const Fit& f, const std::vector<int>& train,
-                                         int threads) {
+ErrorsInVariablesBias errors_in_variables_bias(const ModelFamily& m, const Observations& obs, const Fit& f, const std::vector<int>& train,
+                                               int threads) {
   const Eigen::Index p = f.theta.size(), q = f.phi.size();
-  Eigen::VectorXd bias = Eigen::VectorXd::Zero(p + q);
+  ErrorsInVariablesBias out;
+  out.bias = Eigen::VectorXd::Zero(p + q);
   const auto vars = m.errors_in_variables();
-  if (vars.empty() || train.empty()) return bias;
+  if (vars.empty() || train.empty()) return out;
   const auto lin = m.linear();
   const auto nl = m.nonlinear();
   const auto same_parameters = [&](const ModelFamily& o) {
@@ -545,18 +546,24 @@ Eigen::VectorXd errors_in_variables_bias(const ModelFamily& m, const Observation
   };
   std::vector<bool> fixed = f.fixed;
   fixed.resize(static_cast<std::size_t>(p + q), false);
-  // The families: the fitted one (index 0), then each variable's + and - shift.
-  std::vector<const ModelFamily*> family{&m};
-  for (const auto& v : vars) {
-    if (!v.plus || !v.minus || !same_parameters(*v.plus) || !same_parameters(*v.minus) || !(v.std > 0)) return bias;
-    family.push_back(v.plus.get());
-    family.push_back(v.minus.get());
-  }
-  // G = Jᵀ r of each family at the fit's (θ, φ), and the fitted family's J.
-  std::vector<Eigen::VectorXd> g(family.size());
+  // G = Jᵀ r of the fitted family (task 0) and of each variable shifted by ±σ and ±2σ.
+  constexpr double kShift[] = {1.0, -1.0, 2.0, -2.0};
+  const std::size_t tasks = 1 + 4 * vars.size();
+  std::vector<Eigen::VectorXd> g(tasks);
+  std::vector<std::string> differ(tasks);
   Eigen::MatrixXd J0;
-  parallel::run_tasks(family.size(), parallel::worker_count(family.size(), threads), [&](std::size_t i, std::size_t) {
-    DesignCache cache(*family[i], obs.size());
+  parallel::run_tasks(tasks, parallel::worker_count(tasks, threads), [&](std::size_t i, std::size_t) {
+    std::unique_ptr<ModelFamily> own;
+    if (i > 0) {
+      const auto& v = vars[(i - 1) / 4];
+      own = v.shifted ? v.shifted(kShift[(i - 1) % 4] * v.std) : nullptr;
+      if (!own || !same_parameters(*own)) {
+        differ[i] = v.variable;
+        return;
+      }
+    }
+    const ModelFamily& fam = own ? *own : m;
+    DesignCache cache(fam, obs.size());
     Evaluator ev(cache, obs, train);
     ev.fixed_theta.assign(fixed.begin(), fixed.begin() + p);
     Eigen::MatrixXd J = full_jacobian(ev, nl, f.theta, f.phi, fixed);
@@ -564,13 +571,35 @@ Eigen::VectorXd errors_in_variables_bias(const ModelFamily& m, const Observation
     g[i] = J.transpose() * r;
     if (i == 0) J0 = std::move(J);
   });
-  Eigen::VectorXd curvature = Eigen::VectorXd::Zero(p + q);  // ½ Σ_v σ_v² ∂²G/∂x_v²
-  for (std::size_t v = 0; v < vars.size(); ++v) curvature += 0.5 * (g[1 + 2 * v] + g[2 + 2 * v] - 2.0 * g[0]);
+  for (const auto& d : differ)
+    if (!d.empty()) {
+      out.why_not = "shifting " + d + " changes the family's parameters";
+      return out;
+    }
+  // ½ Σ_v σ_v² ∂²G/∂x_v² from the ±σ differences, and again from the ±2σ ones over 4.
+  Eigen::VectorXd c1 = Eigen::VectorXd::Zero(p + q), c2 = c1;
+  for (std::size_t v = 0; v < vars.size(); ++v) {
+    c1 += 0.5 * (g[1 + 4 * v] + g[2 + 4 * v] - 2.0 * g[0]);
+    c2 += 0.125 * (g[3 + 4 * v] + g[4 + 4 * v] - 2.0 * g[0]);
+  }
   int rank = 0;
-  bias = normal_pinv(J0, rank) * curvature;
+  const Eigen::MatrixXd P = normal_pinv(J0, rank);
+  Eigen::VectorXd b1 = P * c1, b2 = P * c2;
   for (Eigen::Index j = 0; j < p + q; ++j)
-    if (fixed[static_cast<std::size_t>(j)]) bias(j) = 0.0;
-  return bias;
+    if (fixed[static_cast<std::size_t>(j)]) b1(j) = b2(j) = 0.0;
+  // The expansion holds where the score is smooth at the errors' scale: then the curvature over
+  // ±2σ is the one over ±σ. Compared by what each moves the fit's prediction (the weighted rows).
+  const double size = (J0 * b1).norm();
+  out.mismatch = size > 0 ? (J0 * (b2 - b1)).norm() / size : 0.0;
+  if (!b1.allFinite() || !(out.mismatch <= kErrorsInVariablesMismatch)) {
+    out.why_not =
+        fmt::format("the score is not smooth at the errors' scale (the bias over 2 std differs from the one over 1 std by {:.2g} of it)",
+                    out.mismatch);
+    return out;
+  }
+  out.bias = b1;
+  out.applied = true;
+  return out;
 }
 
 double relative_error(const Observations& obs, const Eigen::MatrixXd& prediction, const std::vector<int>& samples) {
@@ -744,8 +773,12 @@ void model_form_intervals(Score& s, const std::vector<ModelFamily::ModelForm>& f
 void correct_errors_in_variables(Score& s, const ModelFamily& m, const Observations& obs, const std::vector<int>& all, int threads) {
   const auto vars = m.errors_in_variables();
   if (vars.empty()) return;
-  const Eigen::VectorXd bias = errors_in_variables_bias(m, obs, s.full, all, threads);
-  if (!bias.allFinite() || bias.isZero(0.0)) return;
+  const ErrorsInVariablesBias eiv = errors_in_variables_bias(m, obs, s.full, all, threads);
+  if (!eiv.applied) {
+    for (const auto& v : vars) s.errors_in_variables.push_back(fmt::format("{}: not corrected, {}", v.variable, eiv.why_not));
+    return;
+  }
+  const Eigen::VectorXd& bias = eiv.bias;
   Fit corrected = s.full;
   corrected.theta -= bias.head(s.full.theta.size());
   corrected.phi -= bias.tail(s.full.phi.size());

@@ -258,8 +258,7 @@ class PressFamily : public ModelFamily {
     std::vector<ErrorInVariable> v(1);
     v[0].variable = "z";
     v[0].std = error_;
-    v[0].plus = std::make_unique<PressFamily>(z_, 0.0, shift_ + error_);
-    v[0].minus = std::make_unique<PressFamily>(z_, 0.0, shift_ - error_);
+    v[0].shifted = [this](double by) { return std::make_unique<PressFamily>(z_, 0.0, shift_ + by); };
     return v;
   }
 
@@ -303,7 +302,10 @@ TEST(Engine, ErrorsInAMeasuredRegressorAreCorrectedToFirstOrderOverManySeeds) {
     const Press p = press_run(5100 + static_cast<unsigned>(s), K, h, e);
     PressFamily m(p.z_read, e);
     const Fit f = fit(m, p.o, all(p.o.size()));
-    const Eigen::VectorXd b = errors_in_variables_bias(m, p.o, f, all(p.o.size()), 1);
+    const ErrorsInVariablesBias eiv = errors_in_variables_bias(m, p.o, f, all(p.o.size()), 1);
+    ASSERT_TRUE(eiv.applied) << eiv.why_not;
+    EXPECT_LT(eiv.mismatch, 1e-6);  // the score is quadratic in z: the ±2σ curvature is the ±σ one
+    const Eigen::VectorXd& b = eiv.bias;
     ASSERT_EQ(b.size(), 2);
     k_lsq.push_back(f.theta(0) - K);
     k_corr.push_back(f.theta(0) - b(0) - K);
@@ -331,7 +333,7 @@ TEST(Engine, ScoreReportsTheCorrectedValuesAndWhatTheyAreCorrectedFor) {
   CvOptions off;
   off.errors_in_variables = false;
   const Score raw = score(m, p.o, off);
-  const Eigen::VectorXd b = errors_in_variables_bias(m, p.o, s.full, all(p.o.size()));
+  const Eigen::VectorXd b = errors_in_variables_bias(m, p.o, s.full, all(p.o.size())).bias;
   ASSERT_EQ(s.errors_in_variables.size(), 1u);
   EXPECT_THAT(s.errors_in_variables[0], HasSubstr("z"));
   EXPECT_TRUE(raw.errors_in_variables.empty());
@@ -348,7 +350,47 @@ TEST(Engine, ScoreReportsTheCorrectedValuesAndWhatTheyAreCorrectedFor) {
   EXPECT_EQ(s.full.theta(0), raw.full.theta(0));
   // No declared error, no correction.
   PressFamily exact(p.z_read, 0.0);
-  EXPECT_TRUE(errors_in_variables_bias(exact, p.o, s.full, all(p.o.size())).isZero(0.0));
+  const ErrorsInVariablesBias none = errors_in_variables_bias(exact, p.o, s.full, all(p.o.size()));
+  EXPECT_FALSE(none.applied);
+  EXPECT_TRUE(none.bias.isZero(0.0));
+}
+
+/// y_z = θ where the measured z exceeds 0.5, else 0: a design that switches with z, whose score
+/// is not smooth at any error's scale.
+class SwitchFamily : public ModelFamily {
+ public:
+  SwitchFamily(std::vector<double> z, double error, double shift = 0.0) : z_(std::move(z)), error_(error), shift_(shift) {}
+  std::string name() const override { return "switch"; }
+  std::vector<Param> linear() const override { return {{"level", "N", 1.0, false}}; }
+  void design(const Eigen::VectorXd&, Eigen::MatrixXd& A, FamilyData&) const override {
+    A.setZero(static_cast<Eigen::Index>(6 * z_.size()), 1);
+    for (std::size_t k = 0; k < z_.size(); ++k) A(static_cast<Eigen::Index>(6 * k) + 2, 0) = z_[k] + shift_ > 0.5 ? 1.0 : 0.0;
+  }
+  std::vector<ErrorInVariable> errors_in_variables() const override {
+    return {{"z", error_, [this](double by) { return std::make_unique<SwitchFamily>(z_, 0.0, shift_ + by); }}};
+  }
+
+ private:
+  std::vector<double> z_;
+  double error_, shift_;
+};
+
+TEST(Engine, AScoreThatSwitchesWithinTheErrorsScaleIsNotCorrected) {
+  const Press p = press_run(78, 2.0, 1.0, 0.02);
+  for (const auto& q : {p.z_read}) {
+    SwitchFamily m(q, 0.02);
+    Observations o = p.o;
+    for (std::size_t k = 0; k < q.size(); ++k) o.y(static_cast<Eigen::Index>(k), 2) = q[k] > 0.5 ? 3.0 : 0.0;
+    const Score s = score(m, o);
+    const ErrorsInVariablesBias eiv = errors_in_variables_bias(m, o, s.full, all(o.size()));
+    EXPECT_FALSE(eiv.applied) << eiv.mismatch;
+    EXPECT_GT(eiv.mismatch, kErrorsInVariablesMismatch);
+    EXPECT_THAT(eiv.why_not, HasSubstr("not smooth"));
+    EXPECT_TRUE(eiv.bias.isZero(0.0));
+    ASSERT_EQ(s.errors_in_variables.size(), 1u);
+    EXPECT_THAT(s.errors_in_variables[0], HasSubstr("not corrected"));
+    EXPECT_EQ(s.full.reported[0].errors_in_variables, 0.0);
+  }
 }
 
 /// y_c = a + b (t - 2) with AR(1) noise of correlation 0.98 (a slowly wandering error, the kind a

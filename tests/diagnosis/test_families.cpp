@@ -67,7 +67,10 @@
 //    (ContactFamily::errors_in_variables; rule added 2026-12-04, before these ran; the same rules):
 //    HIL_FAMILY_FIRST=1250, i = 1250..1299, never drawn before, for geometric_offset (plate_height's
 //    bias, which the correction is for), and sensor_bias, nonlinear_stiffness and contact_damping
-//    (that it breaks nothing where the parameters are not the plate's geometry).
+//    (that it breaks nothing where the parameters are not the plate's geometry). Before the draw,
+//    after the first ctest: the correction is taken only where the score is smooth at the errors'
+//    scale (the bias over ± 2σ within 0.25 of the one over ± σ; kErrorsInVariablesMismatch, set
+//    before any run): the guides of the ACU runs and the blind suite's viscous runs failed without it.
 //  * Per effect, of n draws, at most ceil(10 %) may fail each of:
 //     - named: the effect named first (clean: `none`);
 //     - single: no second cause.

@@ -400,12 +400,16 @@ TEST(PlateCalibration, APointFootsFrictionIsTakenAtItsTipWhereTheRunShowsIt) {
 // +114 and +257 nm, corrected -44 and -31 nm, against a se of ~50 nm: a third of +114 was below what
 // six draws resolve. The rule below replaced it before these 24 phases (none of them run before):
 // the least-squares mean error more than 3 se above 0 (the bias is there), the corrected mean
-// within 2.5 se of 0.
+// within 2.5 se of 0. It passed (two-tone +140 -> -5 nm, moves +253 -> -36 nm). Then the
+// correction gained its smoothness check (kErrorsInVariablesMismatch), which refused two-tone
+// phase 22 (mismatch 0.30): the test now takes what the diagnosis reports (no correction where
+// refused), the same rule, and at least 18 of the 24 phases corrected.
 TEST(PlateCalibration, TheReportedPositionsQuantumIsNotReadAsThePlatesHeight) {
   const double step_m = 8e-6;
   const int phases = 24;
   for (const Motion* m : {&kTwoTone, &kMoves}) {
     std::vector<double> lsq, corrected;
+    int applied = 0;
     for (int j = 0; j < phases; ++j) {
       ct::Scenario sc = clean_scenario();
       m->apply(sc);
@@ -423,7 +427,9 @@ TEST(PlateCalibration, TheReportedPositionsQuantumIsNotReadAsThePlatesHeight) {
       std::vector<int> every(data.obs.size());
       std::iota(every.begin(), every.end(), 0);
       const Fit f = fit(family, data.obs, every);
-      const Eigen::VectorXd bias = errors_in_variables_bias(family, data.obs, f, every);
+      const ErrorsInVariablesBias eiv = errors_in_variables_bias(family, data.obs, f, every);
+      applied += eiv.applied ? 1 : 0;
+      const Eigen::VectorXd& bias = eiv.bias;  // 0 where not applied: what the diagnosis reports
       const auto at = std::find(f.phi_names.begin(), f.phi_names.end(), kPlateHeight);
       ASSERT_NE(at, f.phi_names.end()) << m->name;
       const auto i = static_cast<Eigen::Index>(at - f.phi_names.begin());
@@ -440,6 +446,7 @@ TEST(PlateCalibration, TheReportedPositionsQuantumIsNotReadAsThePlatesHeight) {
     const auto [c, c_se] = mean_se(corrected);
     std::cout << "EIV " << m->name << ": least squares " << 1e9 * l << " nm (se " << 1e9 * l_se << "), corrected " << 1e9 * c << " nm (se "
               << 1e9 * c_se << ")\n";
+    EXPECT_GE(applied, phases * 3 / 4) << m->name;
     EXPECT_GT(l, 3 * l_se) << m->name;
     EXPECT_LT(std::abs(c), 2.5 * c_se) << m->name;
   }

@@ -232,8 +232,12 @@ class ContactFamily : public ModelFamily {
   /// position_quantum_m): an error uniform over the step, std step / √12. The interference is
   /// the plate's height less the ee's, so that error attenuates K and moves the plate's height
   /// (by mean δ var(e) / var(δ): +0.4 std over the family suite at 2 µm, +1.3 at 8 µm;
-  /// docs/diagnosis.md, "Errors in the variables"). The orientation and the twist are not included.
+  /// docs/diagnosis.md, "Errors in the variables"). The orientation and the twist are not included,
+  /// nor an axis the run holds (more than kHeldShare of its samples in runs of kHoldSamples or more
+  /// equal reported values: there the error is one offset per hold, not a spread over the step).
   std::vector<ErrorInVariable> errors_in_variables() const override;
+  static constexpr std::size_t kHoldSamples = 10;
+  static constexpr double kHeldShare = 0.25;
   /// κ: the tangential forces act at the centroid + κ δ e_n (0: the contact paper's model).
   double friction_lever() const { return friction_lever_; }
   /// Whether φ ends with kLagFilter, the time constant of a first-order filter after the delay.

@@ -161,14 +161,16 @@ class ModelFamily {
   virtual std::vector<ModelForm> model_forms() const { return {}; }
   /// A regressor the family takes from a measurement whose error has a known variance (errors in
   /// the variables: e.g. a pose quantised to a known step, whose error is uniform over the step):
-  /// the same family with that measurement shifted by + and - the error's std on every sample.
-  /// Least squares reads such an error as part of the signal and biases the fit to second order in
-  /// the std (a slope attenuated by var(error) / var(regressor)); score() removes that bias
+  /// the same family with that measurement shifted by a given amount on every sample. Least
+  /// squares reads such an error as part of the signal and biases the fit to second order in the
+  /// std (a slope attenuated by var(error) / var(regressor)); score() removes that bias
   /// (errors_in_variables_bias). The shifted families must have the family's parameters.
   struct ErrorInVariable {
     std::string variable;  ///< what is measured and how it errs, for the report
     double std = 0.0;      ///< the error's standard deviation, in the variable's unit
-    std::unique_ptr<ModelFamily> plus, minus;
+    /// The family with the measurement shifted by this much (the variable's unit) on every sample;
+    /// called while the family lives.
+    std::function<std::unique_ptr<ModelFamily>(double)> shifted;
   };
   /// Default: none (the regressors are exact).
   virtual std::vector<ErrorInVariable> errors_in_variables() const { return {}; }
@@ -224,17 +226,27 @@ struct FitOptions {
 /// Fits `m` on the samples `train` (indices into obs). \throws std::runtime_error if the design is zero.
 Fit fit(const ModelFamily& m, const Observations& obs, const std::vector<int>& train, const FitOptions& o = {});
 /// The first-order bias of a least-squares fit's (θ, φ) that the errors in the family's variables
-/// leave (ModelFamily::errors_in_variables), to be subtracted. The fit solves G(θ, φ; x) = Jᵀ r = 0
-/// with the regressors x measured as x + e; to second order in e, E[G(θ*; x + e)] is
-/// ½ Σ_v σ_v² ∂²G/∂x_v², and the bias (JᵀJ)⁺ times it. The second derivative along each variable
-/// is the central difference over ± σ_v (a shift common to every sample: each sample's score depends
-/// on its own regressors only, so the sum's curvature is the curvature of the sum), which is also
-/// the expectation under a two-point error of that variance, so a design that switches (a contact
-/// that lifts off) is averaged, not differentiated. Fixed parameters get 0. Zero when the family
-/// declares no errors, or when a shifted family's parameters differ from the family's.
+/// leave (ModelFamily::errors_in_variables). The fit solves G(θ, φ; x) = Jᵀ r = 0 with the
+/// regressors x measured as x + e; to second order in e, E[G(θ*; x + e)] is ½ Σ_v σ_v² ∂²G/∂x_v²,
+/// and the bias (JᵀJ)⁺ times it. The second derivative along each variable is the central
+/// difference over ± σ_v (a shift common to every sample: each sample's score depends on its own
+/// regressors only, so the sum's curvature is the curvature of the sum). It is taken only where the
+/// score is smooth at the errors' scale: the same over ± 2σ_v (divided by 4) must move the fit's
+/// prediction within kErrorsInVariablesMismatch of what the ± σ_v one moves it (a design whose
+/// contacts switch within a few σ, e.g. sharp guides, fails this and is not corrected).
+struct ErrorsInVariablesBias {
+  Eigen::VectorXd bias;  ///< of (θ, φ), to be subtracted; 0 when not applied (fixed parameters: 0)
+  bool applied = false;
+  double mismatch = 0.0;  ///< |J (b_2σ - b_σ)| / |J b_σ|
+  std::string why_not;    ///< when not applied (empty: the family declares no errors)
+};
+/// How far the ± 2σ curvature's bias may move the prediction from the ± σ one's, as a share of the
+/// latter, for the expansion to be taken as holding: a quadratic score gives 0, and second-order
+/// accuracy needs the next order well below the first.
+constexpr double kErrorsInVariablesMismatch = 0.25;
 /// \param threads as CvOptions::threads.
-Eigen::VectorXd errors_in_variables_bias(const ModelFamily& m, const Observations& obs, const Fit& f, const std::vector<int>& train,
-                                         int threads = 0);
+ErrorsInVariablesBias errors_in_variables_bias(const ModelFamily& m, const Observations& obs, const Fit& f, const std::vector<int>& train,
+                                               int threads = 0);
 
 /// N x 6 prediction of the fitted model on every sample.
 Eigen::MatrixXd predict(const ModelFamily& m, const Fit& f, std::size_t samples);
