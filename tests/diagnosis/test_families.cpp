@@ -70,7 +70,8 @@
 //    (that it breaks nothing where the parameters are not the plate's geometry). Before the draw,
 //    after the first ctest: the correction is taken only where the score is smooth at the errors'
 //    scale (the bias over ± 2σ within 0.25 of the one over ± σ; kErrorsInVariablesMismatch, set
-//    before any run): the guides of the ACU runs and the blind suite's viscous runs failed without it.
+//    before any run): the guides of the ACU runs and the blind suite's viscous runs failed without it;
+//    and an axis held at one reported value for more than a quarter of the run is not declared.
 //  * Per effect, of n draws, at most ceil(10 %) may fail each of:
 //     - named: the effect named first (clean: `none`);
 //     - single: no second cause.
