@@ -18,6 +18,7 @@
 #include <hil/diagnose/deflection_family.hpp>
 #include <hil/diagnose/diagnose.hpp>
 #include <hil/so3/so3.hpp>
+#include <hil/test/eigen.hpp>
 #include "scenes.hpp"
 
 namespace hil::diagnose {
@@ -311,14 +312,9 @@ TEST(Engine, ErrorsInAMeasuredRegressorAreCorrectedToFirstOrderOverManySeeds) {
     k_corr.push_back(f.theta(0) - b(0) - K);
     h_corr.push_back(f.phi(0) - b(1) - h);
   }
-  const auto mean_se = [](const std::vector<double>& x) {
-    const Eigen::Map<const Eigen::VectorXd> v(x.data(), static_cast<Eigen::Index>(x.size()));
-    const double m = v.mean();
-    return std::pair{m, std::sqrt((v.array() - m).square().sum() / (v.size() - 1) / v.size())};
-  };
-  const auto [kl, kl_se] = mean_se(k_lsq);
-  const auto [kc, kc_se] = mean_se(k_corr);
-  const auto [hc, hc_se] = mean_se(h_corr);
+  const auto [kl, kl_se] = hil::test::mean_and_se(k_lsq);
+  const auto [kc, kc_se] = hil::test::mean_and_se(k_corr);
+  const auto [hc, hc_se] = hil::test::mean_and_se(h_corr);
   std::cout << "K: least squares " << kl << " (se " << kl_se << "), corrected " << kc << " (se " << kc_se << "); h corrected " << hc
             << " (se " << hc_se << ")\n";
   EXPECT_LT(kl, -10 * kl_se) << "least squares " << kl << " (se " << kl_se << ")";

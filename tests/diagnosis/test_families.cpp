@@ -72,6 +72,8 @@
 //    scale (the bias over ± 2σ within 0.25 of the one over ± σ; kErrorsInVariablesMismatch, set
 //    before any run): the guides of the ACU runs and the blind suite's viscous runs failed without it;
 //    and an axis held at one reported value for more than a quarter of the run is not declared.
+//    Drawn 2026-12-04: plate_height +0.087 (se 0.094), not biased (+0.25 on the same draws with the
+//    correction off); every effect named and covered, widths fail as before (docs/diagnosis.md).
 //  * Per effect, of n draws, at most ceil(10 %) may fail each of:
 //     - named: the effect named first (clean: `none`);
 //     - single: no second cause.

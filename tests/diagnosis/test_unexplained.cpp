@@ -25,6 +25,7 @@
 
 #include <hil/diagnose/contact_family.hpp>
 #include <hil/diagnose/diagnose.hpp>
+#include <hil/test/eigen.hpp>
 #include "blind_runs.hpp"
 
 namespace hil::diagnose::test {
@@ -437,13 +438,8 @@ TEST(PlateCalibration, TheReportedPositionsQuantumIsNotReadAsThePlatesHeight) {
       lsq.push_back(f.phi(i) + rig.declared_plate_height_m);
       corrected.push_back(lsq.back() - bias(f.theta.size() + i));
     }
-    const auto mean_se = [](const std::vector<double>& x) {
-      const Eigen::Map<const Eigen::VectorXd> v(x.data(), static_cast<Eigen::Index>(x.size()));
-      const double mean = v.mean();
-      return std::pair{mean, std::sqrt((v.array() - mean).square().sum() / (v.size() - 1) / v.size())};
-    };
-    const auto [l, l_se] = mean_se(lsq);
-    const auto [c, c_se] = mean_se(corrected);
+    const auto [l, l_se] = hil::test::mean_and_se(lsq);
+    const auto [c, c_se] = hil::test::mean_and_se(corrected);
     std::cout << "EIV " << m->name << ": least squares " << 1e9 * l << " nm (se " << 1e9 * l_se << "), corrected " << 1e9 * c << " nm (se "
               << 1e9 * c_se << ")\n";
     EXPECT_GE(applied, phases * 3 / 4) << m->name;

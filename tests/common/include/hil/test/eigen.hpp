@@ -3,7 +3,10 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Core>
+#include <cmath>
 #include <sstream>
+#include <utility>
+#include <vector>
 
 namespace hil::test {
 
@@ -17,6 +20,14 @@ template <class A, class B>
   std::ostringstream os;
   os << "max |a - b| = " << err << " > " << tol << "\na =\n" << a << "\nb =\n" << b;
   return ::testing::AssertionFailure() << os.str();
+}
+
+/// The mean of `x` and its standard error (sample std / √n; n >= 2), for rules over many draws.
+inline std::pair<double, double> mean_and_se(const std::vector<double>& x) {
+  const Eigen::Map<const Eigen::VectorXd> v(x.data(), static_cast<Eigen::Index>(x.size()));
+  const double mean = v.mean();
+  const double n = static_cast<double>(v.size());
+  return {mean, std::sqrt((v.array() - mean).square().sum() / (n - 1) / n)};
 }
 
 }  // namespace hil::test
