@@ -25,6 +25,24 @@ struct Hidden {
 };
 constexpr Hidden kHidden[] = {{"geometric_offset", 19}, {"sensor_bias", 12}, {"", 11}};
 
+/// The benchmark's label: what the diagnosis named and its held-out gain, after `prefix`.
+void label(benchmark::State& st, const dg::Diagnosis& d, const std::string& prefix = "") {
+  char gain[32];
+  std::snprintf(gain, sizeof gain, ", gain %.1f %%", d.gain_percent);
+  st.SetLabel(prefix + "named " + d.cause + (d.second_cause.empty() ? "" : " + " + d.second_cause) + gain);
+}
+
+/// `run` diagnosed through `hil diagnose`'s path once per iteration, labelled.
+sv::RunDiagnosis diagnose_run(benchmark::State& st, const hil::format::Run& run, const sv::Options& o) {
+  sv::RunDiagnosis d;
+  for (auto _ : st) {
+    d = sv::diagnose_run(run, o);
+    benchmark::DoNotOptimize(d.result.cause.data());  // (not a double: with GCC the "+r" constraint may clobber it)
+  }
+  label(st, d.result);
+  return d;
+}
+
 void BM_DiagnoseAcu2000(benchmark::State& st) {
   const Hidden h = kHidden[st.range(0)];
   dg::DiagnoseOptions o;
@@ -39,10 +57,7 @@ void BM_DiagnoseAcu2000(benchmark::State& st) {
     d = dg::diagnose(make, dg::contact_extensions(), data.obs, {}, o);
     benchmark::DoNotOptimize(d.cause.data());  // (not a double: with GCC the "+r" constraint may clobber it)
   }
-  char gain[32];
-  std::snprintf(gain, sizeof gain, ", gain %.1f %%", d.gain_percent);
-  st.SetLabel(std::string("hidden ") + (*h.effect ? h.effect : "none") + ", named " + d.cause +
-              (d.second_cause.empty() ? "" : " + " + d.second_cause) + gain);
+  label(st, d, std::string("hidden ") + (*h.effect ? h.effect : "none") + ", ");
   st.counters["samples"] = static_cast<double>(data.obs.size());
   st.counters["seconds"] = d.seconds;
   st.counters["named_hidden"] = d.cause == (*h.effect ? h.effect : "none") ? 1 : 0;
@@ -74,9 +89,7 @@ void BM_DiagnoseScaling(benchmark::State& st) {
     d = dg::diagnose(make, dg::contact_extensions(), data.obs, {}, o);
     benchmark::DoNotOptimize(d.cause.data());
   }
-  char gain[32];
-  std::snprintf(gain, sizeof gain, ", gain %.1f %%", d.gain_percent);
-  st.SetLabel("named " + d.cause + (d.second_cause.empty() ? "" : " + " + d.second_cause) + gain);
+  label(st, d);
   st.counters["samples"] = static_cast<double>(data.obs.size());
   st.counters["seconds"] = d.seconds;
   st.counters["us_per_sample"] = 1e6 * d.seconds / static_cast<double>(data.obs.size());
@@ -107,14 +120,7 @@ void BM_DiagnoseRepeats(benchmark::State& st) {
   sv::Options o;
   o.threads = 2;
   o.max_samples = 0;  // every sample
-  sv::RunDiagnosis d;
-  for (auto _ : st) {
-    d = sv::diagnose_run(run, o);
-    benchmark::DoNotOptimize(d.result.cause.data());
-  }
-  char gain[32];
-  std::snprintf(gain, sizeof gain, ", gain %.1f %%", d.result.gain_percent);
-  st.SetLabel("named " + d.result.cause + (d.result.second_cause.empty() ? "" : " + " + d.result.second_cause) + gain);
+  const sv::RunDiagnosis d = diagnose_run(st, run, o);
   const auto n = static_cast<double>(d.obs().size());
   st.counters["samples"] = n;
   st.counters["seconds"] = d.result.seconds;
@@ -137,14 +143,7 @@ void BM_DiagnoseTenMinutes(benchmark::State& st) {
   sv::Options o;
   o.threads = 2;
   if (decimated_copy) o.max_samples = 0;
-  sv::RunDiagnosis d;
-  for (auto _ : st) {
-    d = sv::diagnose_run(run, o);
-    benchmark::DoNotOptimize(d.result.cause.data());
-  }
-  char gain[32];
-  std::snprintf(gain, sizeof gain, ", gain %.1f %%", d.result.gain_percent);
-  st.SetLabel("named " + d.result.cause + (d.result.second_cause.empty() ? "" : " + " + d.result.second_cause) + gain);
+  const sv::RunDiagnosis d = diagnose_run(st, run, o);
   st.counters["samples_in_run"] = static_cast<double>(d.samples_in_run);
   st.counters["diagnosed"] = static_cast<double>(d.obs().size());
   st.counters["seconds"] = d.result.seconds;
