@@ -305,8 +305,8 @@ std::string fails_without_held_out(const Score& s, const Score& ref, const Diagn
   return fmt::format("{}", fmt::join(why, "; "));
 }
 
-/// CandidateResult::effect_fraction of the fit `f` of `m`: the parameters of `m` that are
-/// extensions and not among `cause_params` are the added candidate's.
+/// CandidateResult::effect_fraction_in_sample of the fit `f` of `m`: the parameters of `m` that
+/// are extensions and not among `cause_params` are the added candidate's.
 double effect_fraction(const ModelFamily& m, const Fit& f, const std::set<std::string>& cause_params, const Observations& obs,
                        double noise) {
   const auto lin = m.linear();
@@ -368,16 +368,16 @@ void judge(CandidateResult& c, const Score& ref, double noise, const Observation
   const bool joint = !std::isnan(c.effect_fraction);
   const double size = joint ? std::max(c.noise_fraction, c.effect_fraction) : c.noise_fraction;
   if (size < o.min_noise_fraction)
-    why.push_back(
-        joint
-            ? fmt::format("below the noise (explains {:.2f} of the noise variance held out, its effect in the joint fit {:.2f}; < {:.2f})",
-                          c.noise_fraction, c.effect_fraction, o.min_noise_fraction)
-            : fmt::format("below the noise (explains {:.2f} of the noise variance < {:.2f})", c.noise_fraction, o.min_noise_fraction));
+    why.push_back(joint ? fmt::format("below the noise (explains {:.2f} of the noise variance held out, its held-out effect in the joint "
+                                      "model {:.2f}; < {:.2f})",
+                                      c.noise_fraction, c.effect_fraction, o.min_noise_fraction)
+                        : fmt::format("below the noise (explains {:.2f} of the noise variance < {:.2f})", c.noise_fraction,
+                                      o.min_noise_fraction));
   if (const auto rest = fails_without_held_out(c.score, ref, o); !rest.empty()) why.push_back(rest);
   c.supported = why.empty();
   c.verdict = c.supported ? fmt::format("supported: held-out gain {:.1f} %, z = {:.1f}, PNR {:.1f}, {:.2f} noise variances{}",
                                         c.gain_percent, c.z, c.pnr, c.noise_fraction,
-                                        joint ? fmt::format(" (its effect in the joint fit {:.2f})", c.effect_fraction) : "")
+                                        joint ? fmt::format(" (its held-out effect in the joint model {:.2f})", c.effect_fraction) : "")
                           : fmt::format("{}", fmt::join(why, "; "));
 }
 
@@ -555,8 +555,17 @@ Diagnosis diagnose(const ModelFactory& make, const std::vector<std::string>& can
       r.name = added[i];
       try {
         const auto model = make({d.cause, r.name});
-        r.score = score(*model, obs, screened_against(first.score, cv), &first.score);
-        if (r.score.held_out()) r.effect_fraction = effect_fraction(*model, r.score.full, cause_params, obs, d.noise_relative);
+        CvOptions sized = screened_against(first.score, cv);
+        for (const auto& p : model->linear())
+          if (p.extension && !cause_params.count(p.name)) sized.effect_of.insert(p.name);
+        for (const auto& p : model->nonlinear())
+          if (p.extension && !cause_params.count(p.name)) sized.effect_of.insert(p.name);
+        r.score = score(*model, obs, sized, &first.score);
+        if (r.score.held_out()) {
+          const double noise2 = d.noise_relative * d.noise_relative;
+          r.effect_fraction = noise2 > 0 ? r.score.held_out_effect / noise2 : 1e300;
+          r.effect_fraction_in_sample = effect_fraction(*model, r.score.full, cause_params, obs, d.noise_relative);
+        }
         judge(r, first.score, d.noise_relative, obs, o);
       } catch (const std::exception& e) {
         r.score.cv_error = std::numeric_limits<double>::infinity();

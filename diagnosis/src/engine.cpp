@@ -513,6 +513,44 @@ Eigen::MatrixXd predict_with(const Eigen::MatrixXd& A, const Fit& f, std::size_t
   return out;
 }
 
+/// The prediction of every sample by the fit `f` of `m` with the parameters named in `off` at
+/// their nominal value 0, the nominal model's free linear parameters re-solved on `train` (QR) and
+/// the rest kept as fitted: what the fit predicts without that part of its model.
+Eigen::MatrixXd prediction_without(const ModelFamily& m, const Fit& f, const Observations& obs, const std::vector<int>& train,
+                                   const std::set<std::string>& off, DesignCache& cache) {
+  const auto lin = m.linear();
+  const auto nl = m.nonlinear();
+  Eigen::VectorXd phi = f.phi;
+  for (std::size_t j = 0; j < nl.size() && static_cast<Eigen::Index>(j) < phi.size(); ++j)
+    if (off.count(nl[j].name)) phi(static_cast<Eigen::Index>(j)) = 0.0;
+  const Eigen::MatrixXd A = cache.get(phi);  // a copy: the cache may drop it
+  Eigen::VectorXd theta = f.theta;
+  std::vector<Eigen::Index> resolve;
+  for (std::size_t j = 0; j < lin.size(); ++j) {
+    const auto i = static_cast<Eigen::Index>(j);
+    if (off.count(lin[j].name)) theta(i) = 0.0;
+    else if (!lin[j].extension && !f.is_fixed(i)) resolve.push_back(i);
+  }
+  if (!resolve.empty()) {
+    for (const auto i : resolve) theta(i) = 0.0;
+    const Eigen::Matrix<double, 6, 1> w = obs.weight;
+    Eigen::MatrixXd An(static_cast<Eigen::Index>(6 * train.size()), static_cast<Eigen::Index>(resolve.size()));
+    Eigen::VectorXd rhs(An.rows());
+    const Eigen::VectorXd rest = A * theta;
+    for (std::size_t a = 0; a < train.size(); ++a)
+      for (int c = 0; c < 6; ++c) {
+        const Eigen::Index row = 6 * train[a] + c, out = static_cast<Eigen::Index>(6 * a) + c;
+        for (std::size_t j = 0; j < resolve.size(); ++j) An(out, static_cast<Eigen::Index>(j)) = w(c) * A(row, resolve[j]);
+        rhs(out) = w(c) * (obs.y(train[a], c) - rest(row));
+      }
+    const Eigen::VectorXd x = solve_ls(An, rhs);
+    for (std::size_t j = 0; j < resolve.size(); ++j) theta(resolve[j]) = x(static_cast<Eigen::Index>(j));
+  }
+  Fit without = f;
+  without.theta = theta;
+  return predict_with(A, without, obs.size());
+}
+
 }  // namespace
 
 Fit fit(const ModelFamily& m, const Observations& obs, const std::vector<int>& train, const FitOptions& o) {
@@ -832,6 +870,7 @@ Score score(const ModelFamily& m, const Observations& obs, const CvOptions& o, c
     std::unique_ptr<ModelFamily> own;  ///< the fold's own model (ModelFamily::restricted), if any
     Fit fit;
     Eigen::MatrixXd prediction;
+    Eigen::MatrixXd without;  ///< the prediction without CvOptions::effect_of (empty: not sized)
   };
   std::vector<Fold> folds;
   for (int shift = 0; shift < offsets; ++shift)
@@ -871,6 +910,7 @@ Score score(const ModelFamily& m, const Observations& obs, const CvOptions& o, c
     if (extends && i < extends->fold_phi.size()) warm = mapped(fm.nonlinear(), extends->fold_phi_names[i], extends->fold_phi[i]);
     fd.fit = fit_with(fm, obs, fd.train, fold_fit, fc, warm ? &*warm : nullptr, false, nullptr, true);
     fd.prediction = predict_with(fc.get(fd.fit.phi), fd.fit, n);
+    if (!o.effect_of.empty()) fd.without = prediction_without(fm, fd.fit, obs, fd.train, o.effect_of, fc);
   };
   // The model forms' refits (they need the full fit only) and the folds are independent: they run
   // side by side, the refits first (the longest), each worker with its own data and design cache
@@ -899,13 +939,20 @@ Score score(const ModelFamily& m, const Observations& obs, const CvOptions& o, c
   });
   std::map<std::string, std::vector<double>> by_name;
   std::size_t folds_unshifted = 0;
-  double pooled_sq = 0.0;
+  double pooled_sq = 0.0, effect_sq = 0.0;
   std::size_t next = 0;
   for (int shift = 0; shift < offsets; ++shift) {
     Eigen::MatrixXd held_out = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(n), 6);
     for (; next < folds.size() && folds[next].shift == shift; ++next) {
       const Fold& fd = folds[next];
       for (int k : fd.block) held_out.row(k) = fd.prediction.row(k);
+      if (fd.without.size() > 0)
+        for (int k : fd.block)
+          for (int c = 0; c < 6; ++c) {
+            const double r = obs.weight(c) * (obs.y(k, c) - fd.prediction(k, c));
+            const double r0 = obs.weight(c) * (obs.y(k, c) - fd.without(k, c));
+            effect_sq += r0 * r0 - r * r;
+          }
       s.fold_phi.push_back(fd.fit.phi);
       s.fold_phi_names.push_back(fd.fit.phi_names);
       if (shift > 0) continue;
@@ -920,6 +967,7 @@ Score score(const ModelFamily& m, const Observations& obs, const CvOptions& o, c
     else s.cv_shifted.push_back(std::move(held_out));
   }
   s.cv_error = std::sqrt(pooled_sq / offsets);
+  if (!o.effect_of.empty()) s.held_out_effect = effect_sq / (6.0 * static_cast<double>(n) * offsets);
   honest_intervals(s, by_name, folds_unshifted);
   model_form_intervals(s, forms, form_fits);
   if (o.errors_in_variables) correct_errors_in_variables(s, m, obs, all, o.threads);

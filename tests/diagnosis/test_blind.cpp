@@ -146,7 +146,8 @@ TEST_P(Blind, TheRightCauseWithItsMagnitude) {
   for (const auto& k : d.candidates)
     table << "  " << k.name << ": " << 100 * k.score.cv_error << " % (noise fraction " << k.noise_fraction << ") " << k.verdict << "\n";
   for (const auto& k : d.second_step) {
-    table << "  + " << k.name << ": " << k.verdict << " nf " << k.noise_fraction << " ef " << k.effect_fraction << " |";
+    table << "  + " << k.name << ": " << k.verdict << " nf " << k.noise_fraction << " ef " << k.effect_fraction << " (in-sample "
+          << k.effect_fraction_in_sample << ") |";
     for (const auto& q : k.score.full.reported)
       if (q.extension)
         table << " " << q.name << "=" << q.value << "±" << q.std << " [a " << q.std_asymptotic << " f " << q.std_folds << " m "
@@ -256,8 +257,9 @@ TEST(BlindSuite, JointQuantileIsBonferronisNormalQuantile) {
 // damping's first order — and the damping added to it explains only 0.14 of the noise variance held
 // out (the delay leaves 0.18 of misfit; the two differ only in the tangential forces and the contact
 // points), below the 0.25 a cause must explain. Its effect in the joint fit is 1.0-1.1 noise
-// variances (robot_compliance's 0.18, sensor_gain's 0.06), and a second cause's size is now the
-// larger of the two (DiagnoseOptions::min_noise_fraction): both named, τ 43.7 ± 4.6 ms for 40,
+// variances (robot_compliance's 0.18, sensor_gain's 0.06; held out, as sized since 2026-12-05:
+// 0.98-1.02), and a second cause's size is now the larger of the two
+// (DiagnoseOptions::min_noise_fraction): both named, τ 43.7 ± 4.6 ms for 40,
 // D 3174 ± 937 for 2500 (paper), 42.4 ms and 2931 ± 774 (fine).
 std::string known_failure(const std::string& effect) {
   (void)effect;  // none at present; an entry returns the observed outcome and skips the case

@@ -246,10 +246,11 @@ class Diagnose(unittest.TestCase):
             second = next(c for c in d["second_step"] if c["name"] == "rest_change")
             self.assertTrue(second["supported"])
             self.assertGreater(second["gain_percent"], 2)
-            # A second cause's size: the held-out reduction and its effect in the joint fit, both
-            # above the quarter noise variance a cause must explain (docs/diagnosis.md).
+            # A second cause's size: the held-out reduction and its held-out effect in the joint
+            # model, both above the quarter noise variance a cause must explain (docs/diagnosis.md).
             self.assertGreater(second["noise_variances"], 0.25)
             self.assertGreaterEqual(second["effect_noise_variances"], 0.25)
+            self.assertIsNotNone(second["effect_noise_variances_in_sample"])  # reported beside it
         for c in d["candidates"]:  # the first step is sized by its held-out reduction alone
             self.assertIsNone(c["effect_noise_variances"], c["name"])
         self.assertGreater(d["gain_percent"], 5)

@@ -308,6 +308,8 @@ nlohmann::json to_json(const RunDiagnosis& r) {
                    {"noise_variances", std::isfinite(c.noise_fraction) ? nlohmann::json(c.noise_fraction) : nlohmann::json(nullptr)},
                    {"effect_noise_variances",
                     std::isfinite(c.effect_fraction) ? nlohmann::json(c.effect_fraction) : nlohmann::json(nullptr)},
+                   {"effect_noise_variances_in_sample",
+                    std::isfinite(c.effect_fraction_in_sample) ? nlohmann::json(c.effect_fraction_in_sample) : nlohmann::json(nullptr)},
                    {"bic", c.score.bic},
                    {"aic", c.score.aic},
                    {"max_pnr", c.pnr},

@@ -120,10 +120,10 @@ struct DiagnoseOptions {
   /// and its size: the held-out mean squared (weighted) error must fall by at least this fraction
   /// of the measurement noise variance (estimated from the nominal residual's first differences),
   /// so that effects far below the sensor's resolution are not named however precisely fitted.
-  /// In the second step the size is the larger of that and the added candidate's effect in the
-  /// joint fit (CandidateResult::effect_fraction): a second cause confounded with the first (a
-  /// damping force looks to the normal force like a lead, which the fitted delay absorbs) shows
-  /// only the part of its size the first cannot mimic as a held-out reduction.
+  /// In the second step the size is the larger of that and the added candidate's held-out effect
+  /// in the joint model (CandidateResult::effect_fraction): a second cause confounded with the
+  /// first (a damping force looks to the normal force like a lead, which the fitted delay absorbs)
+  /// shows only the part of its size the first cannot mimic as a held-out reduction.
   double min_noise_fraction = 0.25;
   StructureOptions structure;  ///< `none` only on an unstructured residual, else `unexplained`
   ConfoundingOptions confounding;
@@ -147,10 +147,15 @@ struct CandidateResult {
   double gain_percent = 0.0;    ///< held-out error reduction against the model it extends
   double z = 0.0;               ///< significance of that reduction
   double noise_fraction = 0.0;  ///< held-out MSE reduction over the noise variance
-  /// Second step: the weighted mean squared change of the joint fit's prediction when the added
-  /// candidate's parameters go to their nominal value (0), the nominal model's linear parameters
-  /// re-solved and the cause's kept as fitted, over the noise variance (NaN: not computed).
+  /// Second step: how much the held-out mean squared (weighted) error of the joint model grows
+  /// when the added candidate's parameters go to their nominal value (0) in each fold's fit, the
+  /// nominal model's linear parameters re-solved on the fold's training samples and the cause's
+  /// kept as fitted (Score::held_out_effect), over the noise variance (NaN: not computed). Sized on
+  /// held-out data only: an effect the joint fit makes up on its own samples predicts nothing.
   double effect_fraction = std::numeric_limits<double>::quiet_NaN();
+  /// The same change of the full joint fit's prediction on its own samples (reported only: it
+  /// counts what the fit made up as effect).
+  double effect_fraction_in_sample = std::numeric_limits<double>::quiet_NaN();
   /// The largest PNR among the parameters this candidate adds (not those of the model it extends).
   double pnr = 0.0;
   bool supported = false;

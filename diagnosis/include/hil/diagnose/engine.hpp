@@ -10,7 +10,9 @@
 #include <Eigen/Core>
 #include <cmath>
 #include <functional>
+#include <limits>
 #include <memory>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -282,6 +284,9 @@ struct CvOptions {
   /// the grid's offsets removes that dependence (docs/diagnosis.md, "Repeated blocked CV"). The
   /// intervals, warm starts and plotted held-out predictions of offset 0 are unchanged by it.
   int offsets = 1;
+  /// The parameters (by name) whose effect each fold sizes on its held-out block
+  /// (Score::held_out_effect): the added candidate's, in a second step. Empty: not sized.
+  std::set<std::string> effect_of;
   /// Threads the folds run on (0: one per core). The folds are independent fits, each with its
   /// own family data and design cache; the results do not depend on the number of threads.
   int threads = 0;
@@ -298,8 +303,13 @@ struct Score {
   /// With CvOptions::offsets > 1: the same held-out prediction on the grid shifted by i/offsets of
   /// a block, i = 1 .. offsets - 1.
   std::vector<Eigen::MatrixXd> cv_shifted;
-  double cv_error = 0.0;           ///< held-out relative error (blocked CV; rms over the grid offsets)
-  double train_error = 0.0;        ///< relative error of the full fit on all samples
+  double cv_error = 0.0;     ///< held-out relative error (blocked CV; rms over the grid offsets)
+  double train_error = 0.0;  ///< relative error of the full fit on all samples
+  /// With CvOptions::effect_of: how much each fold's held-out squared error grows when those
+  /// parameters go to their nominal value 0 in the fold's fit, the nominal model's linear
+  /// parameters re-solved on the fold's training samples and the rest kept as fitted; the mean over
+  /// the held-out rows of every grid (the units of cv_error²). NaN: not sized.
+  double held_out_effect = std::numeric_limits<double>::quiet_NaN();
   double bic = 0.0, aic = 0.0;     ///< n ln(rss/n) + k ln(n) | + 2k, n weighted rows, k = rank
   double min_extension_pnr = 0.0;  ///< smallest PNR over the identifiable extension parameters
   double max_extension_pnr = 0.0;
