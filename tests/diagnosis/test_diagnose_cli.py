@@ -131,6 +131,54 @@ class Diagnose(unittest.TestCase):
         self.assertEqual(d["gain_percent"], 0.0)
         self.assertEqual(r.stderr, "")
 
+    def test_quantised_positions_are_corrected_as_errors_in_the_variables(self):
+        # A press with a two-tone depth (0.5 mm +- 0.15 mm, never held) while the cube circles at
+        # 4 mm/s, its positions reported at 2 um: the contact family declares the reported
+        # positions' errors (docs/diagnosis.md, "Errors in the variables"), and the verdict says
+        # what it did with them, in the JSON and in the text, for the cause's values.
+        import math
+        traj = os.path.join(self.dir, "circle.csv")
+        with open(traj, "w") as f:
+            f.write("t,px,py,pz,qw,qx,qy,qz,vx,vy,vz,wx,wy,wz\n")
+            w, r = 0.004 / 0.003, 0.003
+            for i in range(600):
+                t = i / 50.0
+                depth = 5e-4 + 1e-4 * math.sin(2 * math.pi * 0.7 * t) + 5e-5 * math.sin(2 * math.pi * 2.3 * t)
+                vz = -(2 * math.pi * 0.7 * 1e-4 * math.cos(2 * math.pi * 0.7 * t) + 2 * math.pi * 2.3 * 5e-5 * math.cos(2 * math.pi * 2.3 * t))
+                row = [t, 0.01 + r * math.cos(w * t), r * math.sin(w * t), 0.05 - depth, 1, 0, 0, 0,
+                       -r * w * math.sin(w * t), r * w * math.cos(w * t), vz, 0, 0, 0]
+                f.write(",".join("%.10g" % v for v in row) + "\n")
+        out = os.path.join(self.dir, "circle")
+        r = hil("contact", "simulate", "--rig", RIG, "--trajectory", traj, "--out", out, "--force-resolution", "0.05",
+                "--force-noise", "0.1", "--moment-resolution", "0.001", "--moment-noise", "0.005", "--position-resolution", "2e-6",
+                "--velocity-resolution", "2e-5", "--seed", "11", "--inject", "geometric_offset", "--effect-seed", "4")
+        self.assertEqual(r.returncode, 0, r.stderr)
+        js = os.path.join(self.dir, "circle.json")
+        r = hil("diagnose", out, "--json", js, "--candidates", "geometric_offset")
+        self.assertEqual(r.returncode, 0, r.stderr)
+        with open(js) as f:
+            d = json.load(f)
+        self.assertEqual(d["cause"]["name"], "geometric_offset")
+        declared = d["extended"]["errors_in_variables"]
+        axes = [v for v in declared if v.startswith("the reported ee position along world ")]
+        self.assertEqual(len(axes), len(declared), declared)
+        self.assertEqual(len(axes), 3, declared)  # x, y and z all move; none is held
+        self.assertTrue(all("quantised to 2 um" in v for v in axes), axes)
+        if all("not corrected" in v for v in axes):  # refused: the reason is said, nothing moved
+            self.assertTrue(all(v.split("not corrected, ", 1)[1] for v in axes), axes)
+            for p in d["cause"]["parameters"].values():
+                self.assertIn(p.get("errors_in_variables", 0.0), (0.0, None))
+        else:
+            moved = [n for n, p in d["cause"]["parameters"].items() if p.get("errors_in_variables")]
+            self.assertTrue(moved, d["cause"]["parameters"])
+        for v in declared:
+            said = "errors in the variables: " if "not corrected" in v else "values corrected for the errors in: "
+            self.assertIn(said + v, r.stdout)
+        self.assertIsNone(d["extended"]["model_form_taken"])  # hil's own law: the centroid's lever
+        import jsonschema
+        with open(os.path.join(SRC, "docs", "schemas", "hil.diagnosis.schema.json")) as f:
+            jsonschema.validate(d, json.load(f))
+
     def test_candidates_option(self):
         run = self.simulate("bias2", "sensor_bias")
         r = hil("diagnose", run, "--candidates", "viscous_friction,sensor_bias", "--quiet")

@@ -155,7 +155,10 @@ void print_summary(std::ostream& out, const RunDiagnosis& r) {
     for (const auto& f : ext.model_forms) out << "    model form covered: " << f << "\n";
     for (const auto& f : ext.model_forms_rejected) out << "    model form rejected by the run: " << f << "\n";
     if (!ext.model_form_taken.empty()) out << "    values of the model form the run prefers: " << ext.model_form_taken << "\n";
-    for (const auto& v : ext.errors_in_variables) out << "    values corrected for the errors in: " << v << "\n";
+    // A refused correction reads "<variable>: not corrected, <why>" (engine.cpp).
+    for (const auto& v : ext.errors_in_variables)
+      out << (v.find(": not corrected") != std::string::npos ? "    errors in the variables: " : "    values corrected for the errors in: ")
+          << v << "\n";
     for (const auto& q : ext.full.reported)
       if (q.extension) out << fmt::format("    {:<28} {}  (PNR {:.1f})\n", q.name, fmt_value(q.value, q.std, q.unit), q.pnr());
     if (!ext.full.unidentifiable.empty())
