@@ -1912,8 +1912,13 @@ class ConfoundedFamily : public ModelFamily {
     std::vector<Param> p{{"offset", "", 1, false}};
     if (ext_.count("a")) p.push_back({"alpha", "", 1, true});
     if (ext_.count("b")) p.push_back({"beta", "", 1, true});
+    if (ext_.count("c"))
+      for (Eigen::Index j = 0; j < patches(); ++j) p.push_back({"c" + std::to_string(j), "", 1, true});
     return p;
   }
+  /// "c": one coefficient per 3 of the run's rows (row r belongs to coefficient r mod patches()),
+  /// an extension that can fit a third of the noise on any run.
+  Eigen::Index patches() const { return static_cast<Eigen::Index>(2 * o_.size()); }
   void design(const Eigen::VectorXd&, Eigen::MatrixXd& A, FamilyData&) const override {
     A.setZero(static_cast<Eigen::Index>(6 * o_.size()), static_cast<Eigen::Index>(linear().size()));
     for (std::size_t k = 0; k < o_.size(); ++k)
@@ -1923,6 +1928,7 @@ class ConfoundedFamily : public ModelFamily {
         A(r, j++) = 1.0;
         if (ext_.count("a")) A(r, j++) = u(o_.t_s[k], c);
         if (ext_.count("b")) A(r, j++) = v(o_.t_s[k], c);
+        if (ext_.count("c")) A(r, j + r % patches()) = 1.0;
       }
   }
 
@@ -1933,14 +1939,14 @@ class ConfoundedFamily : public ModelFamily {
 
 /// y = 0.7 + u - s w + noise (σ 0.5): with s = 0.5, "a" (α u) and "b" (β v, v = -u + w) each leave
 /// ±0.5 w and explain the run equally; with s = 0, "a" is exact and "b" leaves w.
-Observations confounded_data(double s, unsigned seed) {
+/// `n` samples `dt_s` apart.
+Observations confounded_data(double s, unsigned seed, int n = 2000, double dt_s = 0.01) {
   std::mt19937 rng(seed);
   std::normal_distribution<double> g(0, 0.5);
   Observations o;
-  const int n = 2000;
   o.y.resize(n, 6);
   for (int k = 0; k < n; ++k) {
-    const double t = 0.01 * k;
+    const double t = dt_s * k;
     o.t_s.push_back(t);
     for (int c = 0; c < 6; ++c) o.y(k, c) = 0.7 + ConfoundedFamily::u(t, c) - s * ConfoundedFamily::w(t, c) + g(rng);
   }
@@ -2021,53 +2027,14 @@ TEST(Diagnose, ASecondCauseConfoundedWithTheFirstIsSizedByItsHeldOutEffectInTheJ
   }
 }
 
-/// "a" as in ConfoundedFamily; "c": one coefficient per 3 of the run's rows (row r belongs to
-/// coefficient r mod (rows / 3)), an extension that can fit a third of the noise on any run.
-class NoiseFittingFamily : public ModelFamily {
- public:
-  NoiseFittingFamily(const Observations& o, std::set<std::string> ext) : o_(o), ext_(std::move(ext)) {}
-  std::string name() const override { return "noise_fitting"; }
-  Eigen::Index patches() const { return static_cast<Eigen::Index>(2 * o_.size()); }
-  std::vector<Param> linear() const override {
-    std::vector<Param> p{{"offset", "", 1, false}};
-    if (ext_.count("a")) p.push_back({"alpha", "", 1, true});
-    if (ext_.count("c"))
-      for (Eigen::Index j = 0; j < patches(); ++j) p.push_back({"c" + std::to_string(j), "", 1, true});
-    return p;
-  }
-  void design(const Eigen::VectorXd&, Eigen::MatrixXd& A, FamilyData&) const override {
-    A.setZero(static_cast<Eigen::Index>(6 * o_.size()), static_cast<Eigen::Index>(linear().size()));
-    for (std::size_t k = 0; k < o_.size(); ++k)
-      for (int c = 0; c < 6; ++c) {
-        const auto r = static_cast<Eigen::Index>(6 * k) + c;
-        A(r, 0) = 1.0;
-        const Eigen::Index first_c = ext_.count("a") ? 2 : 1;
-        if (ext_.count("a")) A(r, 1) = ConfoundedFamily::u(o_.t_s[k], c);
-        if (ext_.count("c")) A(r, first_c + r % patches()) = 1.0;
-      }
-  }
-
- private:
-  const Observations& o_;
-  std::set<std::string> ext_;
-};
-
 TEST(Score, AnEffectThatFitsTheNoiseHasANegativeHeldOutEffect) {
   // Truth: y = 0.7 + u + noise. Added to "a", "c" moves the fit's prediction by a third of the noise
   // variance on its own samples (each coefficient the mean of 3 rows' noise), more than the 0.25 a
   // cause must explain; on each fold's held-out rows it predicts worse, by about as much.
-  std::mt19937 rng(29);
-  const double sigma = 0.5;
-  std::normal_distribution<double> g(0, sigma);
-  Observations o;
+  const double sigma = 0.5;  // confounded_data's
   const int n = 300;
-  o.y.resize(n, 6);
-  for (int k = 0; k < n; ++k) {
-    const double t = 0.05 * k;
-    o.t_s.push_back(t);
-    for (int c = 0; c < 6; ++c) o.y(k, c) = 0.7 + ConfoundedFamily::u(t, c) + g(rng);
-  }
-  const NoiseFittingFamily m(o, {"a", "c"});
+  const Observations o = confounded_data(0.0, 29, n, 0.05);
+  const ConfoundedFamily m(o, {"a", "c"});
   CvOptions cv;
   for (const auto& p : m.linear())
     if (p.name != "offset" && p.name != "alpha") cv.effect_of.insert(p.name);
@@ -2081,7 +2048,7 @@ TEST(Score, AnEffectThatFitsTheNoiseHasANegativeHeldOutEffect) {
   ASSERT_TRUE(std::isfinite(s.held_out_effect));
   EXPECT_LT(s.held_out_effect / (sigma * sigma), -0.25);
   // Without effect_of the folds size nothing.
-  EXPECT_TRUE(std::isnan(score(NoiseFittingFamily(o, {"a"}), o, {}).held_out_effect));
+  EXPECT_TRUE(std::isnan(score(ConfoundedFamily(o, {"a"}), o, {}).held_out_effect));
 }
 
 // --- the deflection family ----------------------------------------------------------------------
