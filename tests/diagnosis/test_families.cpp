@@ -74,6 +74,14 @@
 //    and an axis held at one reported value for more than a quarter of the run is not declared.
 //    Drawn 2026-12-04: plate_height +0.087 (se 0.094), not biased (+0.25 on the same draws with the
 //    correction off); every effect named and covered, widths fail as before (docs/diagnosis.md).
+//  * With the sandwich where the folds are within its reach (branch
+//    experiment/sandwich-fold-reach-2026-12-05; rule added 2026-12-05, before these ran; the same
+//    rules): a fold-comparable value's std is the block-clustered sandwich's (G blocks of twice
+//    Andrews' AR(1) bandwidth, 5 to 40, t-widened) when G >= 10 and every fold's estimate lies
+//    within that std of its linear prediction from the full fit; else as before (the larger of the
+//    asymptotic std and the folds' spread). HIL_FAMILY_FIRST=1300, i = 1300..1349, never drawn
+//    before, for every effect. Widths (mean z² >= 0.5) and coverage are what it is for; the
+//    damping's and viscous coefficient's biases (stated, explained) are expected to show.
 //  * Per effect, of n draws, at most ceil(10 %) may fail each of:
 //     - named: the effect named first (clean: `none`);
 //     - single: no second cause.

@@ -206,6 +206,12 @@ struct Fit {
   bool converged = true;
   std::vector<Reported> reported;
   std::string invalid;  ///< why the fitted parameters are not physical (empty: they are)
+  /// EXPERIMENT (branch): the full fit's weighted Jacobian and residual at the optimum, and the
+  /// block-clustered sandwich over `sandwich_blocks` blocks sized from the residuals.
+  Eigen::MatrixXd jacobian;
+  Eigen::VectorXd residual;
+  Eigen::MatrixXd cov_sandwich;
+  int sandwich_blocks = 0;
 };
 
 struct FitOptions {
