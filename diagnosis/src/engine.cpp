@@ -5,9 +5,6 @@
 #include <Eigen/QR>
 #include <Eigen/SVD>
 #include <algorithm>
-#include <array>
-#include <cstdlib>
-#include <iostream>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -214,6 +211,14 @@ Eigen::MatrixXd full_jacobian(Evaluator& ev, const std::vector<Param>& nl, const
     else if (b < a) J.col(p + j) = other;
   }
   return J;
+}
+
+/// Two-sided 97.5 % quantile of Student's t with `dof` degrees of freedom.
+double t975(int dof) {
+  static const double q[] = {12.706, 4.303, 3.182, 2.776, 2.571, 2.447, 2.365, 2.306, 2.262, 2.228,
+                             2.201,  2.179, 2.160, 2.145, 2.131, 2.120, 2.110, 2.101, 2.093, 2.086};
+  if (dof < 1) return std::numeric_limits<double>::infinity();
+  return dof <= 20 ? q[dof - 1] : 1.96 + 2.4 / dof;
 }
 
 /// (JᵀJ)⁺ by the SVD of J with unit-norm columns (never the normal equations), singular values
@@ -502,9 +507,10 @@ Fit fit_with(const ModelFamily& m, const Observations& obs, const std::vector<in
     f.variance_inflation = den > 0 ? num / den : 1.0;
     f.cov *= f.variance_inflation;
   }
-  // EXPERIMENT: the block-clustered sandwich (JᵀJ)⁺ Σ_b g_b g_bᵀ (JᵀJ)⁺ G/(G-1), g_b = J_bᵀ r_b over
-  // G consecutive blocks of twice Andrews' (1991) AR(1) plug-in Bartlett bandwidth (5 to 40 of
-  // them), widened by t_{0.975, G-1} / 1.96.
+  // The block-clustered sandwich (JᵀJ)⁺ Σ_b g_b g_bᵀ (JᵀJ)⁺ G/(G-1), g_b = J_bᵀ r_b over G
+  // consecutive blocks, widened by t_{0.975, G-1} / 1.96: no pooled σ² over components of unequal
+  // noise, no single block carrying the estimate. The blocks are twice Andrews' (1991) AR(1)
+  // plug-in Bartlett bandwidth long (5 to 40 of them), from the residuals' lag-1 correlation.
   {
     const Eigen::Index ns = static_cast<Eigen::Index>(train.size()), P = J.cols();
     double num = 0.0, den = 0.0;
@@ -519,8 +525,8 @@ Fit fit_with(const ModelFamily& m, const Observations& obs, const std::vector<in
     }
     const double rho = den > 0 ? std::clamp(num / den, -0.97, 0.97) : 0.0;
     const double alpha = 4 * rho * rho / ((1 - rho) * (1 - rho) * (1 + rho) * (1 + rho));
-    const double S = 1.1447 * std::cbrt(alpha * static_cast<double>(ns));
-    const int G = static_cast<int>(std::clamp(std::floor(static_cast<double>(ns) / std::max(1.0, 2 * S)), 5.0, 40.0));
+    const double bandwidth = 1.1447 * std::cbrt(alpha * static_cast<double>(ns));
+    const int G = static_cast<int>(std::clamp(std::floor(static_cast<double>(ns) / std::max(1.0, 2 * bandwidth)), 5.0, 40.0));
     Eigen::MatrixXd M = Eigen::MatrixXd::Zero(P, P);
     int used = 0;
     for (int b = 0; b < G; ++b) {
@@ -531,11 +537,8 @@ Fit fit_with(const ModelFamily& m, const Observations& obs, const std::vector<in
       ++used;
     }
     if (used > 1) {
-      const double tq = (used - 1 <= 20 ? std::array<double, 20>{12.706, 4.303, 3.182, 2.776, 2.571, 2.447, 2.365, 2.306, 2.262, 2.228,
-                                                                 2.201,  2.179, 2.160, 2.145, 2.131, 2.120, 2.110, 2.101, 2.093, 2.086}
-                                                  [static_cast<std::size_t>(used - 2)]
-                                            : 1.96 + 2.4 / (used - 1));
-      f.cov_sandwich = inv * M * inv * (static_cast<double>(used) / (used - 1)) * (tq / 1.96) * (tq / 1.96);
+      const double widen = t975(used - 1) / 1.96;
+      f.cov_sandwich = inv * M * inv * (static_cast<double>(used) / (used - 1)) * widen * widen;
       f.sandwich_blocks = used;
       f.jacobian = J;
       f.residual = cur.r;
@@ -752,34 +755,26 @@ void extension_pnr(Score& s) {
   s.identifiable = s.max_extension_pnr >= 5.0;
 }
 
-/// Two-sided 97.5 % quantile of Student's t with `dof` degrees of freedom.
-double t975(int dof) {
-  static const double q[] = {12.706, 4.303, 3.182, 2.776, 2.571, 2.447, 2.365, 2.306, 2.262, 2.228,
-                             2.201,  2.179, 2.160, 2.145, 2.131, 2.120, 2.110, 2.101, 2.093, 2.086};
-  if (dof < 1) return std::numeric_limits<double>::infinity();
-  return dof <= 20 ? q[dof - 1] : 1.96 + 2.4 / dof;
-}
-
 /// Intervals that hold when the model is not exactly right or the residuals are not white: the
 /// spread of the folds' estimates (delete-a-block jackknife, g blocks: var = (g-1)/g Σ (x_i - x̄)²)
 /// measures what the asymptotic formula assumes away (misfit, autocorrelation beyond its lags,
 /// a multimodal cost). With g - 1 degrees of freedom its ±1.96 std would cover too rarely, so it
-/// is scaled by t_{0.975, g-1} / 1.96. The reported std is the larger of the two; the PNR keeps
-/// the asymptotic one (Reported::pnr).
-void honest_intervals(Score& s, const std::map<std::string, std::vector<double>>& by_name, std::size_t folds,
-                      const ModelFamily& m, const std::map<std::string, std::vector<double>>& by_name_linear) {
+/// is scaled by t_{0.975, g-1} / 1.96. The reported std is the larger of the two, except where the
+/// block-clustered sandwich can stand alone: the residuals' correlation short (at least
+/// kSandwichMinBlocks blocks) and every fold's estimate within one sandwich std of its linear
+/// prediction from the full fit (`linear`), i.e. no fold found another minimum or a nonlinearity
+/// the sandwich cannot see. Then the folds' spread is the leverage of unequally informative blocks,
+/// which the sandwich weighs properly, and the sandwich is the std. The PNR keeps the asymptotic
+/// std (Reported::pnr).
+void honest_intervals(Score& s, const ModelFamily& m, const std::map<std::string, std::vector<double>>& by_name,
+                      const std::map<std::string, std::vector<double>>& linear, std::size_t folds) {
   if (folds < 3) return;
-  // EXPERIMENT: the sandwich's std of each reported value; where the residuals' correlation is
-  // short (G >= 10 blocks) and every fold's estimate lies within that std of the fold's linear
-  // prediction from the full fit (A_i⁺ J_trainᵀ r_train), the sandwich alone is the std.
   std::map<std::string, double> sandwich_std;
   if (s.full.cov_sandwich.size() > 0) {
     Fit f = s.full;
     f.cov = s.full.cov_sandwich;
     for (const auto& r : reported_of(m, f)) sandwich_std[r.name] = r.std;
   }
-  const bool print = std::getenv("HIL_REACH_PRINT") != nullptr;
-  const bool off = std::getenv("HIL_REACH_OFF") != nullptr;
   const double g = static_cast<double>(folds);
   const double widen = t975(static_cast<int>(folds) - 1) / 1.96;
   for (auto& r : s.full.reported) {
@@ -792,16 +787,15 @@ void honest_intervals(Score& s, const std::map<std::string, std::vector<double>>
     r.std_asymptotic = r.std;
     r.std = std::max(r.std, r.std_folds);
     const auto sw = sandwich_std.find(r.name);
-    const auto lin = by_name_linear.find(r.name);
-    if (sw == sandwich_std.end() || lin == by_name_linear.end() || lin->second.size() != folds) continue;
+    const auto lin = linear.find(r.name);
+    if (sw == sandwich_std.end() || !(sw->second > 0) || lin == linear.end() || lin->second.size() != folds) continue;
+    r.std_sandwich = sw->second;
     double worst = 0.0;
     for (std::size_t i = 0; i < folds; ++i) worst = std::max(worst, std::abs(it->second[i] - lin->second[i]));
-    const bool reach = s.full.sandwich_blocks >= 10 && worst <= sw->second;
-    if (print)
-      std::cerr << "REACH " << s.model << " " << r.name << " G " << s.full.sandwich_blocks << " worst/sw " << worst / sw->second
-                << " sw " << sw->second << " asym " << r.std_asymptotic << " folds " << r.std_folds << " -> "
-                << (reach && !off ? "sandwich" : "as now") << "\n";
-    if (reach && !off) r.std = sw->second;
+    if (s.full.sandwich_blocks >= kSandwichMinBlocks && worst <= sw->second) {
+      r.std = sw->second;
+      r.sandwich = true;
+    }
   }
 }
 
@@ -921,6 +915,8 @@ Score score(const ModelFamily& m, const Observations& obs, const CvOptions& o, c
   extension_pnr(s);
   if (o.screen) s.screened = o.screen(s);
   if (!s.screened.empty()) {
+    s.full.jacobian.resize(0, 0);
+    s.full.residual.resize(0);
     s.cv_error = std::numeric_limits<double>::quiet_NaN();
     s.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     return s;
@@ -1002,7 +998,7 @@ Score score(const ModelFamily& m, const Observations& obs, const CvOptions& o, c
     }
     tell();
   });
-  std::map<std::string, std::vector<double>> by_name, by_name_linear;
+  std::map<std::string, std::vector<double>> by_name, linear;
   std::size_t folds_unshifted = 0;
   double pooled_sq = 0.0, effect_sq = 0.0;
   std::size_t next = 0;
@@ -1024,7 +1020,8 @@ Score score(const ModelFamily& m, const Observations& obs, const CvOptions& o, c
       // The fold's estimates of what the full fit reports (derived quantities included): the
       // intervals' spread is that of the plain grid's folds (a shifted grid's overlap them).
       for (const auto& r : values_reported(fd.own ? *fd.own : m, fd.fit, s.full)) by_name[r.name].push_back(r.value);
-      // EXPERIMENT: the fold's estimate as the full fit's linearisation predicts it.
+      // The fold's estimate as the full fit's linearisation predicts it: A_i⁺ J_trainᵀ r_train
+      // from the full optimum (honest_intervals compares the fold's own with it).
       if (s.full.jacobian.size() > 0) {
         const Eigen::MatrixXd& J = s.full.jacobian;
         Eigen::MatrixXd Jt(static_cast<Eigen::Index>(6 * fd.train.size()), J.cols());
@@ -1038,7 +1035,7 @@ Score score(const ModelFamily& m, const Observations& obs, const CvOptions& o, c
         Fit lin = s.full;
         lin.theta += d.head(lin.theta.size());
         lin.phi += d.tail(lin.phi.size());
-        for (const auto& r : values_reported(m, lin, s.full)) by_name_linear[r.name].push_back(r.value);
+        for (const auto& r : values_reported(m, lin, s.full)) linear[r.name].push_back(r.value);
       }
       ++folds_unshifted;
     }
@@ -1049,7 +1046,9 @@ Score score(const ModelFamily& m, const Observations& obs, const CvOptions& o, c
   }
   s.cv_error = std::sqrt(pooled_sq / offsets);
   if (!o.effect_of.empty()) s.held_out_effect = effect_sq / (6.0 * static_cast<double>(n) * offsets);
-  honest_intervals(s, by_name, folds_unshifted, m, by_name_linear);
+  honest_intervals(s, m, by_name, linear, folds_unshifted);
+  s.full.jacobian.resize(0, 0);  // its rows scale with the run: not kept beyond their use
+  s.full.residual.resize(0);
   model_form_intervals(s, forms, form_fits);
   if (o.errors_in_variables) correct_errors_in_variables(s, m, obs, all, o.threads);
   s.full.invalid = m.check(s.full);

@@ -82,6 +82,10 @@
 //    asymptotic std and the folds' spread). HIL_FAMILY_FIRST=1300, i = 1300..1349, never drawn
 //    before, for every effect. Widths (mean z² >= 0.5) and coverage are what it is for; the
 //    damping's and viscous coefficient's biases (stated, explained) are expected to show.
+//    Drawn 2026-12-05 and landed: sensor_bias, time_offset, contact_damping, nonlinear_stiffness and
+//    geometric_offset meet every rule (widths included, for the first time); none and sensor_gain
+//    fail on naming (trapezoidal `unexplained`), viscous_friction on its bias (-0.34, se 0.16)
+//    (docs/diagnosis.md, "The sandwich where the folds are within its reach").
 //  * Per effect, of n draws, at most ceil(10 %) may fail each of:
 //     - named: the effect named first (clean: `none`);
 //     - single: no second cause.

@@ -44,6 +44,8 @@ nlohmann::json params_json(const dg::Fit& f, bool extension_only) {
                  {"std_asymptotic", q.std_asymptotic > 0 ? q.std_asymptotic : q.std},
                  {"std_folds", q.std_folds},
                  {"std_model_form", q.std_model_form},
+                 {"std_sandwich", q.std_sandwich},
+                 {"sandwich", q.sandwich},
                  {"errors_in_variables", q.errors_in_variables},
                  {"unit", q.unit},
                  {"pnr", q.pnr()},

@@ -45,8 +45,13 @@ struct Reported {
   double nominal = 0.0;  ///< the value under the nominal model (the PNR measures the distance from it)
   /// The standard deviation from the spread of the cross-validation folds' estimates (delete-a-block
   /// jackknife, scaled to Student's t of its degrees of freedom); 0: not computed. `std` is the
-  /// larger of it and the asymptotic one.
+  /// larger of it and the asymptotic one, unless the sandwich's is taken (`std_sandwich`).
   double std_folds = 0.0;
+  /// The block-clustered sandwich's standard deviation (0: not computed), taken as `std` where the
+  /// residuals' correlation is short and every fold lies within its reach (docs/diagnosis.md,
+  /// "Intervals"); `sandwich` says whether it was.
+  double std_sandwich = 0.0;
+  bool sandwich = false;
   /// The asymptotic standard deviation, σ² (JᵀJ)⁻¹ inflated for autocorrelation (0: same as std).
   double std_asymptotic = 0.0;
   /// The model-form part (0: none): the largest shift of the value when the fit is repeated under
@@ -206,13 +211,20 @@ struct Fit {
   bool converged = true;
   std::vector<Reported> reported;
   std::string invalid;  ///< why the fitted parameters are not physical (empty: they are)
-  /// EXPERIMENT (branch): the full fit's weighted Jacobian and residual at the optimum, and the
-  /// block-clustered sandwich over `sandwich_blocks` blocks sized from the residuals.
-  Eigen::MatrixXd jacobian;
-  Eigen::VectorXd residual;
+  /// The block-clustered sandwich covariance of (θ, φ) over `sandwich_blocks` consecutive blocks
+  /// sized from the residuals' correlation (empty: not computed), and, until score() has used
+  /// them for the folds' linear predictions, the weighted Jacobian and residual at the optimum.
   Eigen::MatrixXd cov_sandwich;
   int sandwich_blocks = 0;
+  Eigen::MatrixXd jacobian;
+  Eigen::VectorXd residual;
 };
+
+/// The reported std is the block-clustered sandwich's only with at least this many blocks: the
+/// residuals correlated over less than a twentieth of the run (blocks of twice the bandwidth).
+/// Fewer, longer blocks' influences under-covered a slope under AR(1) errors (48-49 of 60 against
+/// the rule's 51, docs/diagnosis.md), where the folds' spread covers.
+constexpr int kSandwichMinBlocks = 10;
 
 struct FitOptions {
   int max_iterations = 40;
