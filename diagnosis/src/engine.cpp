@@ -213,6 +213,14 @@ Eigen::MatrixXd full_jacobian(Evaluator& ev, const std::vector<Param>& nl, const
   return J;
 }
 
+/// Component c of a weighted residual with 6 rows per sample (ns samples), less its mean.
+Eigen::VectorXd centred_component(const Eigen::VectorXd& r, Eigen::Index ns, int c) {
+  Eigen::VectorXd rc(ns);
+  for (Eigen::Index a = 0; a < ns; ++a) rc(a) = r(6 * a + c);
+  rc.array() -= rc.mean();
+  return rc;
+}
+
 /// Two-sided 97.5 % quantile of Student's t with `dof` degrees of freedom.
 double t975(int dof) {
   static const double q[] = {12.706, 4.303, 3.182, 2.776, 2.571, 2.447, 2.365, 2.306, 2.262, 2.228,
@@ -494,9 +502,7 @@ Fit fit_with(const ModelFamily& m, const Observations& obs, const std::vector<in
     const int L = static_cast<int>(std::min<Eigen::Index>(20, ns / 4));
     double num = 0.0, den = 0.0;
     for (int c = 0; c < 6; ++c) {
-      Eigen::VectorXd rc(ns);
-      for (Eigen::Index a = 0; a < ns; ++a) rc(a) = cur.r(6 * a + c);
-      rc.array() -= rc.mean();
+      const Eigen::VectorXd rc = centred_component(cur.r, ns, c);
       const double v0 = rc.squaredNorm();
       if (!(v0 > 0)) continue;
       double factor = 1.0;
@@ -515,9 +521,7 @@ Fit fit_with(const ModelFamily& m, const Observations& obs, const std::vector<in
     const Eigen::Index ns = static_cast<Eigen::Index>(train.size()), P = J.cols();
     double num = 0.0, den = 0.0;
     for (int c = 0; c < 6; ++c) {
-      Eigen::VectorXd rc(ns);
-      for (Eigen::Index a = 0; a < ns; ++a) rc(a) = cur.r(6 * a + c);
-      rc.array() -= rc.mean();
+      const Eigen::VectorXd rc = centred_component(cur.r, ns, c);
       const double v0 = rc.squaredNorm();
       if (!(v0 > 0) || ns < 3) continue;
       num += rc.head(ns - 1).dot(rc.tail(ns - 1));
