@@ -563,7 +563,7 @@ Eigen::MatrixXd predict_with(const Eigen::MatrixXd& A, const Fit& f, std::size_t
 }
 
 /// The prediction of every sample by the fit `f` of `m` with the parameters named in `off` at
-/// their nominal value 0, the nominal model's free linear parameters re-solved on `train` (QR) and
+/// their nominal value 0, the nominal model's free linear parameters re-solved on `train` (solve_ls) and
 /// the rest kept as fitted: what the fit predicts without that part of its model.
 Eigen::MatrixXd prediction_without(const ModelFamily& m, const Fit& f, const Observations& obs, const std::vector<int>& train,
                                    const std::set<std::string>& off, DesignCache& cache) {
