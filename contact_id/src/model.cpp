@@ -68,7 +68,8 @@ void tangent(const Scene& s, const Kinematics& k, double v_tm, ContactPoint& c) 
   const Vec3 v = relative_velocity(s, k, c.point);
   const Vec3 vt = v - v.dot(c.normal) * c.normal;
   c.slip_speed = vt.norm();
-  c.tangent = c.slip_speed > v_tm && c.slip_speed > 0.0 ? Vec3(-vt / c.slip_speed) : Vec3::Zero();
+  c.slip_direction = c.slip_speed > 0.0 ? Vec3(-vt / c.slip_speed) : Vec3::Zero();
+  c.tangent = c.slip_speed > v_tm ? c.slip_direction : Vec3::Zero();
 }
 
 void mindist(const Scene& s, const Kinematics& k, const Eigen::VectorXd& x, double v_tm, std::vector<ContactPoint>& out,

@@ -640,7 +640,7 @@ void ContactFamily::columns(const std::vector<cid::ContactPoint>& cs, const cid:
     const Eigen::Vector3d pt = c.point + friction_lever_ * c.delta * c.normal;  // the tangential forces' point
     out.col(0) += plate_wrench_of(T, normal * c.normal, c.point);
     out.col(1) += plate_wrench_of(T, de * c.tangent, pt);
-    const ContactAt at{d_, c, k_rate, pt, dashpot};
+    const ContactAt at{d_, c, k_rate, pt, dashpot, de};
     for (const auto& b : terms_) b.term->contact_columns(b.slots, at, out);
   }
 }

@@ -96,7 +96,7 @@ class Diagnose(unittest.TestCase):
         self.assertIn("contact_damping takes its penetration rates from the reported twist", d["notes"])
         names = {c["name"] for c in d["candidates"]}
         self.assertEqual(names, {"geometric_offset", "robot_compliance", "time_offset", "sensor_bias", "sensor_gain",
-                                 "viscous_friction", "contact_damping", "nonlinear_stiffness"})
+                                 "viscous_friction", "slow_slip", "contact_damping", "nonlinear_stiffness"})
         for c in d["candidates"]:
             for key in ("relative_error", "gain_percent", "noise_variances", "effect_noise_variances", "bic", "max_pnr",
                         "supported", "verdict"):

@@ -93,7 +93,7 @@ TEST(EffectRegistry, ATestFixtureEffectIsRegisteredAndListedAfterTheBuiltInOnes)
 TEST(EffectRegistry, TheBuiltInListsAreTheRegistrys) {
   EXPECT_EQ(std::vector<std::string>(contact_extensions().begin(), contact_extensions().end() - 1),
             (std::vector<std::string>{"geometric_offset", "robot_compliance", "time_offset", "sensor_bias", "sensor_gain",
-                                      "viscous_friction", "contact_damping", "nonlinear_stiffness"}));
+                                      "viscous_friction", "slow_slip", "contact_damping", "nonlinear_stiffness"}));
   EXPECT_EQ(deflection_extensions(), (std::vector<std::string>{"robot_compliance", "time_offset", "rest_change"}));
   // Repeated blocked CV: asked for by rest_change (its events), by nothing else.
   EXPECT_EQ(default_cv_offsets({"robot_compliance", "time_offset"}), 1);

@@ -61,6 +61,9 @@ struct ContactPoint {
   Vec3 tangent = Vec3::Zero();  ///< e_t,i, world; zero while sticking
   double slip_speed = 0.0;      ///< |v_t,i|, m/s
   int poly1 = -1, poly2 = -1;   ///< flattened polyhedron indices in object 1 and 2
+  /// -v_t,i / |v_t,i| at any slip speed, sticking or not (zero at none): where a slow slip's
+  /// friction would act (the diagnosis's slow_slip candidate)
+  Vec3 slip_direction = Vec3::Zero();
 };
 
 /// Posed polyhedra of both bodies for one sample and one x_u (reusable buffers).

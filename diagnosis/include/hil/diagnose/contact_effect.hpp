@@ -53,6 +53,9 @@ struct ContactAt {
   /// The dashpot's factor at this contact: δ / δ̄ in contact_damping's Hunt-Crossley form
   /// (ContactFamily::model_forms), else 1.
   double damping_scale = 1.0;
+  /// δ_e: the interference as the stiffness law sees it (δ, or δ_ref (δ/δ_ref)^p), what the nominal
+  /// friction column K δ_e e_t scales with
+  double elastic_delta_m = 0.0;
 };
 
 /// What an effect may use when it binds to a run.
