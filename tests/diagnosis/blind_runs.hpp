@@ -100,8 +100,9 @@ struct Diagnosed {
 };
 
 /// Diagnoses the scenario as the CLI does (the same context signals), sticking below
-/// kStickBelow_m_per_s, the pose and twist reported at `r`.
-Diagnosed diagnose_scenario(const ct::Scenario& sc, const TripodRigOptions& rig, const Resolution& r);
+/// `stick_below_m_per_s` (the rig's declared threshold), the pose and twist reported at `r`.
+Diagnosed diagnose_scenario(const ct::Scenario& sc, const TripodRigOptions& rig, const Resolution& r,
+                            double stick_below_m_per_s = kStickBelow_m_per_s);
 
 /// A dashpot D (δ/δ_ref)^q δ̇ (Hunt-Crossley's for q = p) is no linear D' δ̇ (issue 32, item 4's
 /// form mismatches). Its truth for a linear damping: the least-squares D' over the run's feet in
