@@ -1110,8 +1110,11 @@ namespace {
 /// The registered injectable contact effect of that name. \throws std::invalid_argument if none.
 const ContactEffect& injectable_effect(const std::string& name) {
   const Effect* effect = find_effect(name);
-  if (!effect || !effect->contact() || !effect->contact()->injectable())
+  if (!effect || !effect->contact())
     throw std::invalid_argument("unknown effect '" + name + "' (expected one of the diagnosis' candidates)");
+  if (!effect->contact()->injectable())
+    throw std::invalid_argument(fmt::format("effect '{}' is a diagnosis candidate the hidden-effect generator cannot hide (it hides {})",
+                                            name, fmt::join(injectable_contact_effects(), ", ")));
   return *effect->contact();
 }
 
@@ -1156,6 +1159,13 @@ void draw_effect(const std::string& name, unsigned seed, const cid::Scene& scene
 
 void inject_effect(const std::string& name, const TruthValues& values, Effects& e) {
   e.injected[name] = injectable_effect(name).inject(values);
+}
+
+std::vector<std::string> injectable_contact_effects() {
+  std::vector<std::string> out;
+  for (const Effect* x : registered_effects())
+    if (x->contact() && x->contact()->injectable()) out.push_back(x->name());
+  return out;
 }
 
 std::vector<TruthField> truth_file_fields(const Effects& e) {

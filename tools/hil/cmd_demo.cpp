@@ -209,8 +209,8 @@ void add_demo(CLI::App& app) {
   cmd->add_option("--trajectory", o.trajectory, "ee trajectory to simulate the run from")->capture_default_str();
   cmd->add_option("--rig", o.rig, "rig file (with a contact model)")->capture_default_str();
   cmd->add_option("--seed", o.seed, "chooses the hidden effect and its magnitude")->capture_default_str();
-  cmd->add_option("--effect", o.effect, "hide this effect instead (a diagnosis candidate)")
-      ->check(CLI::IsMember(hil::diagnose::contact_extensions()));
+  cmd->add_option("--effect", o.effect, "hide this effect instead (a diagnosis candidate the generator can hide)")
+      ->check(CLI::IsMember(hil::diagnose::injectable_contact_effects()));
   cmd->add_option("--out", o.out, "where to record (default: a new folder under the temp directory)");
   cmd->add_option("--speed", o.speed, "playback speed")->capture_default_str();
   cmd->add_option("--decimate", o.decimate, "keep every n-th trajectory sample")->capture_default_str()->check(CLI::Range(1, 1000));

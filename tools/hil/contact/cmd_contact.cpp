@@ -1,5 +1,6 @@
 // `hil contact simulate|identify|worker`: contact-parameter identification (issue 5).
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <nlohmann/json.hpp>
 #include <spdlog/spdlog.h>
 
@@ -92,11 +93,11 @@ void add_contact(CLI::App& app) {
   sim->add_option("--force-noise", sa.force_noise, "N (Gaussian std)");
   sim->add_option("--moment-noise", sa.moment_noise, "N m (Gaussian std)");
   sim->add_option("--seed", sa.seed, "noise seed");
+  static const std::vector<std::string> injectable = hil::diagnose::injectable_contact_effects();
   sim->add_option("--inject", sa.inject,
-                  "hide an effect in the data (a diagnosis candidate: geometric_offset, robot_compliance, time_offset, "
-                  "sensor_bias, sensor_gain, viscous_friction, contact_damping, nonlinear_stiffness); repeatable")
+                  fmt::format("hide an effect in the data (a diagnosis candidate: {}); repeatable", fmt::join(injectable, ", ")))
       ->delimiter(',')
-      ->check(CLI::IsMember(hil::diagnose::contact_extensions()));
+      ->check(CLI::IsMember(injectable));
   sim->add_option("--effect-seed", sa.effect_seed, "seed of the injected effects' random magnitudes")->capture_default_str();
   sim->add_option("--truth-out", sa.truth_out, "write the injected effects (the hidden truth) as JSON (hil.hidden_effects; - for stdout)");
   sim->callback([] { set_action([] { return simulate_run(sa); }); });

@@ -381,6 +381,9 @@ struct Effects {
   std::optional<double> truth_of(const std::string& name, const cid::Scene& scene) const;
 };
 
+/// The contact effects the hidden-effect generator can hide (ContactEffect::injectable), in the
+/// registry's order: what `hil contact simulate --inject` and `hil demo --effect` accept.
+std::vector<std::string> injectable_contact_effects();
 /// Draws an effect of the named kind with a seeded random magnitude into `e` (ContactEffect::draw).
 /// \throws std::invalid_argument on an unknown or not injectable name.
 void draw_effect(const std::string& name, unsigned seed, const cid::Scene& scene, Effects& e);
