@@ -44,11 +44,10 @@ class Term : public ContactTerm {
   /// How to read μ_s / μ on this run: the reported twist's step beside the threshold says whether
   /// sliding contacts can read below it.
   std::string note() const override {
-    return fmt::format(
-        "slow_slip's μ_s K acts on the {} samples whose contacts slip below the declared sticking threshold ({:.3g} mm/s; the "
-        "reported twist's step {}): μ_s / μ near 1 says they slide there with their friction (declare the threshold lower), "
-        "well below 1 that some of them stick or that sliding contacts read below it",
-        samples_, 1e3 * v_tm_, twist_step_m_per_s_ > 0.0 ? fmt::format("{:.3g} mm/s", 1e3 * twist_step_m_per_s_) : std::string("none seen"));
+    return fmt::format("slow_slip acts on {} samples slipping below the declared sticking threshold ({:.3g} mm/s; twist step {}): "
+                       "μ_s/μ near 1, they slide with their friction (declare it lower); well below 1, some stick or are misread",
+                       samples_, 1e3 * v_tm_,
+                       twist_step_m_per_s_ > 0.0 ? fmt::format("{:.3g} mm/s", 1e3 * twist_step_m_per_s_) : std::string("none seen"));
   }
 
  private:
@@ -77,8 +76,8 @@ class SlowSlip : public ContactEffect {
       for (std::size_t k = 0; k < b.data.contacts.size(); ++k) n += slow(k) ? 1 : 0;
     for (const int k : b.samples) n += slow(static_cast<std::size_t>(k)) ? 1 : 0;
     if (n == 0)
-      throw std::runtime_error(
-          fmt::format("slow_slip: no contact slips below the declared sticking threshold ({:.3g} mm/s) on this run", 1e3 * v_tm));
+      throw std::runtime_error(fmt::format("slow_slip: no contact slips below the declared sticking threshold ({:.3g} mm/s) on this run",
+                                           1e3 * v_tm));
     return std::make_shared<Term>(v_tm, n, b.data.velocity_quantum_m_per_s.maxCoeff());
   }
   std::string separating_experiment(const std::string& other) const override {
