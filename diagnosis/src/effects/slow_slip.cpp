@@ -61,7 +61,8 @@ class SlowSlip : public ContactEffect {
   std::string name() const override { return "slow_slip"; }
   int list_order() const override { return 65; }
   std::string description() const override {
-    return "the contacts slide below the declared sticking threshold and bear friction there (declare v_t,m lower)";
+    return "friction acts where the rig declares the contacts sticking: they slide below the declared threshold, or the "
+           "measured slip reads them below it (μ_s/μ says which)";
   }
   int layout_order() const override { return 65; }
   std::shared_ptr<const ContactTerm> bind(const ContactBinding& b) const override {

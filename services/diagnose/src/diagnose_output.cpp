@@ -173,8 +173,10 @@ void print_summary(std::ostream& out, const RunDiagnosis& r) {
     // an effect outside the library.
     for (const auto& f : d.extended_residuals.structure) out << "    left unexplained: " << f.text << "\n";
   }
+  // The nominal model's readings, and slow_slip's μ_s / μ, which its note tells the reader to read.
   for (const auto& q : ext.full.reported)
-    if (!q.extension && (q.name == "K" || q.name == "mu")) out << fmt::format("    {:<28} {}\n", q.name, fmt_value(q.value, q.std, q.unit));
+    if (!q.extension && (q.name == "K" || q.name == "mu" || q.name == "slow_slip_mu_ratio"))
+      out << fmt::format("    {:<28} {}\n", q.name, fmt_value(q.value, q.std, q.unit));
   out << "  candidates (held-out error, gain, verdict):\n";
   for (const auto& c : d.candidates)
     out << fmt::format("    {:<20} {:>9} {:>9}  {}\n", c.name, percent_cell(c.score.cv_error, "{:.2f} %"),
