@@ -1933,6 +1933,11 @@ TEST(Generator, DrawsSeededEffectsAndRefusesUnknownOnes) {
   EXPECT_EQ(a.names(), std::vector<std::string>{"viscous_friction"});
   EXPECT_THAT([&] { draw_effect("magnetism", 1, r.scene, a); },
               ThrowsMessage<std::invalid_argument>(HasSubstr("unknown effect 'magnetism' (expected one of the diagnosis' candidates)")));
+  // A candidate the generator cannot hide is said to be one, not called unknown.
+  EXPECT_THAT([&] { draw_effect("slow_slip", 1, r.scene, a); },
+              ThrowsMessage<std::invalid_argument>(
+                  HasSubstr("effect 'slow_slip' is a diagnosis candidate the hidden-effect generator cannot hide")));
+  EXPECT_THAT([&] { inject_effect("slow_slip", {}, a); }, ThrowsMessage<std::invalid_argument>(HasSubstr("cannot hide (it hides ")));
 }
 
 TEST(Diagnose, CandidatesFailingWithoutHeldOutDataAreScreenedAndSaySo) {
