@@ -17,6 +17,7 @@ deps() {
     libeigen3-dev libspdlog-dev libfmt-dev libyaml-cpp-dev libcli11-dev nlohmann-json3-dev
     libmodbus-dev libfastrtps-dev libfastcdr-dev fastddsgen fastdds-tools default-jre-headless
     libtinyxml2-dev  # the Net F/T calibration page (drivers)
+    libboost-dev  # Boost.Math's Student t quantiles (diagnosis/src/engine.cpp)
     can-utils iproute2 libgtest-dev libgmock-dev libbenchmark-dev zlib1g-dev libzstd-dev liblz4-dev
     python3-can python3-pymodbus python3-serial-asyncio python3-numpy python3-jsonschema
     pybind11-dev python3-dev python3-pytest

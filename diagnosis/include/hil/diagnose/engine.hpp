@@ -212,10 +212,13 @@ struct Fit {
   std::vector<Reported> reported;
   std::string invalid;  ///< why the fitted parameters are not physical (empty: they are)
   /// The block-clustered sandwich covariance of (θ, φ) over `sandwich_blocks` consecutive blocks
-  /// sized from the residuals' correlation (empty: not computed), and, until score() has used
-  /// them for the folds' linear predictions, the weighted Jacobian and residual at the optimum.
+  /// sized from the residuals' correlation, leverage-corrected (CR2) and widened per parameter by
+  /// Student's t of its Bell-McCaffrey degrees of freedom `sandwich_dof` (the blocks its information
+  /// is spread over); empty: not computed. And, until score() has used them for the folds' linear
+  /// predictions, the weighted Jacobian and residual at the optimum.
   Eigen::MatrixXd cov_sandwich;
   int sandwich_blocks = 0;
+  Eigen::VectorXd sandwich_dof;
   Eigen::MatrixXd jacobian;
   Eigen::VectorXd residual;
 };
