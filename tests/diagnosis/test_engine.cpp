@@ -490,6 +490,20 @@ class Patch : public ModelFamily {
   const Observations& o_;
 };
 
+/// n samples at 100 Hz of 1 + 0.5 x(k) on every component, white noise of std 0.1 from `seed`.
+template <class F>
+Observations bump_data(unsigned seed, int n, F x) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> g(0, 0.1);
+  Observations o;
+  o.y.resize(n, 6);
+  for (int k = 0; k < n; ++k) {
+    o.t_s.push_back(0.01 * k);
+    for (int c = 0; c < 6; ++c) o.y(k, c) = 1.0 + 0.5 * x(k) + g(rng);
+  }
+  return o;
+}
+
 TEST(Engine, OneInformativeBlockIsWeighedByTheSandwichNotSwampedByItsFold) {
   // White noise: the residuals are uncorrelated (40 sandwich blocks) and the model is linear, so
   // every fold lies on its linear prediction and the sandwich's std is taken. The fold without the
@@ -501,15 +515,7 @@ TEST(Engine, OneInformativeBlockIsWeighedByTheSandwichNotSwampedByItsFold) {
   int covered = 0, taken = 0;
   double z2 = 0.0, ratio = 0.0;
   for (int seed = 0; seed < seeds; ++seed) {
-    std::mt19937 rng(2000 + static_cast<unsigned>(seed));
-    std::normal_distribution<double> g(0, 0.1);
-    Observations o;
-    const int n = 500;
-    o.y.resize(n, 6);
-    for (int k = 0; k < n; ++k) {
-      o.t_s.push_back(0.01 * k);
-      for (int c = 0; c < 6; ++c) o.y(k, c) = 1.0 + 0.5 * Patch::x(0.01 * k, 0.01 * n) + g(rng);
-    }
+    const Observations o = bump_data(2000 + static_cast<unsigned>(seed), 500, [](int k) { return Patch::x(0.01 * k, 5.0); });
     const Patch m(o);
     const Score s = score(m, o);
     for (const auto& r : s.full.reported)
@@ -561,15 +567,7 @@ TEST(Engine, AParameterInformedByTwoBlocksIsCoveredByTheLeverageCorrectedSandwic
   int covered = 0, taken = 0;
   double dof = 0.0;
   for (int seed = 0; seed < seeds; ++seed) {
-    std::mt19937 rng(5000 + static_cast<unsigned>(seed));
-    std::normal_distribution<double> g(0, 0.1);
-    Observations o;
-    const int n = 400;
-    o.y.resize(n, 6);
-    for (int k = 0; k < n; ++k) {
-      o.t_s.push_back(0.01 * k);
-      for (int c = 0; c < 6; ++c) o.y(k, c) = 1.0 + 0.5 * TwoBumps::x(k) + g(rng);
-    }
+    const Observations o = bump_data(5000 + static_cast<unsigned>(seed), 400, TwoBumps::x);
     const TwoBumps m(o);
     const Score s = score(m, o);
     ASSERT_EQ(s.full.sandwich_dof.size(), 2);
