@@ -110,6 +110,14 @@ Diagnosed diagnose_scenario(const ct::Scenario& sc, const TripodRigOptions& rig,
 /// (D itself when q = 0).
 double linear_damping_of(const ct::Scenario& s);
 
+/// slow_slip's μ_s / μ on the truth's own law (issue 32): the truth's friction below the sticking
+/// threshold is μ B u / sqrt(u² + ε²) at slip speed u (B its bound, ε its regularisation), weaker
+/// than μ B where u is a few ε, and B is the total normal force where the friction follows it. The
+/// least-squares ratio of that friction to hil's column μ_s K δ_e over the feet in contact whose
+/// true slip speed is in (0, v_t,m], at the sample times: Σ E B g(u) / Σ E², E the elastic force,
+/// g(u) = u / sqrt(u² + ε²). 1 when no foot slips below the threshold.
+double slow_friction_ratio_of(const ct::Scenario& s, double stick_below_m_per_s);
+
 /// The true value of a reported parameter, if the scenario defines it, in hil's parameterisation.
 /// sensor_gain: hil's gains are relative to the reference component (the one K absorbs, without a
 /// gain entry); a friction component's gain fixed as not identifiable (collinear with μ and the

@@ -98,6 +98,10 @@
 //     - single: no second cause but slow_slip;
 //     - where slow_slip is named, its μ_s / μ (slow_slip_mu_ratio, truth 1: the truth's μ is one at
 //       every speed above 1 µm/s) is one more parameter of the effect in the interval rules below.
+//       Since 2026-12-05 (later, before i = 1450..1499 ran) its truth is the truth's own law's,
+//       slow_friction_ratio_of (0.86-1.0 on the trapezoidal development draws: many foot-samples
+//       slip at a few µm/s, where the truth's regularised friction is weaker than μ B); the rules
+//       are unchanged.
 //    HIL_FAMILY_FIRST=1350, i = 1350..1399, never drawn before, every effect. Drawn 2026-12-05:
 //    none named 49 of 50 (was 37), no second cause in any draw, every effect's own parameters
 //    covered and unbiased (viscous +0.08, se 0.14); slow_slip's μ_s / μ fails its intervals (44 of
@@ -404,7 +408,9 @@ TEST(FamilySuite, ADelayOnMovesIsFoundOnItsPlateau) {
 // 23 noise variances beyond white: its yawing feet slip slowly through the stops, below the 0.1 mm/s
 // the rig declares, where the truth's Coulomb friction acts and the nominal model's does not. Rule
 // written before the candidate ran on it: declared at 0.1 mm/s, slow_slip is named alone, its
-// μ_s / μ within 1.96 std of 1 (the truth's μ at every speed above 1 µm/s) and no structure left;
+// μ_s / μ within 1.96 std of the truth's (1 then, taken as the truth's μ at every speed above
+// 1 µm/s; its own law's 0.980 since 2026-12-05, SlowSlipsTruthIsTheTruthsRegularisedFriction) and
+// no structure left;
 // the same run declared at 1 µm/s, below every measured slip, is `none` (slow_slip has nothing to fit).
 TEST(FamilySuite, AFootSlidingBelowTheDeclaredStickingThresholdIsNamedSlowSlip) {
   const Drawn x = draw(Effect::none, 110);
@@ -418,13 +424,48 @@ TEST(FamilySuite, AFootSlidingBelowTheDeclaredStickingThresholdIsNamedSlowSlip) 
   for (const auto& q : declared.d.extended->full.reported) {
     if (q.name != "slow_slip_mu_ratio") continue;
     seen = true;
-    EXPECT_LE(std::abs(q.value - 1.0), 1.96 * q.std) << q.value << " +- " << q.std;
+    // The truth's ratio on its own law, 0.980 here (slow_friction_ratio_of; 1 until 2026-12-05).
+    const double truth = slow_friction_ratio_of(x.scenario, kStickBelow_m_per_s);
+    EXPECT_LE(std::abs(q.value - truth), 1.96 * q.std) << q.value << " +- " << q.std << " against " << truth;
     EXPECT_LT(q.std, 0.2) << "too wide to tell slow slip from sticking";
   }
   EXPECT_TRUE(seen) << declared.line;
   const Diagnosed low = diagnose_scenario(x.scenario, x.rig, x.resolution, 1e-6);
   EXPECT_EQ(low.d.cause, "none") << low.line;
   EXPECT_TRUE(low.d.second_cause.empty()) << low.line;
+}
+
+// slow_slip's truth on the truth's own law (issue 32; docs/diagnosis.md, "Friction below the
+// declared sticking threshold"). Until 2026-12-05 the suite took μ_s / μ = 1, but the truth's
+// friction is μ B u / sqrt(u² + ε²): at slip speeds of a few ε (1 µm/s) it is weaker, and on
+// trapezoidal moves many foot-samples slip that slowly. slow_friction_ratio_of computes the ratio
+// from the truth's law alone. Development draw 1376 (trapezoidal, clean) slips slowly enough to
+// take it 14 % below 1. Checked against hil's own fit where nothing else can move it: no noise, the
+// exact poses and twist, slow_slip alone. Rule (the values seen in the measurement that found it,
+// 0.862 and 0.8621): the truth below 0.9, the fit within 0.01 of it; with ε at 1 nm/s the truth
+// within 1e-3 of 1. Fails with the old truth (1) and with a truth that ignores the slip speed.
+TEST(FamilySuite, SlowSlipsTruthIsTheTruthsRegularisedFriction) {
+  Drawn x = draw(Effect::none, 1376);
+  ASSERT_EQ(x.family, "trapezoidal");
+  x.scenario.sensor.noise_std.setZero();
+  x.scenario.sensor.resolution.setZero();
+  const double truth = slow_friction_ratio_of(x.scenario, kStickBelow_m_per_s);
+  EXPECT_LT(truth, 0.9);
+  const cid::Scene scene = tripod_scene(x.scenario.plate, x.scenario.tripod, x.rig);
+  const auto data = make_contact_data(scene, kStickBelow_m_per_s, to_measurements(ct::simulate(x.scenario), {0.0, 0.0}));
+  const ContactFamily m(data, {"slow_slip"});
+  std::vector<int> all(data.obs.size());
+  std::iota(all.begin(), all.end(), 0);
+  const Fit f = fit(m, data.obs, all);
+  bool seen = false;
+  for (const auto& q : f.reported)
+    if (q.name == "slow_slip_mu_ratio") {
+      seen = true;
+      EXPECT_NEAR(q.value, truth, 0.01);
+    }
+  EXPECT_TRUE(seen);
+  x.scenario.law.slip_regularisation_m_per_s = 1e-9;
+  EXPECT_NEAR(slow_friction_ratio_of(x.scenario, kStickBelow_m_per_s), 1.0, 1e-3);
 }
 
 // The clip at lift-off (issue 32, item 1; docs/diagnosis.md): the truth's normal force per foot is
