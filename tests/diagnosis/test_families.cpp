@@ -157,6 +157,7 @@
 #include <iostream>
 #include <map>
 #include <numeric>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -435,6 +436,21 @@ TEST(FamilySuite, AFootSlidingBelowTheDeclaredStickingThresholdIsNamedSlowSlip) 
   EXPECT_TRUE(low.d.second_cause.empty()) << low.line;
 }
 
+/// The reported `param` of the nominal model with `extension` alone, fitted once on every sample of
+/// `samples` with their exact poses and twist (no folds): what the candidate reads where neither
+/// noise nor the reported resolutions can move it. nullopt: not reported.
+std::optional<double> fitted_alone(const Drawn& x, const std::vector<ct::Sample>& samples, const std::string& extension,
+                                   const std::string& param) {
+  const cid::Scene scene = tripod_scene(x.scenario.plate, x.scenario.tripod, x.rig);
+  const auto data = make_contact_data(scene, kStickBelow_m_per_s, to_measurements(samples, {0.0, 0.0}));
+  const ContactFamily m(data, {extension});
+  std::vector<int> all(data.obs.size());
+  std::iota(all.begin(), all.end(), 0);
+  for (const auto& q : fit(m, data.obs, all).reported)
+    if (q.name == param) return q.value;
+  return std::nullopt;
+}
+
 // slow_slip's truth on the truth's own law (issue 32; docs/diagnosis.md, "Friction below the
 // declared sticking threshold"). Until 2026-12-05 the suite took μ_s / μ = 1, but the truth's
 // friction is μ B u / sqrt(u² + ε²): at slip speeds of a few ε (1 µm/s) it is weaker, and on
@@ -451,19 +467,9 @@ TEST(FamilySuite, SlowSlipsTruthIsTheTruthsRegularisedFriction) {
   x.scenario.sensor.resolution.setZero();
   const double truth = slow_friction_ratio_of(x.scenario, kStickBelow_m_per_s);
   EXPECT_LT(truth, 0.9);
-  const cid::Scene scene = tripod_scene(x.scenario.plate, x.scenario.tripod, x.rig);
-  const auto data = make_contact_data(scene, kStickBelow_m_per_s, to_measurements(ct::simulate(x.scenario), {0.0, 0.0}));
-  const ContactFamily m(data, {"slow_slip"});
-  std::vector<int> all(data.obs.size());
-  std::iota(all.begin(), all.end(), 0);
-  const Fit f = fit(m, data.obs, all);
-  bool seen = false;
-  for (const auto& q : f.reported)
-    if (q.name == "slow_slip_mu_ratio") {
-      seen = true;
-      EXPECT_NEAR(q.value, truth, 0.01);
-    }
-  EXPECT_TRUE(seen);
+  const auto ratio = fitted_alone(x, ct::simulate(x.scenario), "slow_slip", "slow_slip_mu_ratio");
+  ASSERT_TRUE(ratio);
+  EXPECT_NEAR(*ratio, truth, 0.01);
   x.scenario.law.slip_regularisation_m_per_s = 1e-9;
   EXPECT_NEAR(slow_friction_ratio_of(x.scenario, kStickBelow_m_per_s), 1.0, 1e-3);
 }
@@ -487,19 +493,9 @@ TEST(FamilySuite, ADampingWhoseFeetLiftOffIsNotFittedLow) {
     for (const auto& foot : feet) clipped += foot.penetration_m > 0.0 && foot.normal_n == 0.0 ? 1 : 0;
   }
   EXPECT_GE(clipped, 10) << "the draw no longer lifts off";
-  const cid::Scene scene = tripod_scene(x.scenario.plate, x.scenario.tripod, x.rig);
-  const auto data = make_contact_data(scene, kStickBelow_m_per_s, to_measurements(samples, {0.0, 0.0}));
-  const ContactFamily m(data, {"contact_damping"});
-  std::vector<int> all(data.obs.size());
-  std::iota(all.begin(), all.end(), 0);
-  const Fit f = fit(m, data.obs, all);
-  bool seen = false;
-  for (const auto& q : f.reported)
-    if (q.name == "damping_n_s_per_m") {
-      seen = true;
-      EXPECT_NEAR(q.value, D, 0.005 * D) << clipped << " foot-samples clipped";
-    }
-  EXPECT_TRUE(seen);
+  const auto fitted = fitted_alone(x, samples, "contact_damping", "damping_n_s_per_m");
+  ASSERT_TRUE(fitted);
+  EXPECT_NEAR(*fitted, D, 0.005 * D) << clipped << " foot-samples clipped";
 }
 
 /// Draw i of a sensor chain off the suite's: the motion from seed seed_base + i (draw_motion), then
