@@ -101,7 +101,10 @@
 //       Since 2026-12-05 (later, before i = 1450..1499 ran) its truth is the truth's own law's,
 //       slow_friction_ratio_of (0.86-1.0 on the trapezoidal development draws: many foot-samples
 //       slip at a few µm/s, where the truth's regularised friction is weaker than μ B); the rules
-//       are unchanged.
+//       are unchanged. Drawn 2026-12-05: sensor_bias, sensor_gain and contact_damping pass; the
+//       others fail on μ_s / μ's bias (+0.74 to +2.04 mean z: the reported twist's quantisation
+//       reads the friction fully developed where it is not), geometric_offset on plate_tilt_x's
+//       too (docs/diagnosis.md, "Friction below the declared sticking threshold").
 //    HIL_FAMILY_FIRST=1350, i = 1350..1399, never drawn before, every effect. Drawn 2026-12-05:
 //    none named 49 of 50 (was 37), no second cause in any draw, every effect's own parameters
 //    covered and unbiased (viscous +0.08, se 0.14); slow_slip's μ_s / μ fails its intervals (44 of
