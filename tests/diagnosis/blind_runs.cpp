@@ -64,7 +64,7 @@ double linear_damping_of(const ct::Scenario& s) {
   return den > 0.0 ? num / den : s.law.damping_n_s_per_m;
 }
 
-double slow_friction_ratio_of(const ct::Scenario& s, double stick_below_m_per_s) {
+double slow_friction_ratio_of(const ct::Scenario& s, double stick_below_m_per_s, double resolved_from_m_per_s) {
   const auto n = static_cast<std::size_t>(std::floor(s.duration_s * s.sensor.rate_hz + 1e-9));
   const auto& law = s.law;
   const Eigen::Vector3d normal = s.plate.T_world_plate().linear().col(2);
@@ -77,7 +77,7 @@ double slow_friction_ratio_of(const ct::Scenario& s, double stick_below_m_per_s)
       if (!f.in_contact) continue;
       const Eigen::Vector3d v = b.v_world_m_per_s + b.w_world_rad_per_s.cross(f.point_world_m - b.T_world_body.translation());
       const double u = (v - normal.dot(v) * normal).norm();
-      if (!(u > 0.0) || u > stick_below_m_per_s) continue;
+      if (!(u > 0.0) || u < resolved_from_m_per_s || u > stick_below_m_per_s) continue;
       const double elastic = law.stiffness_n_per_m * law.delta_ref_m * std::pow(f.penetration_m / law.delta_ref_m, law.exponent);
       const double bound = law.friction_on_total_normal ? f.normal_n : elastic;
       num += elastic * bound * u / std::hypot(u, law.slip_regularisation_m_per_s);
@@ -87,7 +87,7 @@ double slow_friction_ratio_of(const ct::Scenario& s, double stick_below_m_per_s)
   return den > 0.0 ? num / den : 1.0;
 }
 
-std::optional<double> truth_of(const std::string& name, const ct::Scenario& s, const Fit& f) {
+std::optional<double> truth_of(const std::string& name, const ct::Scenario& s, const Fit& f, double twist_step_m_per_s) {
   const char* comp[6] = {"fx", "fy", "fz", "mx", "my", "mz"};
   // The gains neither reported nor fixed as unidentifiable are references: a gain is relative to its
   // group's (fx, fy and mz carry the friction, fz, mx and my the normal force; sensor_gain's
@@ -127,10 +127,12 @@ std::optional<double> truth_of(const std::string& name, const ct::Scenario& s, c
   if (name == "viscous_n_s_per_m") return s.law.viscous_n_s_per_m;
   if (name == "damping_n_s_per_m") return s.law.damping_exponent == 0.0 ? s.law.damping_n_s_per_m : linear_damping_of(s);
   if (name == "stiffness_exponent") return s.law.exponent;
-  // slow_slip's μ_s / μ: the truth's slow friction in hil's form (slow_friction_ratio_of); a
-  // Stribeck law's is not one number.
+  // slow_slip's μ_s / μ: the truth's slow friction in hil's form over the slips the reported twist
+  // resolves (slow_friction_ratio_of); a Stribeck law's is not one number.
   if (name == "slow_slip_mu_ratio")
-    return s.law.stribeck_speed_m_per_s > 0.0 ? std::nullopt : std::optional<double>(slow_friction_ratio_of(s, kStickBelow_m_per_s));
+    return s.law.stribeck_speed_m_per_s > 0.0
+               ? std::nullopt
+               : std::optional<double>(slow_friction_ratio_of(s, kStickBelow_m_per_s, 0.5 * twist_step_m_per_s));
   // The truth's surface is at o_P, level in P: the rig's declared values are what may be off.
   if (name == kPlateHeight || name == kPlateTiltX || name == kPlateTiltY) return 0.0;
   return std::nullopt;

@@ -207,7 +207,7 @@ TEST_P(Blind, TheRightCauseWithItsMagnitude) {
     int of_cause = 0;
     for (const auto& q : d.extended->full.reported) {
       if (!q.extension || !belongs_to(q.name, cause)) continue;
-      const auto t = truth_of(q.name, sc, d.extended->full);
+      const auto t = truth_of(q.name, sc, d.extended->full, c.resolution.velocity_m_per_s);
       if (!t) continue;
       line << "; " << q.name << " = " << q.value << " ± " << q.std << " (truth " << *t << ", pnr " << q.pnr() << ")";
       if (q.pnr() < 5.0) continue;

@@ -53,7 +53,7 @@ TEST_P(IntervalCoverage, AtLeast85PercentOver20Seeds) {
       if (r.name == c.parameter) q = &r;
     ASSERT_NE(q, nullptr) << c.parameter << " not reported (seed " << seed << ")";
     ++runs;
-    const double truth = std::isnan(c.truth) ? truth_of(q->name, sc, s.full).value_or(c.truth) : c.truth;
+    const double truth = std::isnan(c.truth) ? truth_of(q->name, sc, s.full, 2e-5).value_or(c.truth) : c.truth;
     const bool in = std::abs(q->value - truth) <= 1.96 * q->std;
     covered += in;
     if (!in)

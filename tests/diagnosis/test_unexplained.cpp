@@ -304,7 +304,7 @@ TEST(PlateCalibration, AGainBeyondThePlatesToleranceIsNotNamedButSaysWhy) {
   // component is not the reference.
   int checked = 0, large = 0;
   for (const auto& q : lenient.d.extended->full.reported) {
-    const auto truth = truth_of(q.name, sc, lenient.d.extended->full);
+    const auto truth = truth_of(q.name, sc, lenient.d.extended->full, kFine.velocity_m_per_s);
     if (q.name.rfind("gain_", 0) != 0 || !truth) continue;
     ++checked;
     large += std::abs(*truth) > 0.2 ? 1 : 0;
