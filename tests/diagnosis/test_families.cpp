@@ -119,8 +119,13 @@
 //    these ran; the same rules): HIL_FAMILY_FIRST=1500, i = 1500..1549, never drawn before, every
 //    effect. i = 1350..1499 is development data. Checked first on i = 1450..1499 (2026-12-06):
 //    μ_s / μ 65 of 65 inside, but too wide on the clean draws (mean z² 0.16: the sandwich at a
-//    small ν and the folds' spread, not the new term) and biased +0.2 to +0.46 mean z (~0.5 %);
-//    so not drawn yet (docs/diagnosis.md, "Friction below the declared sticking threshold").
+//    small ν and the folds' spread, not the new term) and biased +0.2 to +0.46 mean z (~0.5 %).
+//    Drawn 2026-12-06 all the same: μ_s / μ 81 of 81 inside, too wide (z² 0.03-0.32); sensor_bias,
+//    nonlinear_stiffness and geometric_offset pass; none fails on the widths, sensor_gain on naming
+//    (44), time_offset on τ's bias (+0.50, se 0.135), viscous_friction on its coefficient's (-0.35),
+//    and time_offset, viscous_friction and contact_damping (this alone) on μ_s / μ's +0.10 to +0.43
+//    mean z under the too-wide intervals (docs/diagnosis.md, "Friction below the declared sticking
+//    threshold").
 //  * Per effect, of n draws, at most ceil(10 %) may fail each of:
 //     - named: the effect named first (clean: `none`);
 //     - single: no second cause.
