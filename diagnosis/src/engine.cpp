@@ -571,24 +571,16 @@ Fit fit_with(const ModelFamily& m, const Observations& obs, const std::vector<in
     }
     const int used = static_cast<int>(T.size());
     if (used > 1 && !alone) {
-      // Bell and McCaffrey's degrees of freedom per parameter j: the blocks its information is
-      // spread over, (tr K)² / ‖K‖²_F, K = diag(m_jᵀ Q_b m_j) − Wᵀ inv W with w_b = T_b m_j,
-      // m_j = inv e_j (Imbens and Kolesár 2016, under working errors iid). Two blocks that hold a
-      // parameter's information give it ~1, and t_{0.975} widens it accordingly.
+      // Per parameter j, Bell and McCaffrey's degrees of freedom (sandwich_dof_along): two blocks
+      // that hold a parameter's information give it ~1, and t_{0.975} widens it accordingly.
+      f.normal_inverse = inv;
+      f.sandwich_half = std::move(T);
+      f.sandwich_full = std::move(Q);
       Eigen::VectorXd widen = Eigen::VectorXd::Ones(P);
       f.sandwich_dof = Eigen::VectorXd::Zero(P);
       for (Eigen::Index j = 0; j < P; ++j) {
-        const Eigen::VectorXd mj = inv.col(j);
-        if (!(mj.squaredNorm() > 0)) continue;
-        Eigen::MatrixXd W(P, used);
-        Eigen::VectorXd d(used);
-        for (int b = 0; b < used; ++b) {
-          W.col(b) = T[static_cast<std::size_t>(b)] * mj;
-          d(b) = mj.dot(Q[static_cast<std::size_t>(b)] * mj);
-        }
-        Eigen::MatrixXd K = -W.transpose() * inv * W;
-        K.diagonal() += d;
-        const double nu = K.squaredNorm() > 0 ? K.trace() * K.trace() / K.squaredNorm() : 0.0;
+        const double nu = sandwich_dof_along(f, Eigen::VectorXd::Unit(P, j));
+        if (!(nu > 0)) continue;
         f.sandwich_dof(j) = nu;
         widen(j) = boost::math::quantile(boost::math::students_t_distribution<double>(std::max(1.0, nu)), 0.975) / 1.96;
       }
@@ -651,6 +643,23 @@ Eigen::MatrixXd prediction_without(const ModelFamily& m, const Fit& f, const Obs
 }
 
 }  // namespace
+
+double sandwich_dof_along(const Fit& f, const Eigen::VectorXd& gradient) {
+  const Eigen::MatrixXd& inv = f.normal_inverse;
+  const std::size_t used = f.sandwich_half.size();
+  if (used < 2 || inv.rows() != gradient.size()) return 0.0;
+  const Eigen::VectorXd mj = inv * gradient;
+  if (!(mj.squaredNorm() > 0)) return 0.0;
+  Eigen::MatrixXd W(inv.rows(), static_cast<Eigen::Index>(used));
+  Eigen::VectorXd d(static_cast<Eigen::Index>(used));
+  for (std::size_t b = 0; b < used; ++b) {
+    W.col(static_cast<Eigen::Index>(b)) = f.sandwich_half[b] * mj;
+    d(static_cast<Eigen::Index>(b)) = mj.dot(f.sandwich_full[b] * mj);
+  }
+  Eigen::MatrixXd K = -W.transpose() * inv * W;
+  K.diagonal() += d;
+  return K.squaredNorm() > 0 ? K.trace() * K.trace() / K.squaredNorm() : 0.0;
+}
 
 Fit fit(const ModelFamily& m, const Observations& obs, const std::vector<int>& train, const FitOptions& o) {
   DesignCache cache(m, obs.size());
@@ -820,6 +829,42 @@ void extension_pnr(Score& s) {
 /// the sandwich cannot see. Then the folds' spread is the leverage of unequally informative blocks,
 /// which the sandwich weighs properly, and the sandwich is the std. The PNR keeps the asymptotic
 /// std (Reported::pnr).
+std::vector<Reported> values_reported(const ModelFamily& m, Fit f, const Fit& full);
+
+/// Each value `m` reports of `full`, with its sandwich degrees of freedom along its gradient in
+/// (θ, φ) (sandwich_dof_along): central differences of the reported values at a thousandth of each
+/// parameter's std. Empty where the fit kept no sandwich.
+std::map<std::string, double> reported_dof(const ModelFamily& m, const Fit& full) {
+  std::map<std::string, double> out;
+  const Eigen::Index p = full.theta.size(), P = p + full.phi.size();
+  if (full.sandwich_half.size() < 2 || full.normal_inverse.rows() != P || full.cov.rows() != P) return out;
+  Fit light = full;  // without the per-sample matrices, which every report would copy
+  light.jacobian.resize(0, 0);
+  light.residual.resize(0);
+  light.sandwich_half.clear();
+  light.sandwich_full.clear();
+  light.normal_inverse.resize(0, 0);
+  light.cov_sandwich.resize(0, 0);
+  std::map<std::string, Eigen::VectorXd> gradient;
+  for (const auto& r : values_reported(m, light, full)) gradient[r.name] = Eigen::VectorXd::Zero(P);
+  for (Eigen::Index j = 0; j < P; ++j) {
+    const double h = 1e-3 * std::sqrt(std::max(0.0, full.cov(j, j)));
+    if (!(h > 0) || full.is_fixed(j)) continue;
+    Fit up = light, down = light;
+    (j < p ? up.theta(j) : up.phi(j - p)) += h;
+    (j < p ? down.theta(j) : down.phi(j - p)) -= h;
+    std::map<std::string, double> above;
+    for (const auto& r : values_reported(m, up, full)) above[r.name] = r.value;
+    for (const auto& r : values_reported(m, down, full)) {
+      const auto a = above.find(r.name);
+      const auto g = gradient.find(r.name);
+      if (a != above.end() && g != gradient.end() && std::isfinite(a->second - r.value)) g->second(j) = (a->second - r.value) / (2 * h);
+    }
+  }
+  for (const auto& [name, g] : gradient) out[name] = sandwich_dof_along(full, g);
+  return out;
+}
+
 void honest_intervals(Score& s, const ModelFamily& m, const std::map<std::string, std::vector<double>>& by_name,
                       const std::map<std::string, std::vector<double>>& linear, std::size_t folds) {
   if (folds < 3) return;
@@ -829,9 +874,12 @@ void honest_intervals(Score& s, const ModelFamily& m, const std::map<std::string
     f.cov = s.full.cov_sandwich;
     for (const auto& r : reported_of(m, f)) sandwich_std[r.name] = r.std;
   }
+  const std::map<std::string, double> dof = reported_dof(m, s.full);
   const double g = static_cast<double>(folds);
   const double widen = t975(static_cast<int>(folds) - 1) / 1.96;
   for (auto& r : s.full.reported) {
+    const auto nu = dof.find(r.name);
+    if (nu != dof.end()) r.sandwich_dof = nu->second;
     const auto it = by_name.find(r.name);
     if (!r.fold_comparable || it == by_name.end() || it->second.size() != folds) continue;
     const Eigen::Map<const Eigen::VectorXd> v(it->second.data(), static_cast<Eigen::Index>(folds));
@@ -839,8 +887,19 @@ void honest_intervals(Score& s, const ModelFamily& m, const std::map<std::string
     const double var = (g - 1.0) / g * (v.array() - v.mean()).square().sum();
     r.std_folds = widen * std::sqrt(var);
     r.std_asymptotic = r.std;
-    r.std = std::max(r.std, r.std_folds);
     const auto sw = sandwich_std.find(r.name);
+    // One event's worth: the sandwich and the folds' spread have no degrees of freedom to measure
+    // this value's error with (t at ν ~ 1 widens 6.5 times; a fold without the event barely sees
+    // it), so the model's std stands, said as such. Only where the residuals' correlation is short
+    // (as many blocks as the sandwich needs to stand alone), so that the long-run inflation holds
+    // what correlation there is: with a few long blocks every value has a small ν, and there the
+    // folds' spread is the measure (Engine.IntervalsCoverTheTruthUnderStronglyCorrelatedErrors...).
+    if (s.full.sandwich_blocks >= kSandwichMinBlocks && r.sandwich_dof > 0 && r.sandwich_dof < kOneEventDof) {
+      if (sw != sandwich_std.end()) r.std_sandwich = sw->second;
+      r.model_based = true;
+      continue;
+    }
+    r.std = std::max(r.std, r.std_folds);
     const auto lin = linear.find(r.name);
     if (sw == sandwich_std.end() || !(sw->second > 0) || lin == linear.end() || lin->second.size() != folds) continue;
     r.std_sandwich = sw->second;
@@ -1103,6 +1162,9 @@ Score score(const ModelFamily& m, const Observations& obs, const CvOptions& o, c
   honest_intervals(s, m, by_name, linear, folds_unshifted);
   s.full.jacobian.resize(0, 0);  // its rows scale with the run: not kept beyond their use
   s.full.residual.resize(0);
+  s.full.sandwich_half.clear();
+  s.full.sandwich_full.clear();
+  s.full.normal_inverse.resize(0, 0);
   model_form_intervals(s, forms, form_fits);
   if (o.errors_in_variables) correct_errors_in_variables(s, m, obs, all, o.threads);
   s.full.invalid = m.check(s.full);

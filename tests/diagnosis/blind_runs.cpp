@@ -38,9 +38,9 @@ Diagnosed diagnose_scenario(const ct::Scenario& sc, const TripodRigOptions& rig,
     o << "; trend " << a.trends.front().component << " r " << a.trends.front().correlation << " expl " << a.trends.front().explained;
   if (d.extended)
     for (const auto& q : d.extended->full.reported)
-      if (q.extension)
+      if (q.extension || q.name == "K" || q.name == "mu")
         o << "; " << q.name << " = " << q.value << " ± " << q.std << " [a " << q.std_asymptotic << " f " << q.std_folds << " m "
-          << q.std_model_form << "]";
+          << q.std_model_form << " s " << q.std_sandwich << " nu " << q.sandwich_dof << (q.model_based ? " MODEL" : "") << "]";
   if (a.structured()) o << " | STRUCTURE: " << a.structure_text();
   if (d.extended && d.extended_residuals.structured()) o << " | LEFT: " << d.extended_residuals.structure_text();
   run.line = o.str();

@@ -138,6 +138,7 @@ double slip_direction_error(const ContactBinding& b, double v_tm) {
   };
   constexpr int kReplicates = 200;
   double mse = 0.0;
+  int counted = 0;  // a replicate whose partialled column vanishes says nothing of the error
   for (int r = 0; r < kReplicates; ++r) {
     double xy = 0.0, xx = 0.0;
     Eigen::Vector2d NtXr = Eigen::Vector2d::Zero();
@@ -153,8 +154,9 @@ double slip_direction_error(const ContactBinding& b, double v_tm) {
     const double num = xy - NtXr.dot(NtN_inv * NtX), den = xx - NtXr.dot(NtN_inv * NtXr);
     if (!(den > 0.0)) continue;
     mse += std::pow(num / den - 1.0, 2);
+    ++counted;
   }
-  return std::sqrt(mse / kReplicates);
+  return counted > 0 ? std::sqrt(mse / counted) : 0.0;
 }
 
 class SlowSlip : public ContactEffect {

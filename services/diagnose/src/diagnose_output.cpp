@@ -33,6 +33,11 @@ std::string fmt_value(double v, double s, const std::string& unit) {
   return fmt::format("{:.4g} ± {:.2g}{}{}", v, 1.96 * s, unit.empty() ? "" : " ", unit);
 }
 
+/// A value whose interval the residuals cannot check (Reported::model_based), said beside it.
+std::string one_event_text(const dg::Reported& q) {
+  return q.model_based ? fmt::format("  one event's worth (ν {:.1f}): the model's std, unchecked by the residuals", q.sandwich_dof) : "";
+}
+
 const dg::Score& extended_score(const RunDiagnosis& r) { return r.result.extended ? *r.result.extended : r.result.nominal; }
 
 nlohmann::json params_json(const dg::Fit& f, bool extension_only) {
@@ -46,6 +51,8 @@ nlohmann::json params_json(const dg::Fit& f, bool extension_only) {
                  {"std_model_form", q.std_model_form},
                  {"std_sandwich", q.std_sandwich},
                  {"sandwich", q.sandwich},
+                 {"sandwich_dof", q.sandwich_dof},
+                 {"model_based", q.model_based},
                  {"errors_in_variables", q.errors_in_variables},
                  {"unit", q.unit},
                  {"pnr", q.pnr()},
@@ -162,7 +169,8 @@ void print_summary(std::ostream& out, const RunDiagnosis& r) {
       out << (v.find(": not corrected") != std::string::npos ? "    errors in the variables: " : "    values corrected for the errors in: ")
           << v << "\n";
     for (const auto& q : ext.full.reported)
-      if (q.extension) out << fmt::format("    {:<28} {}  (PNR {:.1f})\n", q.name, fmt_value(q.value, q.std, q.unit), q.pnr());
+      if (q.extension)
+        out << fmt::format("    {:<28} {}  (PNR {:.1f}){}\n", q.name, fmt_value(q.value, q.std, q.unit), q.pnr(), one_event_text(q));
     if (!ext.full.unidentifiable.empty())
       out << fmt::format("    not identifiable from this run, fixed at nominal: {}\n", unidentifiable_text(ext.full));
     for (const auto& e : located_events(r, extended_set(r)))
@@ -176,7 +184,7 @@ void print_summary(std::ostream& out, const RunDiagnosis& r) {
   // The nominal model's readings, and slow_slip's μ_s / μ, which its note tells the reader to read.
   for (const auto& q : ext.full.reported)
     if (!q.extension && (q.name == "K" || q.name == "mu" || q.name == "slow_slip_mu_ratio"))
-      out << fmt::format("    {:<28} {}\n", q.name, fmt_value(q.value, q.std, q.unit));
+      out << fmt::format("    {:<28} {}{}\n", q.name, fmt_value(q.value, q.std, q.unit), one_event_text(q));
   out << "  candidates (held-out error, gain, verdict):\n";
   for (const auto& c : d.candidates)
     out << fmt::format("    {:<20} {:>9} {:>9}  {}\n", c.name, percent_cell(c.score.cv_error, "{:.2f} %"),

@@ -52,6 +52,14 @@ struct Reported {
   /// "Intervals"); `sandwich` says whether it was.
   double std_sandwich = 0.0;
   bool sandwich = false;
+  /// Bell and McCaffrey's degrees of freedom of the sandwich along this value's gradient: how many
+  /// blocks' worth of the run its information is spread over (0: not computed).
+  double sandwich_dof = 0.0;
+  /// Its information sits in fewer than kOneEventDof blocks' worth of a run whose residuals'
+  /// correlation is short (at least kSandwichMinBlocks blocks): one event, e.g. a single stop. No
+  /// residual-based std (sandwich, folds) has the degrees of freedom to measure its error, and
+  /// `std` is the model's, σ² (JᵀJ)⁻¹ inflated, which the residuals cannot check.
+  bool model_based = false;
   /// The asymptotic standard deviation, σ² (JᵀJ)⁻¹ inflated for autocorrelation (0: same as std).
   double std_asymptotic = 0.0;
   /// The model-form part (0: none): the largest shift of the value when the fit is repeated under
@@ -221,13 +229,28 @@ struct Fit {
   Eigen::VectorXd sandwich_dof;
   Eigen::MatrixXd jacobian;
   Eigen::VectorXd residual;
+  /// What sandwich_dof_along needs, kept as long as the Jacobian: (JᵀJ)⁺ and, per block b,
+  /// J_bᵀ (I − H_bb)^{-1/2} J_b and J_bᵀ (I − H_bb)^{-1} J_b.
+  Eigen::MatrixXd normal_inverse;
+  std::vector<Eigen::MatrixXd> sandwich_half, sandwich_full;
 };
+
+/// Bell and McCaffrey's degrees of freedom of the sandwich for the linear combination gradientᵀ (θ, φ)
+/// of `f`'s parameters: (tr K)² / ‖K‖²_F, K = diag(m ᵀ Q_b m) − Wᵀ (JᵀJ)⁺ W with w_b = T_b m and
+/// m = (JᵀJ)⁺ gradient (Imbens and Kolesár 2016, under working errors iid). 0 where `f` kept no
+/// sandwich or the gradient is 0.
+double sandwich_dof_along(const Fit& f, const Eigen::VectorXd& gradient);
 
 /// The reported std is the block-clustered sandwich's only with at least this many blocks: the
 /// residuals correlated over less than a twentieth of the run (blocks of twice the bandwidth).
 /// Fewer, longer blocks' influences under-covered a slope under AR(1) errors (48-49 of 60 against
 /// the rule's 51, docs/diagnosis.md), where the folds' spread covers.
 constexpr int kSandwichMinBlocks = 10;
+
+/// A reported value whose sandwich degrees of freedom are below this is carried by one event of
+/// the run (Reported::model_based): t_{0.975} at 3 is 1.6 times 1.96, and the information of
+/// slow_slip's μ_s K, which sits in a stop or two, gives 1.0-2.1 (docs/diagnosis.md).
+constexpr double kOneEventDof = 3.0;
 
 struct FitOptions {
   int max_iterations = 40;
