@@ -104,6 +104,9 @@ class Diagnose(unittest.TestCase):
             for name, p in c["parameters"].items():  # the reported std is the wider of the two
                 if p["sandwich"]:  # or the sandwich's, where it stands alone
                     self.assertAlmostEqual(p["std"], math.hypot(p["std_sandwich"], p["std_model_form"]), delta=1e-9 * p["std"])
+                elif p["model_based"]:  # or the model's, where one event carries the value
+                    self.assertLess(p["sandwich_dof"], 3.0, name)
+                    self.assertAlmostEqual(p["std"], math.hypot(p["std_asymptotic"], p["std_model_form"]), delta=1e-9 * p["std"])
                 else:
                     self.assertGreaterEqual(p["std"], p["std_asymptotic"] * (1 - 1e-12), name)
         # The press bench is planar: nothing acts along fy, so sensor_gain's gain_fy is listed as not

@@ -126,6 +126,14 @@
 //    and time_offset, viscous_friction and contact_damping (this alone) on μ_s / μ's +0.10 to +0.43
 //    mean z under the too-wide intervals (docs/diagnosis.md, "Friction below the declared sticking
 //    threshold").
+//  * With a value carried by one event reported on the model's std (f8c9c82, 2026-12-06: sandwich ν
+//    below 3 on a run of at least 10 blocks; only slow_slip's μ_s K and μ_s / μ fall under it):
+//    checked on development draws i = 1450..1499 only, no fresh draw. μ_s / μ 90 of 102 inside,
+//    mean z² 1.80 (0.16 before); the same four effects pass (sensor_bias, sensor_gain,
+//    contact_damping, nonlinear_stiffness); none, time_offset and viscous_friction fail on its bias
+//    (+0.5 to +1.1 mean z: the reported twist reads μ_s K about 1 % high, measured without noise),
+//    geometric_offset on plate_tilt_x (docs/diagnosis.md, "Friction below the declared sticking
+//    threshold").
 //  * Per effect, of n draws, at most ceil(10 %) may fail each of:
 //     - named: the effect named first (clean: `none`);
 //     - single: no second cause.
