@@ -134,6 +134,9 @@
 //    (+0.5 to +1.1 mean z: the reported twist reads μ_s K about 1 % high, measured without noise),
 //    geometric_offset on plate_tilt_x (docs/diagnosis.md, "Friction below the declared sticking
 //    threshold").
+//    Fresh draw under that rule (rule added 2026-12-06 05:40 UTC, before it ran; the same rules):
+//    HIL_FAMILY_FIRST=1550, i = 1550..1599, never drawn before, for none (the widths it failed on
+//    i = 1500..1549; μ_s / μ's bias is expected to show, as on the development draws).
 //  * Per effect, of n draws, at most ceil(10 %) may fail each of:
 //     - named: the effect named first (clean: `none`);
 //     - single: no second cause.
