@@ -818,17 +818,6 @@ void extension_pnr(Score& s) {
   s.identifiable = s.max_extension_pnr >= 5.0;
 }
 
-/// Intervals that hold when the model is not exactly right or the residuals are not white: the
-/// spread of the folds' estimates (delete-a-block jackknife, g blocks: var = (g-1)/g Σ (x_i - x̄)²)
-/// measures what the asymptotic formula assumes away (misfit, autocorrelation beyond its lags,
-/// a multimodal cost). With g - 1 degrees of freedom its ±1.96 std would cover too rarely, so it
-/// is scaled by t_{0.975, g-1} / 1.96. The reported std is the larger of the two, except where the
-/// block-clustered sandwich can stand alone: the residuals' correlation short (at least
-/// kSandwichMinBlocks blocks) and every fold's estimate within one sandwich std of its linear
-/// prediction from the full fit (`linear`), i.e. no fold found another minimum or a nonlinearity
-/// the sandwich cannot see. Then the folds' spread is the leverage of unequally informative blocks,
-/// which the sandwich weighs properly, and the sandwich is the std. The PNR keeps the asymptotic
-/// std (Reported::pnr).
 std::vector<Reported> values_reported(const ModelFamily& m, Fit f, const Fit& full);
 
 /// Each value `m` reports of `full`, with its sandwich degrees of freedom along its gradient in
@@ -865,6 +854,17 @@ std::map<std::string, double> reported_dof(const ModelFamily& m, const Fit& full
   return out;
 }
 
+/// Intervals that hold when the model is not exactly right or the residuals are not white: the
+/// spread of the folds' estimates (delete-a-block jackknife, g blocks: var = (g-1)/g Σ (x_i - x̄)²)
+/// measures what the asymptotic formula assumes away (misfit, autocorrelation beyond its lags,
+/// a multimodal cost). With g - 1 degrees of freedom its ±1.96 std would cover too rarely, so it
+/// is scaled by t_{0.975, g-1} / 1.96. The reported std is the larger of the two, except where the
+/// block-clustered sandwich can stand alone: the residuals' correlation short (at least
+/// kSandwichMinBlocks blocks) and every fold's estimate within one sandwich std of its linear
+/// prediction from the full fit (`linear`), i.e. no fold found another minimum or a nonlinearity
+/// the sandwich cannot see. Then the folds' spread is the leverage of unequally informative blocks,
+/// which the sandwich weighs properly, and the sandwich is the std. A value carried by one event
+/// (Reported::model_based) keeps the asymptotic std. The PNR keeps the asymptotic std (Reported::pnr).
 void honest_intervals(Score& s, const ModelFamily& m, const std::map<std::string, std::vector<double>>& by_name,
                       const std::map<std::string, std::vector<double>>& linear, std::size_t folds) {
   if (folds < 3) return;
