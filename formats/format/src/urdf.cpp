@@ -115,6 +115,17 @@ std::string tree_problem(const urdf::ModelInterface& m) {
   return {};
 }
 
+/// urdfdom links a parent to its children by shared pointers (Link::child_links): joints that close
+/// a loop make a cycle of them, which outlives the model and leaked on every such description the
+/// reader refused (LeakSanitizer, UrdfRobot.BadDescriptionsFailByName). Cut before dropping it.
+void cut_link_cycles(urdf::ModelInterface& m) {
+  for (auto& [name, link] : m.links_)
+    if (link) {
+      link->child_links.clear();
+      link->child_joints.clear();
+    }
+}
+
 /// A mimic joint's value must be computable from the chain's own joints: its master must be a
 /// moving joint between the base and the tip. A mimic of a mimic is resolved to the independent
 /// joint at the end (q_a = m_a (m_b q_c + o_b) + o_a), so that hil's kinematics need one pass.
@@ -209,7 +220,10 @@ RobotSpec parse_urdf_robot(const std::string& xml, const std::string& display_na
     const bool tree_ok = model && problem.empty() && kdl_parser::treeFromUrdfModel(*model, tree);
     console_bridge::restorePreviousOutputHandler();
     if (!model) throw FormatError({display_name, 0, 0, "robot"}, "not a URDF robot description: " + joined(log.lines));
-    if (!problem.empty()) throw FormatError({display_name, 0, 0, "robot"}, problem);
+    if (!problem.empty()) {
+      cut_link_cycles(*model);
+      throw FormatError({display_name, 0, 0, "robot"}, problem);
+    }
     if (!tree_ok) throw FormatError({display_name, 0, 0, "robot"}, "KDL could not build the kinematic tree: " + joined(log.lines));
   }
   for (const auto* end : {&base_link, &tip_link})
