@@ -287,8 +287,9 @@ class Diagnose(unittest.TestCase):
         # over 300 s: 2 offsets exercise the same repeated-CV path there; the verdict needs all 8.
         sanitized = bool(os.environ.get("HIL_SANITIZE"))
         offsets = ["--cv-offsets", "2"] if sanitized else []
+        # ~1 min here; 10-16 min under ASan + UBSan (2026-12-06), hence the longer limit.
         r = hil("diagnose", run, "--rig", os.path.join(SRC, "examples", "import", "tiago_suspension_rig.yaml"), "--json", js,
-                "--quiet", *offsets)
+                "--quiet", *offsets, timeout=900)
         self.assertEqual(r.returncode, 0, r.stderr)
         with open(js) as f:
             d = json.load(f)
