@@ -20,8 +20,12 @@ HIL, SRC, NODE, CHECKER, CHROMIUM, SHOTS = sys.argv[1:7]
 TIAGO = os.path.join(SRC, "..", "shared", "data", "tiago-suspension", "tiago_xyz_vicon_1640.csv")
 
 
+# Sanitizer builds run slower (docs/sanitizers.md): their test presets set this factor.
+TIME_SCALE = float(os.environ.get("HIL_TEST_TIME_SCALE", "1"))
+
+
 def run(*args, timeout=600):
-    r = subprocess.run(list(args), capture_output=True, text=True, timeout=timeout)
+    r = subprocess.run(list(args), capture_output=True, text=True, timeout=timeout * TIME_SCALE)
     return r
 
 
