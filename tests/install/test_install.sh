@@ -144,8 +144,11 @@ echo "== 6. import hil from $prefix/$PYTHONDIR"
 if [[ -z $PYTHONDIR ]]; then
   echo "(the Python module is not built: pybind11-dev or python3-dev missing)"
 else
-  # Away from the build tree, so only the installed extension can be found.
-  out=$(cd "$WORK" && env -i PATH=/usr/bin:/bin PYTHONPATH="$prefix/$PYTHONDIR" /usr/bin/python3 -c '
+  # Away from the build tree, so only the installed extension can be found. In a sanitizer build
+  # the interpreter is not instrumented: it preloads the runtime for the module (as tests/python).
+  san_env=()
+  [[ -z ${PYTHON_PRELOAD:-} ]] || san_env=(LD_PRELOAD="$PYTHON_PRELOAD" ASAN_OPTIONS=detect_leaks=0:halt_on_error=1:new_delete_type_mismatch=0)
+  out=$(cd "$WORK" && env -i PATH=/usr/bin:/bin "${san_env[@]}" PYTHONPATH="$prefix/$PYTHONDIR" /usr/bin/python3 -c '
 import hil, sys
 print("file", hil.__file__)
 print("version", hil.__version__)
