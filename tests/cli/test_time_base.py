@@ -127,6 +127,15 @@ class TimeBase(unittest.TestCase):
         self.assertEqual(tf.returncode, 0, err + replayed)
         self.assertEqual(out.count("robot_base -> ee"), 10, out)
 
+    def test_echo_prints_exactly_its_count(self):
+        # A replay as fast as it can go delivers many samples between two of echo's checks of its
+        # count: it must still print exactly --count, the recording's first ones, and exit 0.
+        out, _ = replay_and_echo(RUN, count=3)
+        start = start_ns(os.path.join(RUN, "run.yaml"))
+        first = [start + int((t * 10**9).to_integral_value()) for t in t_column(os.path.join(RUN, "samples.csv"))[:3]]
+        self.assertEqual(stamps(out), first, out)
+        self.assertEqual(len(out.splitlines()), 3, out)
+
 
 if __name__ == "__main__":
     unittest.main(argv=[sys.argv[0], "-v"])
