@@ -41,28 +41,39 @@ std::vector<Reported> ModelFamily::report(const Fit& f) const {
 
 namespace {
 
-/// The weighted rows of the samples `s` of a 6N-row matrix or vector.
-Eigen::MatrixXd rows_of(const Eigen::MatrixXd& A, const std::vector<int>& s, const Eigen::Matrix<double, 6, 1>& w) {
-  Eigen::MatrixXd out(static_cast<Eigen::Index>(6 * s.size()), A.cols());
+/// The weighted rows of the samples `s` of a 6N-row matrix, into `out` (its storage reused when
+/// the size is the same).
+void rows_of(const Eigen::MatrixXd& A, const std::vector<int>& s, const Eigen::Matrix<double, 6, 1>& w, Eigen::MatrixXd& out) {
+  out.resize(static_cast<Eigen::Index>(6 * s.size()), A.cols());
   for (std::size_t a = 0; a < s.size(); ++a)
     for (int c = 0; c < 6; ++c) out.row(static_cast<Eigen::Index>(6 * a) + c) = w(c) * A.row(6 * s[a] + c);
-  return out;
 }
 
 /// Least squares with scaled columns by complete orthogonal decomposition (minimum-norm when
-/// rank deficient): never the normal equations.
-Eigen::VectorXd solve_ls(const Eigen::MatrixXd& A, const Eigen::VectorXd& b) {
-  Eigen::VectorXd scale = A.colwise().norm().transpose();
-  for (Eigen::Index j = 0; j < scale.size(); ++j)
-    if (!(scale(j) > 0)) scale(j) = 1.0;
-  const Eigen::MatrixXd As = A * scale.cwiseInverse().asDiagonal();
+/// rank deficient): never the normal equations. One object solves again and again without
+/// allocating: a fit's designs are MBs each, and fresh ones every evaluation cost more in page
+/// faults than the decomposition itself (docs/performance.md, "The engine's allocations").
+class LeastSquares {
+ public:
   // The threshold decides the rank inside compute(): set before it (set after, it is ignored and a
   // nearly collinear design gets a wrong solution).
-  Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> cod;
-  cod.setThreshold(1e-10);
-  cod.compute(As);
-  return cod.solve(b).cwiseQuotient(scale);
-}
+  LeastSquares() { cod_.setThreshold(1e-10); }
+  Eigen::VectorXd solve(const Eigen::MatrixXd& A, const Eigen::VectorXd& b) {
+    scale_ = A.colwise().norm().transpose();
+    for (Eigen::Index j = 0; j < scale_.size(); ++j)
+      if (!(scale_(j) > 0)) scale_(j) = 1.0;
+    As_ = A * scale_.cwiseInverse().asDiagonal();
+    cod_.compute(As_);
+    return cod_.solve(b).cwiseQuotient(scale_);
+  }
+
+ private:
+  Eigen::VectorXd scale_;
+  Eigen::MatrixXd As_;
+  Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> cod_;
+};
+
+Eigen::VectorXd solve_ls(const Eigen::MatrixXd& A, const Eigen::VectorXd& b) { return LeastSquares().solve(A, b); }
 
 struct Projected {
   Eigen::VectorXd theta, r;
@@ -129,19 +140,20 @@ class Evaluator {
     for (std::size_t a = 0; a < train.size(); ++a)
       for (int c = 0; c < 6; ++c) b_(static_cast<Eigen::Index>(6 * a) + c) = obs.weight(c) * obs.y(train[a], c);
   }
-  /// The weighted design on the training rows; the columns of fixed θ are 0 (θ_j = 0 then).
-  Eigen::MatrixXd weighted_design(const Eigen::VectorXd& phi, bool keep = false) {
+  /// The weighted design on the training rows; the columns of fixed θ are 0 (θ_j = 0 then). In
+  /// this evaluator's one buffer: valid until its next call.
+  const Eigen::MatrixXd& weighted_design(const Eigen::VectorXd& phi, bool keep = false) {
     ++evaluations;
-    Eigen::MatrixXd A = rows_of(cache_.get(phi, keep), train_, obs_.weight);
+    rows_of(cache_.get(phi, keep), train_, obs_.weight, A_);
     for (std::size_t j = 0; j < fixed_theta.size(); ++j)
-      if (fixed_theta[j]) A.col(static_cast<Eigen::Index>(j)).setZero();
-    return A;
+      if (fixed_theta[j]) A_.col(static_cast<Eigen::Index>(j)).setZero();
+    return A_;
   }
   std::vector<bool> fixed_theta;
   Projected project(const Eigen::VectorXd& phi, bool keep = false) {
-    const Eigen::MatrixXd A = weighted_design(phi, keep);
+    const Eigen::MatrixXd& A = weighted_design(phi, keep);
     Projected p;
-    p.theta = solve_ls(A, b_);
+    p.theta = ls_.solve(A, b_);
     p.r = b_ - A * p.theta;
     p.cost = p.r.squaredNorm();
     return p;
@@ -154,6 +166,8 @@ class Evaluator {
   const Observations& obs_;
   const std::vector<int>& train_;
   Eigen::VectorXd b_;
+  Eigen::MatrixXd A_;  // weighted_design's buffer
+  LeastSquares ls_;
 };
 
 Eigen::VectorXd clamp(const Eigen::VectorXd& phi, const std::vector<Param>& nl) {
@@ -189,7 +203,7 @@ std::vector<Reported> reported_of(const ModelFamily& m, const Fit& f) {
 /// difference) is taken, else the smaller: the side without the switch. Fixed parameters' columns are 0.
 Eigen::MatrixXd full_jacobian(Evaluator& ev, const std::vector<Param>& nl, const Eigen::VectorXd& theta, const Eigen::VectorXd& phi,
                               const std::vector<bool>& fixed, bool keep = false) {
-  const Eigen::MatrixXd A = ev.weighted_design(phi, keep);
+  const Eigen::MatrixXd& A = ev.weighted_design(phi, keep);  // overwritten by the next design: used here only
   const Eigen::Index p = A.cols(), q = phi.size();
   Eigen::MatrixXd J(A.rows(), p + q);
   J.leftCols(p) = A;
