@@ -7,11 +7,13 @@
 #include <functional>
 #include <iostream>
 
+#include <hil/allocator/retain.hpp>
 #include <hil/cli/commands.hpp>
 #include <hil/error/error.hpp>
 #include "usage.hpp"
 
 int main(int argc, char** argv) {
+  hil::allocator::retain_freed_memory();  // before any thread: the diagnosis' matrices (core/allocator)
   using namespace hil::cli;
   CLI::App app{"hil: hardware-in-the-loop acquisition and identification for robotics labs\n"
                "Force plate over CAN, robot over Modbus, synchronized samples on DDS, stiffness and\n"
