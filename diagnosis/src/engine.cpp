@@ -52,7 +52,7 @@ void rows_of(const Eigen::MatrixXd& A, const std::vector<int>& s, const Eigen::M
 /// Least squares with scaled columns by complete orthogonal decomposition (minimum-norm when
 /// rank deficient): never the normal equations. One object solves again and again without
 /// allocating: a fit's designs are MBs each, and fresh ones every evaluation cost more in page
-/// faults than the decomposition itself (docs/performance.md, "The engine's allocations").
+/// faults than the decomposition itself (docs/performance.md, "The heap policy").
 class LeastSquares {
  public:
   // The threshold decides the rank inside compute(): set before it (set after, it is ignored and a
