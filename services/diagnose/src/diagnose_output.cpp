@@ -159,8 +159,10 @@ void print_summary(std::ostream& out, const RunDiagnosis& r) {
   for (const auto& c : d.confounded)
     out << fmt::format("  confounded:      {} or {}: {}\n    to separate them: {}\n", c.cause, c.rival, c.evidence, c.experiment);
   if (d.extended) {
-    out << "    (value ± 95 % interval, i.e. 1.96 std, the wider of the asymptotic and the folds' spread,\n"
-           "     with the model forms' shifts added; PNR = |value - nominal| / asymptotic std)\n";
+    // The std rules are the engine's (docs/diagnosis.md, "Intervals"); this line names them.
+    out << "    (value ± 95 % interval, i.e. 1.96 std: the block sandwich's where every fold agrees with it,\n"
+           "     the model's where one event carries the value, else the wider of the asymptotic std and\n"
+           "     the folds' spread; the model forms' shifts added. PNR = |value - nominal| / asymptotic std)\n";
     for (const auto& f : ext.model_forms) out << "    model form covered: " << f << "\n";
     for (const auto& f : ext.model_forms_rejected) out << "    model form rejected by the run: " << f << "\n";
     if (!ext.model_form_taken.empty()) out << "    values of the model form the run prefers: " << ext.model_form_taken << "\n";
