@@ -138,6 +138,11 @@
 //    HIL_FAMILY_FIRST=1550, i = 1550..1599, never drawn before, for none (the widths it failed on
 //    i = 1500..1549; μ_s / μ's bias is expected to show, as on the development draws). Drawn
 //    2026-12-06: named 49 of 50, μ_s / μ 13 of 13 inside, mean z² 0.97, biased (+0.81, se 0.16).
+//    time_offset's i = 1500..1549 re-run under that rule (development data, 2026-12-06 evening):
+//    τ 45 of 50 inside, mean z +0.42 (se 0.17); on two trapezoidal draws with slow_slip named τ is
+//    carried by the same stop (ν 1.15, 2.3) and model-based, one of them 4.7 std off (a fold check
+//    for the rule tried, not landed: docs/diagnosis.md, "Friction below the declared sticking
+//    threshold").
 //  * Per effect, of n draws, at most ceil(10 %) may fail each of:
 //     - named: the effect named first (clean: `none`);
 //     - single: no second cause.
