@@ -143,6 +143,12 @@
 //    carried by the same stop (ν 1.15, 2.3) and model-based, one of them 4.7 std off (a fold check
 //    for the rule tried, not landed: docs/diagnosis.md, "Friction below the declared sticking
 //    threshold").
+//  * With the folds' check on the one-event rule (one_event_agrees, kOneEventFoldZ: the model's std
+//    only where every fold that lost a fifth of the value's information or more lies within 2.576
+//    of the Hausman spread sqrt(s_i² - s²); rule added 2026-12-06 23:35 UTC, before these ran; the
+//    same rules): HIL_FAMILY_FIRST=1600, i = 1600..1649, never drawn before, for time_offset (τ
+//    under the rule), none (μ_s / μ's widths, which the check widens where stops disagree) and
+//    viscous_friction. μ_s / μ's bias is expected to show, as before.
 //  * Per effect, of n draws, at most ceil(10 %) may fail each of:
 //     - named: the effect named first (clean: `none`);
 //     - single: no second cause.
