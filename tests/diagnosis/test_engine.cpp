@@ -550,7 +550,10 @@ TEST(Engine, AParameterInformedByTwoBlocksIsReportedWithTheModelsStdAndSaysSo) {
   // freedom to measure b's error from the residuals, its std is the model's, said as such (rule
   // written before the test ran: coverage 85-99 % over 200 seeds, model_based every time, the std
   // the asymptotic one, ν below kOneEventDof and equal to the sandwich's own for b, the sandwich's
-  // std wider than the model's on average).
+  // std wider than the model's on average). With the folds' check on the model's std
+  // (one_event_agrees, rule written 2026-12-06 before this ran with it): the two folds that each
+  // lose a bump fail it at 1 % each under the model, so model_based on at least 95 % of the seeds
+  // (about 98 % expected), and where it fails the std is at least the model's.
   const int seeds = 200;
   int covered = 0, model = 0;
   double wider = 0.0;
@@ -565,15 +568,64 @@ TEST(Engine, AParameterInformedByTwoBlocksIsReportedWithTheModelsStdAndSaysSo) {
         model += r.model_based && !r.sandwich;
         EXPECT_LT(r.sandwich_dof, kOneEventDof);
         EXPECT_NEAR(r.sandwich_dof, s.full.sandwich_dof(1), 1e-6 * s.full.sandwich_dof(1));
-        EXPECT_DOUBLE_EQ(r.std, r.std_asymptotic);
-        wider += r.std_sandwich / r.std / seeds;
+        if (r.model_based) EXPECT_DOUBLE_EQ(r.std, r.std_asymptotic);
+        else EXPECT_GE(r.std, r.std_asymptotic);
+        wider += r.std_sandwich / r.std_asymptotic / seeds;
       }
   }
   std::cout << "b: " << covered << " of " << seeds << " covered, the sandwich's std " << wider << " times the model's\n";
-  EXPECT_EQ(model, seeds);
+  EXPECT_GE(model, 0.95 * seeds) << model << " of " << seeds;
   EXPECT_GE(covered, 0.85 * seeds) << covered << " of " << seeds;
   EXPECT_LE(covered, 0.99 * seeds) << covered << " of " << seeds;
   EXPECT_GT(wider, 1.0) << "the sandwich's std over the model's";
+}
+
+/// b x(k) with x a bump of 10 samples at 100..109 of 400 and a weak 0.1-amplitude sinusoid
+/// elsewhere: one block carries most of b's information (ν ~ 1), the rest of the run knows b too.
+class BumpAndWeakSignal : public Affine {
+ public:
+  explicit BumpAndWeakSignal(const Observations& o)
+      : Affine(o, "bump and weak signal", [](std::size_t k) { return x(static_cast<int>(k)); }) {}
+  static double x(int k) { return k >= 100 && k < 110 ? std::sin(M_PI * (k - 100 + 0.5) / 10.0) : 0.1 * std::sin(2 * M_PI * k / 37.0); }
+};
+
+TEST(Engine, AOneEventValueTheRestOfTheRunContradictsIsNotReportedWithTheModelsStd) {
+  // Issue 32: on a trapezoidal delay draw the stop that carried slow slip carried τ too (ν 1.15),
+  // misfit there, and the model's std put the truth 4.7 std away while the fold without the stop
+  // read it. Here the bump's response is not the model's (1 + 0.5 x + 0.4 x², a form the line
+  // lacks, in the bump only), so the bump pulls b while the weak signal elsewhere reads 0.5. Rule
+  // written before the test ran: over 60 seeds, b is one event's (ν below kOneEventDof) every
+  // time, model_based on at most 10 % of them, its interval covers 0.5 on at least 85 %; the
+  // model's std alone would cover on at most 10 %.
+  const int seeds = 60;
+  int one_event = 0, model = 0, covered = 0, model_would = 0;
+  for (int seed = 0; seed < seeds; ++seed) {
+    std::mt19937 rng(7000 + static_cast<unsigned>(seed));
+    std::normal_distribution<double> g(0, 0.1);
+    Observations o;
+    o.y.resize(400, 6);
+    for (int k = 0; k < 400; ++k) {
+      o.t_s.push_back(0.01 * k);
+      const double x = BumpAndWeakSignal::x(k);
+      const double bend = k >= 100 && k < 110 ? 0.4 * x * x : 0.0;
+      for (int c = 0; c < 6; ++c) o.y(k, c) = 1.0 + 0.5 * x + bend + g(rng);
+    }
+    const BumpAndWeakSignal m(o);
+    const Score s = score(m, o);
+    for (const auto& r : s.full.reported)
+      if (r.name == "b") {
+        one_event += r.sandwich_dof > 0 && r.sandwich_dof < kOneEventDof;
+        model += r.model_based;
+        covered += std::abs(r.value - 0.5) <= 1.96 * r.std;
+        model_would += std::abs(r.value - 0.5) <= 1.96 * r.std_asymptotic;
+      }
+  }
+  std::cout << "b: one event " << one_event << ", model-based " << model << ", covered " << covered << " (" << model_would
+            << " with the model's std) of " << seeds << "\n";
+  EXPECT_EQ(one_event, seeds);
+  EXPECT_LE(model, 0.10 * seeds);
+  EXPECT_GE(covered, 0.85 * seeds);
+  EXPECT_LE(model_would, 0.10 * seeds) << "the case does not test the check";
 }
 
 /// 400 samples at 100 Hz of 1 + 0.5 (x + bend x²), x = t - 2, on every component, with white noise

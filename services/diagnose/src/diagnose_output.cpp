@@ -33,9 +33,10 @@ std::string fmt_value(double v, double s, const std::string& unit) {
   return fmt::format("{:.4g} ± {:.2g}{}{}", v, 1.96 * s, unit.empty() ? "" : " ", unit);
 }
 
-/// A value whose interval the residuals cannot check (Reported::model_based), said beside it.
+/// A value whose interval the residuals cannot measure (Reported::model_based), said beside it.
 std::string one_event_text(const dg::Reported& q) {
-  return q.model_based ? fmt::format("  one event's worth (ν {:.1f}): the model's std, unchecked by the residuals", q.sandwich_dof) : "";
+  return q.model_based ? fmt::format("  one event's worth (ν {:.1f}): the model's std, which the folds do not contradict", q.sandwich_dof)
+                       : "";
 }
 
 const dg::Score& extended_score(const RunDiagnosis& r) { return r.result.extended ? *r.result.extended : r.result.nominal; }
@@ -161,8 +162,9 @@ void print_summary(std::ostream& out, const RunDiagnosis& r) {
   if (d.extended) {
     // The std rules are the engine's (docs/diagnosis.md, "Intervals"); this line names them.
     out << "    (value ± 95 % interval, i.e. 1.96 std: the block sandwich's where every fold agrees with it,\n"
-           "     the model's where one event carries the value, else the wider of the asymptotic std and\n"
-           "     the folds' spread; the model forms' shifts added. PNR = |value - nominal| / asymptotic std)\n";
+           "     the model's where one event carries the value and no fold contradicts it, else the wider of\n"
+           "     the asymptotic std and the folds' spread; the model forms' shifts added.\n"
+           "     PNR = |value - nominal| / asymptotic std)\n";
     for (const auto& f : ext.model_forms) out << "    model form covered: " << f << "\n";
     for (const auto& f : ext.model_forms_rejected) out << "    model form rejected by the run: " << f << "\n";
     if (!ext.model_form_taken.empty()) out << "    values of the model form the run prefers: " << ext.model_form_taken << "\n";

@@ -58,7 +58,9 @@ struct Reported {
   /// Its information sits in fewer than kOneEventDof blocks' worth of a run whose residuals'
   /// correlation is short (at least kSandwichMinBlocks blocks): one event, e.g. a single stop. No
   /// residual-based std (sandwich, folds) has the degrees of freedom to measure its error, and
-  /// `std` is the model's, σ² (JᵀJ)⁻¹ inflated, which the residuals cannot check.
+  /// `std` is the model's, σ² (JᵀJ)⁻¹ inflated, which the residuals cannot check; taken only where
+  /// every fold's estimate lies where the model says its block's removal can move it
+  /// (kOneEventFoldZ): else the rest of the run knows the value too, and the folds measure it.
   bool model_based = false;
   /// The asymptotic standard deviation, σ² (JᵀJ)⁻¹ inflated for autocorrelation (0: same as std).
   double std_asymptotic = 0.0;
@@ -251,6 +253,9 @@ constexpr int kSandwichMinBlocks = 10;
 /// the run (Reported::model_based): t_{0.975} at 3 is 1.6 times 1.96, and the information of
 /// slow_slip's μ_s K, which sits in a stop or two, gives 1.0-2.1 (docs/diagnosis.md).
 constexpr double kOneEventDof = 3.0;
+/// The one-event rule's check on the folds: every fold within z_{1 - 0.025/5} = 2.576 of the
+/// Hausman spread its block's removal allows (95 % jointly over the 5 folds, Bonferroni).
+constexpr double kOneEventFoldZ = 2.576;
 
 struct FitOptions {
   int max_iterations = 40;
