@@ -875,13 +875,14 @@ std::map<std::string, double> reported_dof(const ModelFamily& m, const Fit& full
 /// event that carries the value knows it poorly (s_i ≫ s) and may wander far; a fold that keeps the
 /// event must stay close. Issue 32: on a trapezoidal delay draw whose slow slip carried τ (ν 1.15),
 /// the full fit read τ 0.31 ms early with a model std of 0.066 ms (z -4.7), the folds 0.38 ms apart.
-/// Its cost: slow_slip's μ_s on clean moves runs, where one stop reads it higher than the others
-/// by more than the model's noise, is then reported with the folds' spread (docs/diagnosis.md).
+/// Its cost: slow_slip's μ_s on clean runs with stops, where one stop reads it higher than the
+/// others by more than the model's noise, is then reported with the folds' spread (docs/diagnosis.md).
 bool one_event_agrees(double x, double s, const std::vector<double>& folds, const std::vector<double>& fold_std) {
   for (std::size_t i = 0; i < folds.size(); ++i) {
     // Only a fold that lost a fifth of the value's information or more: where s_i ~ s the allowed
     // spread is below the fits' convergence (draw 36,631,517: μ_s K's folds 1-4 within 10 N/m of
-    // the full fit's 60,547 ± 740, a ratio of 2.8 on fold 1 for an allowed 3.6 N/m).
+    // the full fit's 60,547 ± 740, a ratio of 2.8 on fold 1 for an allowed 3.6 N/m). A fold whose
+    // pseudo-inverse dropped the value's direction (s_i below s) cannot know it and is skipped too.
     if (fold_std[i] * fold_std[i] < 1.25 * s * s) continue;
     const double spread = std::sqrt(std::max(0.0, fold_std[i] * fold_std[i] - s * s));
     if (!(std::abs(folds[i] - x) <= kOneEventFoldZ * spread)) return false;

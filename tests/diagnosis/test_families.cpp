@@ -148,7 +148,11 @@
 //    of the Hausman spread sqrt(s_i² - s²); rule added 2026-12-06 23:35 UTC, before these ran; the
 //    same rules): HIL_FAMILY_FIRST=1600, i = 1600..1649, never drawn before, for time_offset (τ
 //    under the rule), none (μ_s / μ's widths, which the check widens where stops disagree) and
-//    viscous_friction. μ_s / μ's bias is expected to show, as before.
+//    viscous_friction. μ_s / μ's bias is expected to show, as before. Drawn 2026-12-06 on dea5da6:
+//    all three pass (none 47 named, μ_s / μ 13 of 13, z² 0.56; time_offset 49, τ 47 of 49;
+//    viscous_friction 50, its coefficient 48 of 50, mean z -0.23, se 0.14); τ misses by z +31.8
+//    on draw 36,631,619, model-based, where the check passes and fz's residual still follows the
+//    penetration rate (docs/diagnosis.md, "Friction below the declared sticking threshold").
 //  * Per effect, of n draws, at most ceil(10 %) may fail each of:
 //     - named: the effect named first (clean: `none`);
 //     - single: no second cause.
