@@ -551,9 +551,10 @@ TEST(Engine, AParameterInformedByTwoBlocksIsReportedWithTheModelsStdAndSaysSo) {
   // written before the test ran: coverage 85-99 % over 200 seeds, model_based every time, the std
   // the asymptotic one, ν below kOneEventDof and equal to the sandwich's own for b, the sandwich's
   // std wider than the model's on average). With the folds' check on the model's std
-  // (one_event_agrees, rule written 2026-12-06 before this ran with it): the two folds that each
-  // lose a bump fail it at 1 % each under the model, so model_based on at least 95 % of the seeds
-  // (about 98 % expected), and where it fails the std is at least the model's.
+  // (one_event_agrees): the two folds that each lose a bump fail it at 1 % each under the model,
+  // so model_based on at least 95 % of the seeds (about 98 % expected), and where it fails the std
+  // is at least the model's. This assertion was changed after the check, tried on a branch, gave
+  // 198 of 200 against "every time": this design no longer tests the check blind.
   const int seeds = 200;
   int covered = 0, model = 0;
   double wider = 0.0;
