@@ -236,6 +236,10 @@ class ContactFamily : public ModelFamily {
   /// nor an axis the run holds (more than kHeldShare of its samples in runs of kHoldSamples or more
   /// equal reported values: there the error is one offset per hold, not a spread over the step).
   std::vector<ErrorInVariable> errors_in_variables() const override;
+  /// The plate's two groups: fz, mx and my carry the normal force, fx, fy and mz the friction
+  /// (docs/diagnosis.md, "The plate's two groups of components"). A delay carried by one stop's
+  /// friction torque was read 32 std off while the normal group alone read the truth (issue 32).
+  std::vector<ComponentGroup> component_groups() const override { return {{"fz, mx, my", {2, 3, 4}}, {"fx, fy, mz", {0, 1, 5}}}; }
   static constexpr std::size_t kHoldSamples = 10;
   static constexpr double kHeldShare = 0.25;
   /// κ: the tangential forces act at the centroid + κ δ e_n (0: the contact paper's model).

@@ -61,7 +61,16 @@ struct Reported {
   /// `std` is the model's, σ² (JᵀJ)⁻¹ inflated, which the residuals cannot check; taken only where
   /// every fold's estimate lies where the model says its block's removal can move it
   /// (kOneEventFoldZ): else the rest of the run knows the value too, and the folds measure it.
+  /// Nor where a group of components contradicts it (`std_components`).
   bool model_based = false;
+  /// A value carried by one event whose reading by one group of the observation's components alone
+  /// (ModelFamily::component_groups) lies beyond what the model allows (kOneEventFoldZ of the
+  /// Hausman spread): the model is wrong where one group looks, and which group reads the truth the
+  /// run cannot say. This is the std whose ±1.96 reaches across that group's own 95 % interval,
+  /// |x_g - x| / 1.96 + s_g; `std` is at least this (0: every group agrees, or not one event's).
+  double std_components = 0.0;
+  /// The group that contradicts the value and what it reads (empty: none), for the report.
+  std::string components_disagree = {};
   /// The asymptotic standard deviation, σ² (JᵀJ)⁻¹ inflated for autocorrelation (0: same as std).
   double std_asymptotic = 0.0;
   /// The model-form part (0: none): the largest shift of the value when the fit is repeated under
@@ -191,6 +200,16 @@ class ModelFamily {
   };
   /// Default: none (the regressors are exact).
   virtual std::vector<ErrorInVariable> errors_in_variables() const { return {}; }
+  /// Groups of the observation's components that see the parameters through different physics
+  /// (a plate's normal force in fz, mx and my, the friction in fx, fy and mz). Under the model each
+  /// group's rows alone estimate the same values, less precisely; a value carried by one event is
+  /// reported on the model's std only where every group's reading agrees with it (Reported::
+  /// std_components). Default: none.
+  struct ComponentGroup {
+    std::string name;             ///< e.g. "fz, mx, my"
+    std::vector<int> components;  ///< columns of Observations::y
+  };
+  virtual std::vector<ComponentGroup> component_groups() const { return {}; }
   /// What the family located from the data on every sample (its effects' Effect::locates_events). Default: none.
   virtual std::vector<LocatedEvent> located_events() const { return {}; }
 };
@@ -254,7 +273,9 @@ constexpr int kSandwichMinBlocks = 10;
 /// slow_slip's μ_s K, which sits in a stop or two, gives 1.0-2.1 (docs/diagnosis.md).
 constexpr double kOneEventDof = 3.0;
 /// The one-event rule's check on the folds: every fold within z_{1 - 0.025/5} = 2.576 of the
-/// Hausman spread its block's removal allows (95 % jointly over the 5 folds, Bonferroni).
+/// Hausman spread its block's removal allows (95 % jointly over the 5 folds, Bonferroni). The
+/// component groups' check takes the same bound (with the two contact groups, at most 7 % of the
+/// values the model holds are sent to the other rules).
 constexpr double kOneEventFoldZ = 2.576;
 
 struct FitOptions {
