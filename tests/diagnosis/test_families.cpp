@@ -153,6 +153,13 @@
 //    viscous_friction 50, its coefficient 48 of 50, mean z -0.23, se 0.14); τ misses by z +31.8
 //    on draw 36,631,619, model-based, where the check passes and fz's residual still follows the
 //    penetration rate (docs/diagnosis.md, "Friction below the declared sticking threshold").
+//  * With the component groups' check on the one-event rule (ContactFamily::component_groups: fz,
+//    mx, my and fx, fy, mz; each group's one-step reading from the full optimum within 2.576 of its
+//    Hausman spread, else the value takes the other rules and its std reaches across that group's
+//    95 % interval, Reported::std_components; rule added 2026-12-07 02:56 UTC, before these ran,
+//    after the engine test and one development draw, 36,631,619, whose τ it moves from z +31.8 to
+//    +1.07; the same rules): HIL_FAMILY_FIRST=1650, i = 1650..1699, never drawn before, every
+//    effect. μ_s / μ's bias is expected to show, as before.
 //  * Per effect, of n draws, at most ceil(10 %) may fail each of:
 //     - named: the effect named first (clean: `none`);
 //     - single: no second cause.
