@@ -1190,6 +1190,13 @@ Score score(const ModelFamily& m, const Observations& obs, const CvOptions& o, c
     }
     tell();
   });
+  // The full fit without its per-sample matrices: what the folds' and the groups' linear readings
+  // copy and report from (a copy of the Jacobian per fold grew with the run).
+  Fit light = s.full;
+  light.jacobian.resize(0, 0);
+  light.residual.resize(0);
+  light.sandwich_half.clear();
+  light.sandwich_full.clear();
   std::map<std::string, std::vector<double>> by_name, linear, fold_std;
   std::size_t folds_unshifted = 0;
   double pooled_sq = 0.0, effect_sq = 0.0;
@@ -1225,13 +1232,13 @@ Score score(const ModelFamily& m, const Observations& obs, const CvOptions& o, c
         int lin_rank = 0;
         const Eigen::MatrixXd fold_inverse = normal_pinv(Jt, lin_rank);
         const Eigen::VectorXd d = fold_inverse * (Jt.transpose() * rt);
-        Fit lin = s.full;
+        Fit lin = light;
         lin.theta += d.head(lin.theta.size());
         lin.phi += d.tail(lin.phi.size());
         for (const auto& r : values_reported(m, lin, s.full)) linear[r.name].push_back(r.value);
         // The fold's asymptotic std of each value at the full optimum, with the full fit's σ² and
         // long-run inflation: what the model says the fold knows (the one-event check below).
-        Fit at = s.full;
+        Fit at = light;
         at.cov = s.full.sigma2 * s.full.variance_inflation * fold_inverse;
         for (const auto& r : reported_of(m, at)) fold_std[r.name].push_back(r.std);
       }
@@ -1260,11 +1267,7 @@ Score score(const ModelFamily& m, const Observations& obs, const CvOptions& o, c
       int g_rank = 0;
       const Eigen::MatrixXd inverse = normal_pinv(Jg, g_rank);
       const Eigen::VectorXd d = inverse * (Jg.transpose() * rg);
-      Fit at = s.full;
-      at.jacobian.resize(0, 0);
-      at.residual.resize(0);
-      at.sandwich_half.clear();
-      at.sandwich_full.clear();
+      Fit at = light;
       at.theta += d.head(at.theta.size());
       at.phi += d.tail(at.phi.size());
       groups.names.push_back(g.name);
