@@ -40,7 +40,8 @@ Diagnosed diagnose_scenario(const ct::Scenario& sc, const TripodRigOptions& rig,
     for (const auto& q : d.extended->full.reported)
       if (q.extension || q.name == "K" || q.name == "mu")
         o << "; " << q.name << " = " << q.value << " ± " << q.std << " [a " << q.std_asymptotic << " f " << q.std_folds << " m "
-          << q.std_model_form << " s " << q.std_sandwich << " nu " << q.sandwich_dof << (q.model_based ? " MODEL" : "") << "]";
+          << q.std_model_form << " s " << q.std_sandwich << " nu " << q.sandwich_dof << (q.model_based ? " MODEL" : "")
+          << (q.std_components > 0 ? " COMPONENTS " + q.components_disagree : "") << "]";
   if (a.structured()) o << " | STRUCTURE: " << a.structure_text();
   if (d.extended && d.extended_residuals.structured()) o << " | LEFT: " << d.extended_residuals.structure_text();
   run.line = o.str();

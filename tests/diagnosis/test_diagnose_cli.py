@@ -114,6 +114,12 @@ class Diagnose(unittest.TestCase):
                     self.assertAlmostEqual(p["std"], math.hypot(p["std_asymptotic"], p["std_model_form"]), delta=1e-9 * p["std"])
                 else:
                     self.assertGreaterEqual(p["std"], p["std_asymptotic"] * (1 - 1e-12), name)
+                # A group of components that contradicts a one-event value widens it across its reading.
+                self.assertGreaterEqual(p["std"], p["std_components"] * (1 - 1e-12), name)
+                self.assertEqual(p["std_components"] > 0, p["components_disagree"] != "", name)
+                if p["std_components"] > 0:
+                    self.assertFalse(p["model_based"], name)
+                    self.assertLess(p["sandwich_dof"], 3.0, name)
         # The press bench is planar: nothing acts along fy, so sensor_gain's gain_fy is listed as not
         # identifiable (fixed, with the reason) and never printed as an estimate.
         gain = next(c for c in d["candidates"] if c["name"] == "sensor_gain")
