@@ -699,8 +699,8 @@ TEST(Engine, AOneEventValueOneGroupOfComponentsContradictsReachesAcrossThatGroup
         covered_without += std::abs(r.value - 0.5) <= 1.96 * r.std;
       }
   }
-  std::cout << "b: one event " << one_event << ", a group disagrees " << disagree << ", model-based " << model << ", covered "
-            << covered << " (" << covered_without << " without the groups) of " << seeds << "\n";
+  std::cout << "b: one event " << one_event << ", a group disagrees " << disagree << ", model-based " << model << ", covered " << covered
+            << " (" << covered_without << " without the groups) of " << seeds << "\n";
   EXPECT_GE(one_event, 0.90 * seeds);
   EXPECT_GE(disagree, 0.90 * seeds);
   EXPECT_LE(model, 0.10 * seeds);

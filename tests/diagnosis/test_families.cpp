@@ -159,7 +159,11 @@
 //    95 % interval, Reported::std_components; rule added 2026-12-07 02:56 UTC, before these ran,
 //    after the engine test and one development draw, 36,631,619, whose τ it moves from z +31.8 to
 //    +1.07; the same rules): HIL_FAMILY_FIRST=1650, i = 1650..1699, never drawn before, every
-//    effect. μ_s / μ's bias is expected to show, as before.
+//    effect. μ_s / μ's bias is expected to show, as before. Drawn 2026-12-07 02:55-03:34 UTC on
+//    2a03195: none, sensor_gain, time_offset (τ 47 of 50, mean z -0.08), viscous_friction and
+//    contact_damping pass; sensor_bias and nonlinear_stiffness fail on μ_s / μ's bias,
+//    geometric_offset on its widths (158 of 159 inside). The groups' check fired on none of the 81
+//    one-event values (docs/diagnosis.md, "Friction below the declared sticking threshold").
 //  * Per effect, of n draws, at most ceil(10 %) may fail each of:
 //     - named: the effect named first (clean: `none`);
 //     - single: no second cause.
