@@ -890,6 +890,38 @@ bool one_event_agrees(double x, double s, const std::vector<double>& folds, cons
   return true;
 }
 
+/// What the full fit's rows `rows` alone say of the reported values: each value one linear step
+/// from the full optimum, A⁺ J_rowsᵀ r_rows (a fold's estimate as the full fit's linearisation
+/// predicts it, or a group of components' reading), with its asymptotic std at the full optimum
+/// from those rows, the full fit's σ² and long-run inflation: what the model says they know.
+/// `light`: the full fit without its per-sample matrices (what is copied).
+std::vector<Reported> rows_reading(const ModelFamily& m, const Fit& full, const Fit& light, const std::vector<Eigen::Index>& rows) {
+  const Eigen::MatrixXd& J = full.jacobian;
+  Eigen::MatrixXd Jr(static_cast<Eigen::Index>(rows.size()), J.cols());
+  Eigen::VectorXd rr(Jr.rows());
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    Jr.row(static_cast<Eigen::Index>(i)) = J.row(rows[i]);
+    rr(static_cast<Eigen::Index>(i)) = full.residual(rows[i]);
+  }
+  int rank = 0;
+  const Eigen::MatrixXd inverse = normal_pinv(Jr, rank);
+  const Eigen::VectorXd d = inverse * (Jr.transpose() * rr);
+  Fit at = light;
+  at.theta += d.head(at.theta.size());
+  at.phi += d.tail(at.phi.size());
+  std::vector<Reported> out = values_reported(m, at, full);
+  at.theta = full.theta;
+  at.phi = full.phi;
+  at.cov = full.sigma2 * full.variance_inflation * inverse;
+  std::map<std::string, double> sd;
+  for (const auto& r : reported_of(m, at)) sd[r.name] = r.std;
+  for (auto& r : out) {
+    const auto it = sd.find(r.name);
+    r.std = it != sd.end() ? it->second : std::numeric_limits<double>::quiet_NaN();
+  }
+  return out;
+}
+
 /// Each component group's reading of the reported values, one linear step from the full optimum on
 /// the group's rows alone, and its asymptotic std there (ModelFamily::component_groups): per value
 /// name, one entry per group.
@@ -1222,25 +1254,16 @@ Score score(const ModelFamily& m, const Observations& obs, const CvOptions& o, c
       // The fold's estimate as the full fit's linearisation predicts it: A_i⁺ J_trainᵀ r_train
       // from the full optimum (honest_intervals compares the fold's own with it).
       if (s.full.jacobian.size() > 0) {
-        const Eigen::MatrixXd& J = s.full.jacobian;
-        Eigen::MatrixXd Jt(static_cast<Eigen::Index>(6 * fd.train.size()), J.cols());
-        Eigen::VectorXd rt(Jt.rows());
-        for (std::size_t a = 0; a < fd.train.size(); ++a) {
-          Jt.middleRows(static_cast<Eigen::Index>(6 * a), 6) = J.middleRows(6 * fd.train[a], 6);
-          rt.segment(static_cast<Eigen::Index>(6 * a), 6) = s.full.residual.segment(6 * fd.train[a], 6);
+        std::vector<Eigen::Index> train_rows;
+        train_rows.reserve(6 * fd.train.size());
+        for (int k : fd.train)
+          for (Eigen::Index c = 0; c < 6; ++c) train_rows.push_back(6 * static_cast<Eigen::Index>(k) + c);
+        // The fold's asymptotic std of each value is what the model says the fold knows (the
+        // one-event check in honest_intervals).
+        for (const auto& r : rows_reading(m, s.full, light, train_rows)) {
+          linear[r.name].push_back(r.value);
+          fold_std[r.name].push_back(r.std);
         }
-        int lin_rank = 0;
-        const Eigen::MatrixXd fold_inverse = normal_pinv(Jt, lin_rank);
-        const Eigen::VectorXd d = fold_inverse * (Jt.transpose() * rt);
-        Fit lin = light;
-        lin.theta += d.head(lin.theta.size());
-        lin.phi += d.tail(lin.phi.size());
-        for (const auto& r : values_reported(m, lin, s.full)) linear[r.name].push_back(r.value);
-        // The fold's asymptotic std of each value at the full optimum, with the full fit's σ² and
-        // long-run inflation: what the model says the fold knows (the one-event check below).
-        Fit at = light;
-        at.cov = s.full.sigma2 * s.full.variance_inflation * fold_inverse;
-        for (const auto& r : reported_of(m, at)) fold_std[r.name].push_back(r.std);
       }
       ++folds_unshifted;
     }
@@ -1254,28 +1277,15 @@ Score score(const ModelFamily& m, const Observations& obs, const CvOptions& o, c
   GroupReadings groups;
   if (s.full.jacobian.size() > 0)
     for (const auto& g : m.component_groups()) {
-      const Eigen::MatrixXd& J = s.full.jacobian;
-      const auto per = static_cast<Eigen::Index>(g.components.size());
-      Eigen::MatrixXd Jg(per * static_cast<Eigen::Index>(n), J.cols());
-      Eigen::VectorXd rg(Jg.rows());
+      std::vector<Eigen::Index> group_rows;
+      group_rows.reserve(g.components.size() * n);
       for (std::size_t k = 0; k < n; ++k)
-        for (Eigen::Index c = 0; c < per; ++c) {
-          const Eigen::Index row = 6 * static_cast<Eigen::Index>(k) + g.components[static_cast<std::size_t>(c)];
-          Jg.row(per * static_cast<Eigen::Index>(k) + c) = J.row(row);
-          rg(per * static_cast<Eigen::Index>(k) + c) = s.full.residual(row);
-        }
-      int g_rank = 0;
-      const Eigen::MatrixXd inverse = normal_pinv(Jg, g_rank);
-      const Eigen::VectorXd d = inverse * (Jg.transpose() * rg);
-      Fit at = light;
-      at.theta += d.head(at.theta.size());
-      at.phi += d.tail(at.phi.size());
+        for (int c : g.components) group_rows.push_back(6 * static_cast<Eigen::Index>(k) + c);
       groups.names.push_back(g.name);
-      for (const auto& r : values_reported(m, at, s.full)) groups.value[r.name].push_back(r.value);
-      at.theta = s.full.theta;
-      at.phi = s.full.phi;
-      at.cov = s.full.sigma2 * s.full.variance_inflation * inverse;
-      for (const auto& r : reported_of(m, at)) groups.std[r.name].push_back(r.std);
+      for (const auto& r : rows_reading(m, s.full, light, group_rows)) {
+        groups.value[r.name].push_back(r.value);
+        groups.std[r.name].push_back(r.std);
+      }
     }
   honest_intervals(s, m, by_name, linear, fold_std, folds_unshifted, groups);
   s.full.jacobian.resize(0, 0);  // its rows scale with the run: not kept beyond their use

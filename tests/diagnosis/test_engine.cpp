@@ -6,6 +6,7 @@
 #include <array>
 #include <atomic>
 #include <cmath>
+#include <functional>
 #include <iostream>
 #include <limits>
 #include <memory>
@@ -590,6 +591,20 @@ class BumpAndWeakSignal : public Affine {
   static double x(int k) { return k >= 100 && k < 110 ? std::sin(M_PI * (k - 100 + 0.5) / 10.0) : 0.1 * std::sin(2 * M_PI * k / 37.0); }
 };
 
+/// 400 samples at 100 Hz of mean(k, c) plus white noise of std 0.1 from `seed` (drawn sample by
+/// sample, component by component).
+Observations noisy_samples(unsigned seed, const std::function<double(int, int)>& mean) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> g(0, 0.1);
+  Observations o;
+  o.y.resize(400, 6);
+  for (int k = 0; k < 400; ++k) {
+    o.t_s.push_back(0.01 * k);
+    for (int c = 0; c < 6; ++c) o.y(k, c) = mean(k, c) + g(rng);
+  }
+  return o;
+}
+
 TEST(Engine, AOneEventValueTheRestOfTheRunContradictsIsNotReportedWithTheModelsStd) {
   // Issue 32: on a trapezoidal delay draw the stop that carried slow slip carried τ too (ν 1.15),
   // misfit there, and the model's std put the truth 4.7 std away while the fold without the stop
@@ -601,16 +616,10 @@ TEST(Engine, AOneEventValueTheRestOfTheRunContradictsIsNotReportedWithTheModelsS
   const int seeds = 60;
   int one_event = 0, model = 0, covered = 0, model_would = 0;
   for (int seed = 0; seed < seeds; ++seed) {
-    std::mt19937 rng(7000 + static_cast<unsigned>(seed));
-    std::normal_distribution<double> g(0, 0.1);
-    Observations o;
-    o.y.resize(400, 6);
-    for (int k = 0; k < 400; ++k) {
-      o.t_s.push_back(0.01 * k);
+    const Observations o = noisy_samples(7000 + static_cast<unsigned>(seed), [](int k, int) {
       const double x = BumpAndWeakSignal::x(k);
-      const double bend = k >= 100 && k < 110 ? 0.4 * x * x : 0.0;
-      for (int c = 0; c < 6; ++c) o.y(k, c) = 1.0 + 0.5 * x + bend + g(rng);
-    }
+      return 1.0 + 0.5 * x + (k >= 100 && k < 110 ? 0.4 * x * x : 0.0);
+    });
     const BumpAndWeakSignal m(o);
     const Score s = score(m, o);
     for (const auto& r : s.full.reported)
@@ -675,15 +684,10 @@ TEST(Engine, AOneEventValueOneGroupOfComponentsContradictsReachesAcrossThatGroup
   const int seeds = 60;
   int one_event = 0, disagree = 0, model = 0, covered = 0, covered_without = 0;
   for (int seed = 0; seed < seeds; ++seed) {
-    std::mt19937 rng(7100 + static_cast<unsigned>(seed));
-    std::normal_distribution<double> g(0, 0.1);
-    Observations o;
-    o.y.resize(400, 6);
-    for (int k = 0; k < 400; ++k) {
-      o.t_s.push_back(0.01 * k);
+    const Observations o = noisy_samples(7100 + static_cast<unsigned>(seed), [](int k, int c) {
       const double x = ThreeBumpsTwoGroups::x(k);
-      for (int c = 0; c < 6; ++c) o.y(k, c) = 1.0 + (c >= 2 && c <= 4 ? 0.5 * x / 3.0 : 0.9 * x) + g(rng);
-    }
+      return 1.0 + (c >= 2 && c <= 4 ? 0.5 * x / 3.0 : 0.9 * x);
+    });
     const ThreeBumpsTwoGroups with(o, true), without(o, false);
     const Score s = score(with, o), s0 = score(without, o);
     for (const auto& r : s.full.reported)
