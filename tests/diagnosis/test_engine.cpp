@@ -402,10 +402,12 @@ TEST(ContactFamily, AnAxisTheRunHoldsIsNotDeclaredAsAnErrorInTheVariables) {
   for (const auto& v : f.errors_in_variables()) EXPECT_THAT(v.variable, ::testing::Not(HasSubstr("world z"))) << v.variable;
 }
 
-/// y_c = a + b x_k on every component: a family linear in a regressor x given per sample.
+/// y_c = a + b s_c x_k: a family linear in a regressor x given per sample, seen at the scale s_c
+/// by component c (1 on every component unless given).
 class Affine : public ModelFamily {
  public:
-  Affine(const Observations& o, std::string name, std::function<double(std::size_t)> x) : o_(o), name_(std::move(name)), x_(std::move(x)) {}
+  Affine(const Observations& o, std::string name, std::function<double(std::size_t)> x, std::function<double(int)> scale = nullptr)
+      : o_(o), name_(std::move(name)), x_(std::move(x)), scale_(std::move(scale)) {}
   std::string name() const override { return name_; }
   std::vector<Param> linear() const override { return {{"a", "", 1, false}, {"b", "", 1, true}}; }
   void design(const Eigen::VectorXd&, Eigen::MatrixXd& A, FamilyData&) const override {
@@ -413,7 +415,7 @@ class Affine : public ModelFamily {
     for (std::size_t k = 0; k < o_.size(); ++k)
       for (int c = 0; c < 6; ++c) {
         A(static_cast<Eigen::Index>(6 * k) + c, 0) = 1.0;
-        A(static_cast<Eigen::Index>(6 * k) + c, 1) = x_(k);
+        A(static_cast<Eigen::Index>(6 * k) + c, 1) = (scale_ ? scale_(c) : 1.0) * x_(k);
       }
   }
 
@@ -421,6 +423,7 @@ class Affine : public ModelFamily {
   const Observations& o_;
   std::string name_;
   std::function<double(std::size_t)> x_;
+  std::function<double(int)> scale_;
 };
 
 /// y_c = a + b (t - 2) with AR(1) noise of correlation 0.98 (a slowly wandering error, the kind a
@@ -641,24 +644,17 @@ TEST(Engine, AOneEventValueTheRestOfTheRunContradictsIsNotReportedWithTheModelsS
 /// y = a + b x(k) s_c: three bumps (the first carries most of b), nothing elsewhere; the normal
 /// group's components (2, 3, 4) see x at a third of the scale (s_c = 1/3) of the others'.
 /// `groups`: whether the family declares the two groups (ModelFamily::component_groups).
-class ThreeBumpsTwoGroups : public ModelFamily {
+class ThreeBumpsTwoGroups : public Affine {
  public:
-  ThreeBumpsTwoGroups(const Observations& o, bool groups) : o_(o), groups_(groups) {}
-  std::string name() const override { return "three bumps, two groups"; }
-  std::vector<Param> linear() const override { return {{"a", "", 1, false}, {"b", "", 1, true}}; }
-  void design(const Eigen::VectorXd&, Eigen::MatrixXd& A, FamilyData&) const override {
-    A.setZero(static_cast<Eigen::Index>(6 * o_.size()), 2);
-    for (std::size_t k = 0; k < o_.size(); ++k)
-      for (int c = 0; c < 6; ++c) {
-        A(static_cast<Eigen::Index>(6 * k) + c, 0) = 1.0;
-        A(static_cast<Eigen::Index>(6 * k) + c, 1) = scale(c) * x(static_cast<int>(k));
-      }
-  }
+  ThreeBumpsTwoGroups(const Observations& o, bool groups)
+      : Affine(
+            o, "three bumps, two groups", [](std::size_t k) { return x(static_cast<int>(k)); },
+            [](int c) { return c >= 2 && c <= 4 ? 1.0 / 3.0 : 1.0; }),
+        groups_(groups) {}
   std::vector<ComponentGroup> component_groups() const override {
     if (!groups_) return {};
     return {{"normal", {2, 3, 4}}, {"tangential", {0, 1, 5}}};
   }
-  static double scale(int c) { return c >= 2 && c <= 4 ? 1.0 / 3.0 : 1.0; }
   static double x(int k) {
     const auto bump = [k](int start, double amplitude) {
       return k >= start && k < start + 10 ? amplitude * std::sin(M_PI * (k - start + 0.5) / 10.0) : 0.0;
@@ -667,7 +663,6 @@ class ThreeBumpsTwoGroups : public ModelFamily {
   }
 
  private:
-  const Observations& o_;
   bool groups_;
 };
 
