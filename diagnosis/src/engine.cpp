@@ -1111,7 +1111,7 @@ void correct_errors_in_variables(Score& s, const ModelFamily& m, const Observati
         const double d = after[i].value - before[i].value;
         if (!std::isfinite(d)) continue;
         r.value += d;
-        r.errors_in_variables = d;
+        r.errors_in_variables += d;  // beside a family's own (slow_slip's slip directions)
       }
   for (const auto& v : vars) s.errors_in_variables.push_back(fmt::format("{} (error std {:.3g})", v.variable, v.std));
 }
