@@ -77,8 +77,9 @@ struct Reported {
   /// the family's alternative assumptions (ModelFamily::model_forms), taken as uniform over ± that
   /// shift (shift / √3). `std` includes it in quadrature; the PNR does not.
   double std_model_form = 0.0;
-  /// The correction for errors in the variables already in `value` (ModelFamily::errors_in_variables):
-  /// value minus the least-squares estimate's (0: none). The std is the least-squares estimate's.
+  /// The correction for errors in the variables already in `value` (ModelFamily::errors_in_variables,
+  /// plus a term's own: slow_slip's slip directions): value minus the least-squares estimate's (0: none).
+  /// The std is the least-squares estimate's (slow_slip's scaled with its value).
   double errors_in_variables = 0.0;
   /// false: the value's meaning depends on data-derived choices a fold makes anew (e.g. the
   /// coordinates of a compliance basis chosen from its samples), so the folds cannot measure its spread.
