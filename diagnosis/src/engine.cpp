@@ -1118,8 +1118,21 @@ void correct_errors_in_variables(Score& s, const ModelFamily& m, const Observati
 
 }  // namespace
 
+/// A family's component groups name columns of Observations::y (0..5), none empty: said before any fit.
+void check_component_groups(const ModelFamily& m) {
+  for (const auto& g : m.component_groups()) {
+    if (g.components.empty())
+      throw std::invalid_argument(fmt::format("model '{}': component group '{}' has no components", m.name(), g.name));
+    for (const int c : g.components)
+      if (c < 0 || c > 5)
+        throw std::invalid_argument(fmt::format("model '{}': component group '{}' names component {}, outside the observation's 0..5",
+                                                m.name(), g.name, c));
+  }
+}
+
 Score score(const ModelFamily& m, const Observations& obs, const CvOptions& o, const Score* extends) {
   const auto t0 = std::chrono::steady_clock::now();
+  check_component_groups(m);
   Score s;
   s.model = m.name();
   const std::size_t n = obs.size();

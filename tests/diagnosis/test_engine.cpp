@@ -707,6 +707,32 @@ TEST(Engine, AOneEventValueOneGroupOfComponentsContradictsReachesAcrossThatGroup
   EXPECT_LE(covered_without, 0.10 * seeds) << "the case does not test the groups' check";
 }
 
+/// A family whose component groups name what the observation does not have.
+class BadGroups : public ThreeBumpsTwoGroups {
+ public:
+  BadGroups(const Observations& o, std::vector<ComponentGroup> groups) : ThreeBumpsTwoGroups(o, true), groups_(std::move(groups)) {}
+  std::vector<ComponentGroup> component_groups() const override { return groups_; }
+
+ private:
+  std::vector<ComponentGroup> groups_;
+};
+
+TEST(Engine, AComponentGroupOutsideTheObservationIsRefusedByName) {
+  const Observations o = noisy_samples(7000, [](int k, int) { return 1.0 + ThreeBumpsTwoGroups::x(k); });
+  auto message = [&](std::vector<ModelFamily::ComponentGroup> groups) {
+    try {
+      score(BadGroups(o, std::move(groups)), o);
+    } catch (const std::invalid_argument& e) {
+      return std::string(e.what());
+    }
+    return std::string("accepted");
+  };
+  EXPECT_THAT(message({{"normal", {2, 3, 4}}, {"twist", {0, 6}}}), HasSubstr("component group 'twist' names component 6"));
+  EXPECT_THAT(message({{"normal", {2, -1}}}), HasSubstr("names component -1"));
+  EXPECT_THAT(message({{"empty", {}}}), HasSubstr("component group 'empty' has no components"));
+  EXPECT_EQ(message({{"normal", {2, 3, 4}}, {"tangential", {0, 1, 5}}}), "accepted");
+}
+
 /// 400 samples at 100 Hz of 1 + 0.5 (x + bend x²), x = t - 2, on every component, with white noise
 /// of std 0.01 from `seed`.
 Observations line_data(unsigned seed, double bend = 0.0) {
