@@ -33,17 +33,6 @@ std::string fmt_value(double v, double s, const std::string& unit) {
   return fmt::format("{:.4g} ± {:.2g}{}{}", v, 1.96 * s, unit.empty() ? "" : " ", unit);
 }
 
-/// A value whose interval the residuals cannot measure (Reported::model_based), or which a group of
-/// components contradicts (Reported::std_components), said beside it.
-std::string one_event_text(const dg::Reported& q) {
-  if (q.model_based)
-    return fmt::format("  one event's worth (ν {:.1f}): the model's std, which the folds and the component groups do not contradict",
-                       q.sandwich_dof);
-  if (!q.components_disagree.empty())
-    return fmt::format("  one event's worth (ν {:.1f}), but {}: the interval reaches across theirs", q.sandwich_dof, q.components_disagree);
-  return "";
-}
-
 const dg::Score& extended_score(const RunDiagnosis& r) { return r.result.extended ? *r.result.extended : r.result.nominal; }
 
 nlohmann::json params_json(const dg::Fit& f, bool extension_only) {
@@ -138,6 +127,15 @@ std::string events_text(const std::vector<dg::LocatedEvent>& events) {
 }
 
 }  // namespace
+
+std::string one_event_text(const dg::Reported& q) {
+  if (q.model_based)
+    return fmt::format("  one event's worth (ν {:.1f}): the model's std, which the folds and the component groups do not contradict",
+                       q.sandwich_dof);
+  if (!q.components_disagree.empty())
+    return fmt::format("  one event's worth (ν {:.1f}), but {}: the interval reaches across theirs", q.sandwich_dof, q.components_disagree);
+  return "";
+}
 
 void print_summary(std::ostream& out, const RunDiagnosis& r) {
   const auto& d = r.result;

@@ -11,6 +11,10 @@
 namespace hil::services::diagnose {
 
 void print_summary(std::ostream& out, const RunDiagnosis& r);
+/// What print_summary says beside a value whose interval the residuals cannot measure
+/// (Reported::model_based) or which a group of components contradicts (Reported::std_components);
+/// empty for any other.
+std::string one_event_text(const hil::diagnose::Reported& q);
 nlohmann::json to_json(const RunDiagnosis& r);
 /// True values by the reported parameters' names (bias_fz, time_offset_s, an uncertainty's name).
 using TruthValues = std::map<std::string, double>;
