@@ -170,7 +170,13 @@
 //    of slow samples takes no error; Reported::errors_in_variables says the correction; rule added
 //    2026-12-07 06:50 UTC, before these ran, after development draws i = 1650..1699 of every
 //    effect, where μ_s / μ's mean z went from +0.33 pooled to near zero; the same rules):
-//    HIL_FAMILY_FIRST=1700, i = 1700..1749, never drawn before, every effect.
+//    HIL_FAMILY_FIRST=1700, i = 1700..1749, never drawn before, every effect. Drawn 2026-12-07
+//    06:55-07:24 UTC on 573ced6: μ_s / μ 89 of 89 inside, pooled mean z +0.05 (se 0.08), z² 0.57;
+//    none, sensor_gain, time_offset, nonlinear_stiffness and geometric_offset (157 of 163) pass;
+//    sensor_bias fails on bias_mx (-0.33, se 0.10; +0.05 on the draw before), viscous_friction on
+//    its coefficient's known bias (-0.31, se 0.13; trapezoidal -0.52), contact_damping on μ_s / μ
+//    (-0.15, se 0.06, under intervals about four times too wide, z² 0.07) (docs/diagnosis.md,
+//    "Friction below the declared sticking threshold").
 //  * Per effect, of n draws, at most ceil(10 %) may fail each of:
 //     - named: the effect named first (clean: `none`);
 //     - single: no second cause.
