@@ -13,8 +13,7 @@ TEST(SummaryText, SaysWhyAOneEventValueKeepsOrLosesTheModelsStd) {
   q.sandwich_dof = 1.31;
   EXPECT_EQ(one_event_text(q), "");  // the residuals measured its interval: nothing to say
   q.model_based = true;
-  EXPECT_EQ(one_event_text(q),
-            "  one event's worth (ν 1.3): the model's std, which the folds and the component groups do not contradict");
+  EXPECT_EQ(one_event_text(q), "  one event's worth (ν 1.3): the model's std, which the folds and the component groups do not contradict");
   q.model_based = false;
   q.components_disagree = "fz, mx, my alone read 5.9e+04 ± 900";
   q.std_components = 1200.0;
