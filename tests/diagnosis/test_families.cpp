@@ -176,7 +176,8 @@
 //    sensor_bias fails on bias_mx (-0.33, se 0.10; +0.05 on the draw before), viscous_friction on
 //    its coefficient's known bias (-0.31, se 0.13; trapezoidal -0.52), contact_damping on μ_s / μ
 //    (-0.15, se 0.06, under intervals about four times too wide, z² 0.07) (docs/diagnosis.md,
-//    "Friction below the declared sticking threshold").
+//    "Friction below the declared sticking threshold"). sensor_bias alone redrawn on i = 1750..1799
+//    (2026-12-07 10:45 UTC, 56d3961, the same rules): passes, bias_mx -0.02 (se 0.11).
 //  * Per effect, of n draws, at most ceil(10 %) may fail each of:
 //     - named: the effect named first (clean: `none`);
 //     - single: no second cause.
