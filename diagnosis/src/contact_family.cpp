@@ -125,6 +125,19 @@ double quantisation_bias_variance(const std::vector<double>& series, double step
   return quantisation_bias_variance(step, var > 0.0 ? std::sqrt(var) : 0.0);
 }
 
+double touching_probability(double delta_m, const Eigen::Vector3d& normal, const Eigen::Vector3d& quantum_m) {
+  const Eigen::Vector3d spread = (normal.cwiseAbs().array() * quantum_m.cwiseAbs().array()).matrix();
+  Eigen::Index j = 0;
+  const double widest = spread.maxCoeff(&j);
+  if (!(widest > 0.0)) return delta_m > 0.0 ? 1.0 : 0.0;
+  const double h = widest / 2.0;
+  const double s = std::sqrt((spread.squaredNorm() - widest * widest) / 12.0);
+  if (!(s > 1e-6 * h)) return std::clamp((delta_m + h) / (2.0 * h), 0.0, 1.0);
+  constexpr double inv_sqrt_2pi = 0.3989422804014327;
+  auto G = [](double u) { return u * 0.5 * std::erfc(-u / std::sqrt(2.0)) + inv_sqrt_2pi * std::exp(-0.5 * u * u); };
+  return std::clamp(s / (2.0 * h) * (G((delta_m + h) / s) - G((delta_m - h) / s)), 0.0, 1.0);
+}
+
 // Lobes of the Lanczos window of the pose interpolation (2 kSincLobes samples per instant).
 // Why not a linear blend of the two neighbours: the reported poses are quantised (2 µm on the
 // paper's rig) and a blend halves the quantisation noise's variance at a half-sample shift, so a

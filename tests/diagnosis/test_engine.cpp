@@ -1764,6 +1764,33 @@ TEST(ContactFamily, AQuantumIsSeenWhenNoTwoLevelsAreAdjacent) {
 
 // The bias a quantiser leaves in a mean, against its direct simulation: a constant at an unknown
 // place on the grid, dithered by Gaussian noise, its quantised mean's error squared over the places.
+// touching_probability against a direct simulation of the reported positions' quantum: the true
+// interference is δ + n · e, e uniform over each axis's step. Rule written before it ran: within
+// 0.01 of the simulated share (200,000 draws: its own error under 0.0012) at every δ across the
+// errors' reach, for a tilted plate's normal (the suite's: one axis dominant) and a 45° one (three
+// comparable axes, the Gaussian part's worst case); 1 far beyond the reach, a pure ramp with one axis,
+// a step with exact positions.
+TEST(ContactFamily, TheTouchingProbabilityIsTheShareOfTruePositionsWithinTheQuantumThatTouch) {
+  std::mt19937_64 rng(29);
+  const Eigen::Vector3d q(2e-6, 2e-6, 2e-6);
+  for (const Eigen::Vector3d& n : {Eigen::Vector3d(0.05, -0.03, 1.0).normalized(), Eigen::Vector3d(0.5, 0.5, 0.7071).normalized()}) {
+    std::uniform_real_distribution<double> ex(-q(0) / 2, q(0) / 2), ey(-q(1) / 2, q(1) / 2), ez(-q(2) / 2, q(2) / 2);
+    const double reach = 0.5 * n.cwiseAbs().dot(q);
+    for (double delta = -reach; delta <= reach; delta += reach / 8) {
+      int touching = 0;
+      const int draws = 200000;
+      for (int k = 0; k < draws; ++k) touching += delta + n.dot(Eigen::Vector3d(ex(rng), ey(rng), ez(rng))) > 0.0 ? 1 : 0;
+      EXPECT_NEAR(touching_probability(delta, n, q), static_cast<double>(touching) / draws, 0.01) << n.transpose() << " at " << delta;
+    }
+    EXPECT_NEAR(touching_probability(1.01 * reach, n, q), 1.0, 0.01);
+    EXPECT_NEAR(touching_probability(-1.01 * reach, n, q), 0.0, 0.01);
+    EXPECT_EQ(touching_probability(10 * reach, n, q), 1.0);
+  }
+  EXPECT_NEAR(touching_probability(0.5e-6, Eigen::Vector3d::UnitZ(), q), 0.75, 1e-12);
+  EXPECT_EQ(touching_probability(1e-9, Eigen::Vector3d::UnitZ(), Eigen::Vector3d::Zero()), 1.0);
+  EXPECT_EQ(touching_probability(-1e-9, Eigen::Vector3d::UnitZ(), Eigen::Vector3d::Zero()), 0.0);
+}
+
 TEST(ContactFamily, TheQuantisationBiasFloorShrinksWithTheDitherTheNoiseGives) {
   const double step = 0.1;
   std::mt19937_64 rng(11);

@@ -136,6 +136,19 @@ double quantisation_bias_variance(double step, double sigma);
 /// there is) and on a series without second differences (σ = 0).
 double quantisation_bias_variance(const std::vector<double>& series, double step);
 
+/// The probability that a contact found at interference δ (m) along the unit normal n touches in
+/// truth, when the reported ee positions are quantised per world axis by `quantum_m` (0: exact).
+/// Berkson's error: a position that spans many steps lies anywhere within its reported step, so
+/// the true interference is δ + Σ_i n_i e_i, e_i uniform over ± q_i / 2. The axis with the largest
+/// |n_i| q_i is taken exactly (uniform), the others as a Gaussian of their variance (the exact
+/// convolution for one axis, within a few 1e-3 for three): s/(2h) [G((δ+h)/s) - G((δ-h)/s)],
+/// G(u) = u Φ(u) + φ(u), h = |n_j| q_j / 2. 1 for δ beyond the errors' reach or exact positions.
+/// A force that exists only while a foot touches and does not vanish with δ (viscous friction)
+/// jumps at lift-off; the quantum then decides a few samples' contact at random, and such a column
+/// read at the reported pose is biased by O(q) (docs/diagnosis.md, "The viscous coefficient's
+/// trapezoidal bias"). Weighted by this probability its least squares is not.
+double touching_probability(double delta_m, const Eigen::Vector3d& normal, const Eigen::Vector3d& quantum_m);
+
 /// Per sample, the least-squares slope of x over the samples within ± half_window of it (clipped at
 /// the ends of the run), against the sample times. \pre t increasing, t.size() == x.size().
 std::vector<double> windowed_slope(const std::vector<double>& t_s, const std::vector<double>& x, int half_window);
