@@ -130,6 +130,11 @@ double touching_probability(double delta_m, const Eigen::Vector3d& normal, const
   Eigen::Index j = 0;
   const double widest = spread.maxCoeff(&j);
   if (!(widest > 0.0)) return delta_m > 0.0 ? 1.0 : 0.0;
+  // The errors are bounded: beyond their reach the contact is decided (the Gaussian part's tails
+  // would leave a rounding's worth there).
+  const double reach = spread.sum() / 2.0;
+  if (delta_m >= reach) return 1.0;
+  if (delta_m <= -reach) return 0.0;
   const double h = widest / 2.0;
   const double s = std::sqrt((spread.squaredNorm() - widest * widest) / 12.0);
   if (!(s > 1e-6 * h)) return std::clamp((delta_m + h) / (2.0 * h), 0.0, 1.0);

@@ -142,7 +142,7 @@ double quantisation_bias_variance(const std::vector<double>& series, double step
 /// the true interference is δ + Σ_i n_i e_i, e_i uniform over ± q_i / 2. The axis with the largest
 /// |n_i| q_i is taken exactly (uniform), the others as a Gaussian of their variance (the exact
 /// convolution for one axis, within a few 1e-3 for three): s/(2h) [G((δ+h)/s) - G((δ-h)/s)],
-/// G(u) = u Φ(u) + φ(u), h = |n_j| q_j / 2. 1 for δ beyond the errors' reach or exact positions.
+/// G(u) = u Φ(u) + φ(u), h = |n_j| q_j / 2; 1 (0) at δ beyond (below) the errors' reach Σ|n_i| q_i / 2.
 /// A force that exists only while a foot touches and does not vanish with δ (viscous friction)
 /// jumps at lift-off; the quantum then decides a few samples' contact at random, and such a column
 /// read at the reported pose is biased by O(q) (docs/diagnosis.md, "The viscous coefficient's
