@@ -1762,13 +1762,12 @@ TEST(ContactFamily, AQuantumIsSeenWhenNoTwoLevelsAreAdjacent) {
   EXPECT_EQ(quantum_of(sparse), 0.0);
 }
 
-// The bias a quantiser leaves in a mean, against its direct simulation: a constant at an unknown
-// place on the grid, dithered by Gaussian noise, its quantised mean's error squared over the places.
 // touching_probability against a direct simulation of the reported positions' quantum: the true
 // interference is δ + n · e, e uniform over each axis's step. Rule written before it ran: within
 // 0.01 of the simulated share (200,000 draws: its own error under 0.0012) at every δ across the
 // errors' reach, for a tilted plate's normal (the suite's: one axis dominant) and a 45° one (three
-// comparable axes, the Gaussian part's worst case); 1 far beyond the reach, a pure ramp with one axis,
+// comparable axes; measured afterwards with 2e6 draws: 0.0005 and 0.003 off at worst, 0.006
+// with three equal axes); 1 far beyond the reach, a pure ramp with one axis,
 // a step with exact positions.
 TEST(ContactFamily, TheTouchingProbabilityIsTheShareOfTruePositionsWithinTheQuantumThatTouch) {
   std::mt19937_64 rng(29);
@@ -1791,6 +1790,8 @@ TEST(ContactFamily, TheTouchingProbabilityIsTheShareOfTruePositionsWithinTheQuan
   EXPECT_EQ(touching_probability(-1e-9, Eigen::Vector3d::UnitZ(), Eigen::Vector3d::Zero()), 0.0);
 }
 
+// The bias a quantiser leaves in a mean, against its direct simulation: a constant at an unknown
+// place on the grid, dithered by Gaussian noise, its quantised mean's error squared over the places.
 TEST(ContactFamily, TheQuantisationBiasFloorShrinksWithTheDitherTheNoiseGives) {
   const double step = 0.1;
   std::mt19937_64 rng(11);
