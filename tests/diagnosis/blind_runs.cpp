@@ -65,7 +65,7 @@ double linear_damping_of(const ct::Scenario& s) {
   return den > 0.0 ? num / den : s.law.damping_n_s_per_m;
 }
 
-double slow_friction_ratio_of(const ct::Scenario& s, double stick_below_m_per_s, double resolved_from_m_per_s) {
+double slow_friction_ratio_of(const ct::Scenario& s, double stick_below_m_per_s, double resolved_from_m_per_s, bool total_normal_column) {
   const auto n = static_cast<std::size_t>(std::floor(s.duration_s * s.sensor.rate_hz + 1e-9));
   const auto& law = s.law;
   const Eigen::Vector3d normal = s.plate.T_world_plate().linear().col(2);
@@ -81,14 +81,16 @@ double slow_friction_ratio_of(const ct::Scenario& s, double stick_below_m_per_s,
       if (!(u > 0.0) || u < resolved_from_m_per_s || u > stick_below_m_per_s) continue;
       const double elastic = law.stiffness_n_per_m * law.delta_ref_m * std::pow(f.penetration_m / law.delta_ref_m, law.exponent);
       const double bound = law.friction_on_total_normal ? f.normal_n : elastic;
-      num += elastic * bound * u / std::hypot(u, law.slip_regularisation_m_per_s);
-      den += elastic * elastic;
+      const double column = total_normal_column ? f.normal_n : elastic;
+      num += column * bound * u / std::hypot(u, law.slip_regularisation_m_per_s);
+      den += column * column;
     }
   }
   return den > 0.0 ? num / den : 1.0;
 }
 
-std::optional<double> truth_of(const std::string& name, const ct::Scenario& s, const Fit& f, double twist_step_m_per_s) {
+std::optional<double> truth_of(const std::string& name, const ct::Scenario& s, const Fit& f, double twist_step_m_per_s,
+                               const std::string& form_taken) {
   const char* comp[6] = {"fx", "fy", "fz", "mx", "my", "mz"};
   // The gains neither reported nor fixed as unidentifiable are references: a gain is relative to its
   // group's (fx, fy and mz carry the friction, fz, mx and my the normal force; sensor_gain's
@@ -130,10 +132,17 @@ std::optional<double> truth_of(const std::string& name, const ct::Scenario& s, c
   if (name == "stiffness_exponent") return s.law.exponent;
   // slow_slip's μ_s / μ: the truth's slow friction in hil's form over the slips the reported twist
   // resolves (slow_friction_ratio_of); a Stribeck law's is not one number.
-  if (name == "slow_slip_mu_ratio")
+  // With contact_damping in the model its column follows the model's total normal force.
+  if (name == "slow_slip_mu_ratio") {
+    auto of_damping = [](const std::string& param) { return param.rfind("damping_", 0) == 0; };  // D, μ_D D, τ_D
+    bool damping = false;
+    for (const auto& q : f.reported) damping = damping || of_damping(q.name);
+    for (const auto& u : f.unidentifiable) damping = damping || of_damping(u.name);
+    damping = damping && form_taken.rfind(ContactFamily::kSlowFrictionElasticForm, 0) != 0;
     return s.law.stribeck_speed_m_per_s > 0.0
                ? std::nullopt
-               : std::optional<double>(slow_friction_ratio_of(s, kStickBelow_m_per_s, 0.5 * twist_step_m_per_s));
+               : std::optional<double>(slow_friction_ratio_of(s, kStickBelow_m_per_s, 0.5 * twist_step_m_per_s, damping));
+  }
   // The truth's surface is at o_P, level in P: the rig's declared values are what may be off.
   if (name == kPlateHeight || name == kPlateTiltX || name == kPlateTiltY) return 0.0;
   return std::nullopt;

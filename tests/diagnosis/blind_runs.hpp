@@ -116,11 +116,15 @@ double linear_damping_of(const ct::Scenario& s);
 /// least-squares ratio of that friction to hil's column μ_s K δ_e over the feet in contact whose
 /// true slip speed is in (0, v_t,m], at the sample times: Σ E B g(u) / Σ E², E the elastic force,
 /// g(u) = u / sqrt(u² + ε²). 1 when no foot slips below the threshold.
+/// \param total_normal_column hil's column follows the total normal force (δ_e + τ_D δ̇)₊ instead of
+/// δ_e, as it does with contact_damping in the model: Σ N B g(u) / Σ N², N the truth's total
+/// normal force (clipped at zero, as hil's is).
 /// \param resolved_from_m_per_s only the feet slipping at least this fast: with a twist reported
 /// in steps q, half a step, the least slip whose direction it resolves. Below, an error of up to
 /// q/2 per axis makes the measured direction any direction, and the fitted ratio reads the friction
 /// of the slips it resolves, fully developed there (docs/diagnosis.md, measured 2026-12-06).
-double slow_friction_ratio_of(const ct::Scenario& s, double stick_below_m_per_s, double resolved_from_m_per_s = 0.0);
+double slow_friction_ratio_of(const ct::Scenario& s, double stick_below_m_per_s, double resolved_from_m_per_s = 0.0,
+                              bool total_normal_column = false);
 
 /// The true value of a reported parameter, if the scenario defines it, in hil's parameterisation.
 /// sensor_gain: hil's gains are relative to the reference component (the one K absorbs, without a
@@ -128,8 +132,11 @@ double slow_friction_ratio_of(const ct::Scenario& s, double stick_below_m_per_s,
 /// other friction components' gains: friction lives in fx, fy and mz only) is the reference of the
 /// other friction components, μ absorbing its factor.
 /// \param twist_step_m_per_s the step of the reported linear twist (0: exact): slow_slip's μ_s / μ
-/// is the truth's over the slips it resolves (slow_friction_ratio_of from half a step).
-std::optional<double> truth_of(const std::string& name, const ct::Scenario& s, const Fit& f, double twist_step_m_per_s);
+/// is the truth's over the slips it resolves (slow_friction_ratio_of from half a step), in the form
+/// `f`'s model gives it (on the total normal force where it holds contact_damping, unless
+/// `form_taken`, the Score's model_form_taken, is ContactFamily::kSlowFrictionElasticForm's).
+std::optional<double> truth_of(const std::string& name, const ct::Scenario& s, const Fit& f, double twist_step_m_per_s,
+                               const std::string& form_taken = {});
 
 /// Whether a reported parameter belongs to an extension (by name).
 bool belongs_to(const std::string& param, const std::string& extension);

@@ -41,7 +41,7 @@ class Term : public ContactTerm {
   void contact_columns(const ContactSlots& s, const ContactAt& at, Eigen::Ref<Eigen::MatrixXd> rows) const override {
     const auto& c = at.contact;
     if (!slow(c, v_tm_)) return;  // sliding: the nominal μK's
-    rows.col(s.linear) += plate_wrench_of(at.data.scene.T_world_fp, at.elastic_delta_m * c.slip_direction, at.friction_point);
+    rows.col(s.linear) += plate_wrench_of(at.data.scene.T_world_fp, at.normal_delta_m * c.slip_direction, at.friction_point);
   }
   /// μ_s / μ = θ_s / (μK) with its std by the delta method (informative: the PNR checks θ_s).
   void report_derived(const ContactSlots& s, Eigen::Index, const Fit& f, std::vector<Reported>& out) const override {

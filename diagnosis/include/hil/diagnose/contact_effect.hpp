@@ -56,6 +56,10 @@ struct ContactAt {
   /// δ_e: the interference as the stiffness law sees it (δ, or δ_ref (δ/δ_ref)^p), what the nominal
   /// friction column K δ_e e_t scales with
   double elastic_delta_m = 0.0;
+  /// The interference the slow contacts' friction bound follows (slow_slip): the total normal
+  /// force's, δ_e + τ_D δ̇ (> 0), with contact_damping in the model; δ_e without it, or under the
+  /// model form ContactFamily::kSlowFrictionElasticForm.
+  double normal_delta_m = 0.0;
 };
 
 /// What an effect may use when it binds to a run.

@@ -261,7 +261,12 @@ class ContactFamily : public ModelFamily {
   bool has_lag_filter() const { return lag_filter_; }
   /// δ̄ of the Hunt-Crossley form (0: a linear dashpot, the family's own form).
   double damping_depth_m() const { return damping_depth_m_; }
+  /// Whether slow_slip's friction follows the elastic force only with contact_damping in the model
+  /// (a model form; the family's own: the total normal force, damping included).
+  bool slow_friction_elastic() const { return slow_friction_elastic_; }
   static constexpr const char* kLagFilter = "time_offset_filter_s";
+  /// The model form whose slow contacts' friction follows the elastic force only (Score::model_form_taken begins with it when taken).
+  static constexpr const char* kSlowFrictionElasticForm = "the slow contacts' friction on the elastic force only, not the damping's";
   const std::set<std::string>& extensions() const { return ext_; }
   /// The measured kinematics at time t (time_offset's pose at t - τ): windowed-sinc (Lanczos, 8
   /// lobes) interpolation of the samples, which keeps a quantised pose stream's noise level at every
@@ -320,6 +325,7 @@ class ContactFamily : public ModelFamily {
   double friction_lever_ = 0.0;
   bool lag_filter_ = false;
   double damping_depth_m_ = 0.0;
+  bool slow_friction_elastic_ = false;
 
   // Contacts recomputed for φ (docs/diagnosis.md, "Cost"). mindist on every pair of every sample is
   // what a design costs; most pairs are provably apart or unchanged, and are skipped:
