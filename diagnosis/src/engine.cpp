@@ -78,6 +78,7 @@ Eigen::VectorXd solve_ls(const Eigen::MatrixXd& A, const Eigen::VectorXd& b) { r
 struct Projected {
   Eigen::VectorXd theta, r;
   double cost = 0.0;
+  std::vector<bool> held;  ///< per θ: held at its bound 0 (Param::lower) by the projection
 };
 
 /// The designs A(φ) already computed, by φ. One cache serves a model's full fit, its folds and
@@ -150,10 +151,35 @@ class Evaluator {
     return A_;
   }
   std::vector<bool> fixed_theta;
+  std::vector<bool> nonnegative_theta;  ///< θ bounded below by 0 (Param::lower of a linear parameter)
+  /// θ(φ) by least squares; a θ bounded below by 0 that the solution puts below it is held at 0 and
+  /// the rest solved again, until none is. For one bounded θ (the only case there is: contact_damping's
+  /// μ_D D) that is the bounded problem's solution: the cost is convex in θ, so when its unbounded
+  /// minimum lies beyond the bound, the bounded one lies on it. The projected cost stays continuous in φ.
   Projected project(const Eigen::VectorXd& phi, bool keep = false) {
     const Eigen::MatrixXd& A = weighted_design(phi, keep);
     Projected p;
     p.theta = ls_.solve(A, b_);
+    p.held.assign(static_cast<std::size_t>(A.cols()), false);
+    auto below = [&] {
+      bool any = false;
+      for (std::size_t j = 0; j < nonnegative_theta.size() && j < p.held.size(); ++j)
+        if (nonnegative_theta[j] && !p.held[j] && p.theta(static_cast<Eigen::Index>(j)) < 0.0) {
+          p.held[j] = true;
+          any = true;
+        }
+      return any;
+    };
+    if (below()) {
+      Eigen::MatrixXd Ah = A;  // rare: a copy, the buffer stays the design
+      do {
+        for (std::size_t j = 0; j < p.held.size(); ++j)
+          if (p.held[j]) Ah.col(static_cast<Eigen::Index>(j)).setZero();
+        p.theta = ls_.solve(Ah, b_);
+        for (std::size_t j = 0; j < p.held.size(); ++j)
+          if (p.held[j]) p.theta(static_cast<Eigen::Index>(j)) = 0.0;
+      } while (below());
+    }
     p.r = b_ - A * p.theta;
     p.cost = p.r.squaredNorm();
     return p;
@@ -352,6 +378,12 @@ Fit fit_with(const ModelFamily& m, const Observations& obs, const std::vector<in
     return phi;
   };
   ev.fixed_theta.assign(f.fixed.begin(), f.fixed.begin() + p);
+  for (const auto& b : lin) {
+    // A linear parameter takes one bound, θ >= 0: a fixed θ is 0, so a held one is fixed there.
+    if (b.upper < 1e300 || (b.lower > -1e300 && b.lower != 0.0))
+      throw std::logic_error(m.name() + ": the linear parameter " + b.name + " has a bound other than >= 0");
+    ev.nonnegative_theta.push_back(b.lower == 0.0);
+  }
 
   Eigen::VectorXd phi = Eigen::VectorXd::Zero(q);
   Projected cur;
@@ -460,9 +492,11 @@ Fit fit_with(const ModelFamily& m, const Observations& obs, const std::vector<in
     f.rss = cur.cost;
   };
   finish();
-  // The nonlinear parameters that ended at a bound (a bound is no estimate).
+  // The parameters that ended at a bound (a bound is no estimate): nonlinear ones within a
+  // millionth of their range, linear ones held at 0 by the projection.
   auto at_bounds = [&]() {
     std::vector<bool> bounded(static_cast<std::size_t>(p + q), false);
+    for (std::size_t j = 0; j < cur.held.size() && j < static_cast<std::size_t>(p); ++j) bounded[j] = cur.held[j];
     for (Eigen::Index j = 0; j < q; ++j) {
       const auto& b = nl[static_cast<std::size_t>(j)];
       const double tol = 1e-6 * std::max(b.scale, std::min(b.upper - b.lower, 1e300));

@@ -241,6 +241,63 @@ TEST(Engine, AParameterAtItsBoundIsListedNotPrinted) {
   EXPECT_NEAR(g.phi(0), 0.05, 1e-9);  // what would have been printed
 }
 
+/// SineFamily with its offset bounded below by 0 (`bounded`), or without the offset column.
+class NonnegativeOffset : public ModelFamily {
+ public:
+  NonnegativeOffset(const Observations& o, bool with_offset, double lower = 0.0) : o_(o), offset_(with_offset), lower_(lower) {}
+  std::string name() const override { return "nonnegative offset"; }
+  std::vector<Param> linear() const override {
+    std::vector<Param> v{{"amplitude", "", 1, false}};
+    if (offset_) v.push_back({"offset", "", 1, true, lower_});
+    return v;
+  }
+  std::vector<Param> nonlinear() const override { return {{"frequency", "Hz", 0.1, true, 0.1, 5}}; }
+  std::vector<Eigen::VectorXd> starts() const override { return {Eigen::VectorXd::Constant(1, 1.2)}; }
+  void design(const Eigen::VectorXd& phi, Eigen::MatrixXd& A, FamilyData&) const override {
+    A.setZero(static_cast<Eigen::Index>(6 * o_.size()), offset_ ? 2 : 1);
+    for (std::size_t k = 0; k < o_.size(); ++k)
+      for (int c = 0; c < 6; ++c) {
+        A(static_cast<Eigen::Index>(6 * k) + c, 0) = std::sin(2 * M_PI * phi(0) * o_.t_s[k] + c);
+        if (offset_) A(static_cast<Eigen::Index>(6 * k) + c, 1) = 1.0;
+      }
+  }
+
+ private:
+  const Observations& o_;
+  bool offset_;
+  double lower_;
+};
+
+// A linear parameter bounded below by 0 (contact_damping's μ_D D, issue 32): where the data put it
+// below, the fit holds it at 0 and reports it as having run to its bound, and the other
+// parameters are the fit without it (the bounded least squares' solution); where the data put it
+// above, the bound changes nothing. A bound other than >= 0 on a linear parameter is refused.
+TEST(Engine, ALinearParameterBoundedAtZeroIsHeldThereAndListed) {
+  const auto o = sine_data(1.23, 2.5, -0.3, 0.05, 7);
+  const Fit unbounded = fit(SineFamily(o), o, all(o.size()));
+  ASSERT_LT(unbounded.theta(1), -0.2);  // the data's offset, read where nothing bounds it
+  const Fit f = fit(NonnegativeOffset(o, true), o, all(o.size()));
+  ASSERT_TRUE(listed(f, "offset"));
+  EXPECT_NE(f.unidentifiable.front().reason.find("bound"), std::string::npos) << f.unidentifiable.front().reason;
+  EXPECT_FALSE(reported(f, "offset"));
+  EXPECT_EQ(f.theta(1), 0.0);
+  const Fit without = fit(NonnegativeOffset(o, false), o, all(o.size()));
+  EXPECT_NEAR(f.theta(0), without.theta(0), 1e-9 * std::abs(without.theta(0)));
+  EXPECT_NEAR(f.phi(0), without.phi(0), 1e-7);
+  EXPECT_NEAR(f.rss, without.rss, 1e-9 * without.rss);
+  EXPECT_GT(f.rss, unbounded.rss * 1.5);  // the bound costs: the data's offset is far below it
+
+  const auto up = sine_data(1.23, 2.5, 0.4, 0.05, 8);
+  const Fit g = fit(NonnegativeOffset(up, true), up, all(up.size()));
+  const Fit h = fit(SineFamily(up), up, all(up.size()));
+  EXPECT_FALSE(listed(g, "offset"));
+  ASSERT_TRUE(reported(g, "offset"));
+  EXPECT_NEAR(g.theta(1), h.theta(1), 1e-9);
+  EXPECT_NEAR(g.phi(0), h.phi(0), 1e-7);
+
+  EXPECT_THROW(fit(NonnegativeOffset(o, true, -1.0), o, all(o.size())), std::logic_error);
+}
+
 /// A plate's normal force f_z = K (h - z): K linear, the plate's height h nonlinear, z the measured
 /// ee height, read with an error of known std (a quantiser's). `shift` moves every z by that much.
 class PressFamily : public ModelFamily {

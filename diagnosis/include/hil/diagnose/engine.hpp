@@ -32,9 +32,11 @@ struct Observations {
 struct Param {
   std::string name;
   std::string unit;
-  double scale = 1.0;                    ///< typical magnitude: finite-difference steps, LM scaling
-  bool extension = false;                ///< belongs to the extension (PNR-checked), not to the nominal model
-  double lower = -1e300, upper = 1e300;  ///< bounds (nonlinear parameters only)
+  double scale = 1.0;      ///< typical magnitude: finite-difference steps, LM scaling
+  bool extension = false;  ///< belongs to the extension (PNR-checked), not to the nominal model
+  /// Bounds. A linear parameter takes only lower = 0 (θ >= 0): held there by the projection and
+  /// then fixed, as a nonlinear parameter that ends at a bound is ("ran to its bound").
+  double lower = -1e300, upper = 1e300;
 };
 
 /// A reported (possibly derived) parameter with its standard deviation.
