@@ -213,7 +213,12 @@
 //    HIL_FAMILY_FIRST=1850, i = 1850..1899, never drawn before; and, since the candidate now
 //    competes where the check refused it, none, sensor_bias, sensor_gain, time_offset,
 //    viscous_friction, nonlinear_stiffness and geometric_offset on HIL_FAMILY_FIRST=1800,
-//    i = 1800..1849, never drawn before for any of these.
+//    i = 1800..1849, never drawn before for any of these. Drawn 2026-12-07 19:49-20:13 UTC on
+//    0808f03: the elastic-friction draw (D 48 of 49, -0.18, z² 0.64), contact_damping (D 48 of
+//    50, -0.19, z² 1.01), sensor_gain, viscous_friction, nonlinear_stiffness and geometric_offset
+//    pass; none (μ_s / μ -0.39, se 0.19, z² 0.48), sensor_bias (bias_my +0.35, se 0.10) and
+//    time_offset (+0.30, se 0.13) fail, on runs where contact_damping is never named: their
+//    values are the code's before the bound (docs/diagnosis.md).
 //  * Per effect, of n draws, at most ceil(10 %) may fail each of:
 //     - named: the effect named first (clean: `none`);
 //     - single: no second cause.
