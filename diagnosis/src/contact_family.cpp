@@ -445,13 +445,15 @@ std::vector<ModelFamily::ModelForm> ContactFamily::model_forms() const {
   for (const double kappa : {-0.75, 0.75}) {
     auto m = std::make_unique<ContactFamily>(*this);
     m->friction_lever_ = kappa;
-    // Always covered (a level plate's gains make it collinear with μK), and its values taken where the
-    // run prefers it (a point foot's friction at its tip biased the tilting moments: docs/diagnosis.md).
+    // Always covered (a level plate's gains make it collinear with μK), and its values weighted by
+    // how much the run prefers it (a point foot's friction at its tip biased the tilting moments,
+    // and where the run preferred it by less than the margin, the delay: docs/diagnosis.md).
     out.push_back({std::string("the friction's line of action 3/4 of the interference's depth from its centroid ") +
                        (kappa < 0 ? "against" : "along") + " the normal",
                    std::move(m),
                    false,
                    {},
+                   true,
                    true});
   }
   if (has("time_offset") && !lag_filter_) {

@@ -1114,12 +1114,44 @@ void model_form_intervals(Score& s, const std::vector<ModelFamily::ModelForm>& f
     if (r.std_asymptotic == 0.0) r.std_asymptotic = r.std;
     r.std = std::hypot(r.std, r.std_model_form);
   }
-  if (taken == forms.size()) return;
-  for (const auto& r : values_reported(*forms[taken].model, fits[taken], s.full))
-    for (auto& q : s.full.reported)
-      if (q.name == r.name && std::isfinite(r.value)) q.value = r.value;
-  s.model_form_taken = fmt::format("{} (its weighted RSS {:.3g} long-run residual variances below the model's)", forms[taken].assumption,
-                                   margin);
+  if (taken < forms.size())
+    s.model_form_taken = fmt::format("{} (its weighted RSS {:.3g} long-run residual variances below the model's)", forms[taken].assumption,
+                                     margin);
+  if (taken < forms.size() && !forms[taken].weighted) {
+    for (const auto& r : values_reported(*forms[taken].model, fits[taken], s.full))
+      for (auto& q : s.full.reported)
+        if (q.name == r.name && std::isfinite(r.value)) q.value = r.value;
+    return;
+  }
+  // The weighted forms and the model's own, averaged by their likelihoods relative to the model's
+  // (weights exp(-excess / 2), the model's 1), each value where the form reports it (else the model's).
+  std::vector<std::size_t> weighted;
+  std::vector<double> log_w;
+  for (std::size_t i = 0; i < forms.size(); ++i)
+    if (forms[i].taken_when_preferred && forms[i].weighted && variance > 0) {
+      weighted.push_back(i);
+      log_w.push_back(-0.5 * (fits[i].rss - s.full.rss) / variance);
+    }
+  if (weighted.empty()) return;
+  const double top = std::max(0.0, *std::max_element(log_w.begin(), log_w.end()));
+  double total = std::exp(-top);
+  for (const double l : log_w) total += std::exp(l - top);
+  const double w_model = std::exp(-top) / total;
+  std::map<std::string, double> mean;
+  for (const auto& q : s.full.reported) mean[q.name] = w_model * q.value;
+  s.model_form_weights.push_back(fmt::format("the model's own form: {:.3g}", w_model));
+  for (std::size_t j = 0; j < weighted.size(); ++j) {
+    const double w = std::exp(log_w[j] - top) / total;
+    s.model_form_weights.push_back(fmt::format("{}: {:.3g}", forms[weighted[j]].assumption, w));
+    std::map<std::string, double> v;
+    for (const auto& r : values_reported(*forms[weighted[j]].model, fits[weighted[j]], s.full))
+      if (std::isfinite(r.value)) v[r.name] = r.value;
+    for (const auto& q : s.full.reported) {
+      const auto it = v.find(q.name);
+      mean[q.name] += w * (it != v.end() ? it->second : q.value);
+    }
+  }
+  for (auto& q : s.full.reported) q.value = mean[q.name];
 }
 
 /// The reported values corrected for the errors in the family's variables (errors_in_variables_bias):

@@ -219,6 +219,13 @@
 //    pass; none (μ_s / μ -0.39, se 0.19, z² 0.48), sensor_bias (bias_my +0.35, se 0.10) and
 //    time_offset (+0.30, se 0.13) fail, on runs where contact_damping is never named: their
 //    values are the code's before the bound (docs/diagnosis.md).
+//  * With the friction's lever forms weighted by the run's likelihoods (ModelForm::weighted: the
+//    values the model's and both lever forms' averaged with weights exp(-excess / 2); rule added
+//    2026-12-07 23:55 UTC, before these ran, after time_offset's τ lean was traced on i = 1800..1849
+//    without noise to moves runs that preferred the tip's lever by 3-4 variances, less than the
+//    margin that took it, and read τ 60-260 µs high on the centroid's; the same rules): every
+//    effect on HIL_FAMILY_FIRST=1900, i = 1900..1949, never drawn before for any. Expected:
+//    τ's and the tilting moments' offsets' leans smaller; nothing else worse.
 //  * Per effect, of n draws, at most ceil(10 %) may fail each of:
 //     - named: the effect named first (clean: `none`);
 //     - single: no second cause.

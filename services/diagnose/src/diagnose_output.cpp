@@ -172,7 +172,12 @@ void print_summary(std::ostream& out, const RunDiagnosis& r) {
            "     PNR = |value - nominal| / asymptotic std)\n";
     for (const auto& f : ext.model_forms) out << "    model form covered: " << f << "\n";
     for (const auto& f : ext.model_forms_rejected) out << "    model form rejected by the run: " << f << "\n";
-    if (!ext.model_form_taken.empty()) out << "    values of the model form the run prefers: " << ext.model_form_taken << "\n";
+    if (!ext.model_form_taken.empty())
+      out << (ext.model_form_weights.empty() ? "    values of the model form the run prefers: " : "    the model form the run prefers: ")
+          << ext.model_form_taken << "\n";
+    if (!ext.model_form_weights.empty())
+      out << "    values averaged over the model forms, weighted by the run's likelihoods: "
+          << fmt::format("{}", fmt::join(ext.model_form_weights, "; ")) << "\n";
     // A refused correction reads "<variable>: not corrected, <why>" (engine.cpp).
     for (const auto& v : ext.errors_in_variables)
       out << (v.find(": not corrected") != std::string::npos ? "    errors in the variables: " : "    values corrected for the errors in: ")
@@ -292,6 +297,7 @@ nlohmann::json to_json(const RunDiagnosis& r) {
                    {"model_forms", ext.model_forms},
                    {"model_forms_rejected", ext.model_forms_rejected},
                    {"model_form_taken", ext.model_form_taken.empty() ? nlohmann::json() : nlohmann::json(ext.model_form_taken)},
+                   {"model_form_weights", ext.model_form_weights},
                    {"errors_in_variables", ext.errors_in_variables},
                    {"residuals", res(d.extended_residuals)}};
   add_events(j["extended"]["parameters"], located_events(r, extended_set(r)));

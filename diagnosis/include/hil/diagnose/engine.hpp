@@ -186,6 +186,17 @@ class ModelFamily {
     /// preferred by hundreds of variances on pure delays; docs/diagnosis.md, "Forms the run
     /// decides"). For a form the run's other misfits do not pull towards, shown on fresh draws.
     bool taken_when_preferred = false;
+    /// With taken_when_preferred: the form's values mean the model's quantities under another
+    /// assumption (where the friction acts), so the run's evidence weighs them continuously. The
+    /// reported values are the average of the model's and every such form's, weighted by their
+    /// likelihoods relative to the model's, exp(-excess / 2) with excess the refit's weighted RSS
+    /// less the full fit's in long-run residual variances (equal prior weights: Bayesian model
+    /// averaging). A form preferred beyond kFormRejection then carries almost all the weight, as a
+    /// taken one does; one preferred by less moves the values part of the way instead of none
+    /// (issue 32: on moves, a point foot's lever preferred by 3 variances left the delay on the
+    /// centroid's reading, 60-260 µs high; docs/diagnosis.md, "Model-form intervals"). The
+    /// intervals are widened as before. A form that is not weighted and is taken replaces the values.
+    bool weighted = false;
   };
   virtual std::vector<ModelForm> model_forms() const { return {}; }
   /// A regressor the family takes from a measurement whose error has a known variance (errors in
@@ -402,7 +413,11 @@ struct Score {
   /// long-run residual variances: they widen nothing.
   std::vector<std::string> model_forms_rejected;
   /// The form whose values are reported (ModelForm::taken_when_preferred), with its RSS margin; empty: the model's own.
+  /// For weighted forms (ModelForm::weighted): the one preferred beyond kFormRejection, if any.
   std::string model_form_taken;
+  /// The weighted forms' weights where they moved the values (ModelForm::weighted): "<assumption>:
+  /// <weight>", the model's own weight first as "the model's own form: <weight>". Empty: none moved them.
+  std::vector<std::string> model_form_weights;
   /// The measurements whose errors the reported values are corrected for (Reported::errors_in_variables).
   std::vector<std::string> errors_in_variables;
   double seconds = 0.0;
