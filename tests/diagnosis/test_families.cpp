@@ -225,7 +225,11 @@
 //    without noise to moves runs that preferred the tip's lever by 3-4 variances, less than the
 //    margin that took it, and read τ 60-260 µs high on the centroid's; the same rules): every
 //    effect on HIL_FAMILY_FIRST=1900, i = 1900..1949, never drawn before for any. Expected:
-//    τ's and the tilting moments' offsets' leans smaller; nothing else worse.
+//    τ's and the tilting moments' offsets' leans smaller; nothing else worse. Drawn 2026-12-07
+//    23:53 to 2026-12-08 00:13 UTC on 63e3a6e: time_offset (τ -0.12, se 0.11), sensor_bias,
+//    none, sensor_gain, contact_damping and nonlinear_stiffness pass; geometric_offset fails on
+//    plate_height's bias (+0.30, se 0.115) and viscous_friction on μ_s / μ's (+0.97, se 0.42),
+//    both read identically by the code before on the same draws (docs/diagnosis.md).
 //  * Per effect, of n draws, at most ceil(10 %) may fail each of:
 //     - named: the effect named first (clean: `none`);
 //     - single: no second cause.
