@@ -415,8 +415,9 @@ struct Score {
   /// The form whose values are reported (ModelForm::taken_when_preferred), with its RSS margin; empty: the model's own.
   /// For weighted forms (ModelForm::weighted): the one preferred beyond kFormRejection, if any.
   std::string model_form_taken;
-  /// The weighted forms' weights where they moved the values (ModelForm::weighted): "<assumption>:
-  /// <weight>", the model's own weight first as "the model's own form: <weight>". Empty: none moved them.
+  /// The weights the values were averaged with (ModelForm::weighted): "<assumption>: <weight>", the
+  /// model's own first as "the model's own form: <weight>". Empty: the family has no weighted form
+  /// (or one not weighted was taken).
   std::vector<std::string> model_form_weights;
   /// The measurements whose errors the reported values are corrected for (Reported::errors_in_variables).
   std::vector<std::string> errors_in_variables;
