@@ -175,9 +175,11 @@ void print_summary(std::ostream& out, const RunDiagnosis& r) {
     if (!ext.model_form_taken.empty())
       out << (ext.model_form_weights.empty() ? "    values of the model form the run prefers: " : "    the model form the run prefers: ")
           << ext.model_form_taken << "\n";
-    if (!ext.model_form_weights.empty())
-      out << "    values averaged over the model forms, weighted by the run's likelihoods: "
-          << fmt::format("{}", fmt::join(ext.model_form_weights, "; ")) << "\n";
+    // One weight a line: the forms' assumptions are long, and the summary keeps its lines short.
+    if (!ext.model_form_weights.empty()) {
+      out << "    values averaged over the model forms, weighted by the run's likelihoods:\n";
+      for (const auto& w : ext.model_form_weights) out << "      " << w << "\n";
+    }
     // A refused correction reads "<variable>: not corrected, <why>" (engine.cpp).
     for (const auto& v : ext.errors_in_variables)
       out << (v.find(": not corrected") != std::string::npos ? "    errors in the variables: " : "    values corrected for the errors in: ")
