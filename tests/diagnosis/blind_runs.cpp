@@ -82,7 +82,10 @@ double slow_friction_ratio_of(const ct::Scenario& s, double stick_below_m_per_s,
       const double elastic = law.stiffness_n_per_m * law.delta_ref_m * std::pow(f.penetration_m / law.delta_ref_m, law.exponent);
       const double bound = law.friction_on_total_normal ? f.normal_n : elastic;
       const double column = total_normal_column ? f.normal_n : elastic;
-      num += column * bound * u / std::hypot(u, law.slip_regularisation_m_per_s);
+      // The truth's viscous friction acts at every slip speed; hil's viscous column only on contacts
+      // sliding above the declared threshold (their tangent is zero below it), so below it the slow
+      // slip's term carries the viscous part too: c_v u, relative to μ as the ratio is.
+      num += column * (bound * u / std::hypot(u, law.slip_regularisation_m_per_s) + law.viscous_n_s_per_m * u / law.mu);
       den += column * column;
     }
   }

@@ -115,7 +115,10 @@ double linear_damping_of(const ct::Scenario& s);
 /// than μ B where u is a few ε, and B is the total normal force where the friction follows it. The
 /// least-squares ratio of that friction to hil's column μ_s K δ_e over the feet in contact whose
 /// true slip speed is in (0, v_t,m], at the sample times: Σ E B g(u) / Σ E², E the elastic force,
-/// g(u) = u / sqrt(u² + ε²). 1 when no foot slips below the threshold.
+/// g(u) = u / sqrt(u² + ε²). 1 when no foot slips below the threshold. The truth's viscous friction
+/// c_v u acts there too, and hil's viscous column does not (sliding contacts only): B g(u) + c_v u / μ
+/// in place of B g(u) (measured on the viscous draws i = 1900..1949, 2026-12-08: 0.1-1.1 % of the
+/// ratio, a third of their μ_s / μ bias).
 /// \param total_normal_column hil's column follows the total normal force (δ_e + τ_D δ̇)₊ instead of
 /// δ_e, as it does with contact_damping in the model: Σ N B g(u) / Σ N², N the truth's total
 /// normal force (clipped at zero, as hil's is).
