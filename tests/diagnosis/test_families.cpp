@@ -232,11 +232,15 @@
 //    both read identically by the code before on the same draws (docs/diagnosis.md).
 //  * With slow_slip's μ_s / μ truth holding the truth's viscous friction below the declared sticking
 //    threshold (slow_friction_ratio_of: hil's viscous column acts on sliding contacts only, so the
-//    slow slip's term carries c_v u there; rule added 2026-12-08 04:05 UTC, before these ran, after
-//    the viscous draws i = 1900..1949 were probed: c_v u / μ is 0.1-1.1 % of the ratio there, a
-//    third of their μ_s / μ bias, whose rest, +0.58 mean z on those draws, is not explained; the
-//    same rules): HIL_FAMILY_FIRST=1950, i = 1950..1999, never drawn before, for viscous_friction.
-//    Expected: μ_s / μ's bias smaller, and it may still fail on the unexplained rest.
+//    slow slip's term carries c_v u there; rule added 2026-12-08 03:10 UTC (committed in b9657ee),
+//    before these ran, after the viscous draws i = 1900..1949 were probed: c_v u / μ is 0.1-1.1 %
+//    of the ratio there, a third of their μ_s / μ bias, whose rest, +0.58 mean z on those draws,
+//    was not explained then; the same rules): HIL_FAMILY_FIRST=1950, i = 1950..1999, never drawn
+//    before, for viscous_friction. Expected: μ_s / μ's bias smaller, and it may still fail on the
+//    unexplained rest. i = 1900..1949 is not blind for this change. Drawn 2026-12-08 03:11-03:13
+//    UTC on b9657ee: passes; c_v 46 of 50 inside, +0.02 (se 0.14); μ_s / μ 8 of 9, +0.01 (se
+//    0.44). Probed after (i = 1900..1949): the rest reads +0.08 with an exact twist and +0.43 with
+//    c_v = 0, the reported twist's quanta on those motions (docs/diagnosis.md).
 //  * Per effect, of n draws, at most ceil(10 %) may fail each of:
 //     - named: the effect named first (clean: `none`);
 //     - single: no second cause.
